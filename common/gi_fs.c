@@ -1,0 +1,207 @@
+/* gi_fs: whole-file reads and atomic writes. */
+#include "gi_fs.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return gi_fail(err, errno == ENOENT ? GI_EINVAL : GI_EIO, "%s: %s", path,
+                       strerror(errno));
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return gi_fail(err, GI_EINVAL, "%s: not a regular file", path);
+    }
+    if ((unsigned long long)st.st_size > max_bytes) {
+        close(fd);
+        return gi_fail(err, GI_EINVAL, "%s: file is %lld bytes, over the limit of %zu",
+                       path, (long long)st.st_size, max_bytes);
+    }
+    gi_buf_reset(out);
+    gi_buf_reserve(out, (size_t)st.st_size + 1);
+    for (;;) {
+        gi_buf_reserve(out, 65536);
+        ssize_t n = read(fd, out->data + out->len, out->cap - out->len);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0) {
+            int e = errno;
+            close(fd);
+            return gi_fail(err, GI_EIO, "%s: read: %s", path, strerror(e));
+        }
+        if (n == 0)
+            break;
+        out->len += (size_t)n;
+        if (out->len > max_bytes) {
+            close(fd);
+            return gi_fail(err, GI_EINVAL, "%s: file is over the limit of %zu bytes",
+                           path, max_bytes);
+        }
+    }
+    close(fd);
+    return 0;
+}
+
+char *gi_temp_path(const char *path)
+{
+    static atomic_uint counter;
+    unsigned n = atomic_fetch_add(&counter, 1);
+    size_t len = strlen(path) + 64;
+    char *tmp = gi_xmalloc(len);
+    snprintf(tmp, len, "%s.tmp-%ld-%u", path, (long)getpid(), n);
+    return tmp;
+}
+
+int gi_commit_file(const char *tmp, const char *path, gi_error *err)
+{
+    int fd = open(tmp, O_RDONLY | O_CLOEXEC);
+    if (fd < 0 || fsync(fd) != 0) {
+        int e = errno;
+        if (fd >= 0)
+            close(fd);
+        unlink(tmp);
+        return gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(e));
+    }
+    close(fd);
+    if (rename(tmp, path) != 0) {
+        int e = errno;
+        unlink(tmp);
+        return gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(e));
+    }
+    return 0;
+}
+
+int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err)
+{
+    char *tmp = gi_temp_path(path);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        gi_fail(err, GI_EIO, "%s: %s", path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    const unsigned char *p = data;
+    while (len) {
+        ssize_t n = write(fd, p, len);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            gi_fail(err, GI_EIO, "%s: write: %s", path, strerror(errno));
+            close(fd);
+            unlink(tmp);
+            free(tmp);
+            return -1;
+        }
+        p += n;
+        len -= (size_t)n;
+    }
+    if (close(fd) != 0) {
+        gi_fail(err, GI_EIO, "%s: close: %s", path, strerror(errno));
+        unlink(tmp);
+        free(tmp);
+        return -1;
+    }
+    int rc = gi_commit_file(tmp, path, err);
+    free(tmp);
+    return rc;
+}
+
+int gi_mkdirs(const char *dir, gi_error *err)
+{
+    char *p = gi_xstrdup(dir);
+    for (char *s = p + 1; *s; s++) {
+        if (*s != '/')
+            continue;
+        *s = '\0';
+        if (mkdir(p, 0755) != 0 && errno != EEXIST) {
+            gi_fail(err, GI_EIO, "%s: mkdir: %s", p, strerror(errno));
+            free(p);
+            return -1;
+        }
+        *s = '/';
+    }
+    int rc = 0;
+    if (*p && mkdir(p, 0755) != 0 && errno != EEXIST)
+        rc = gi_fail(err, GI_EIO, "%s: mkdir: %s", p, strerror(errno));
+    free(p);
+    return rc;
+}
+
+char *gi_dirname(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        return gi_xstrdup(".");
+    if (slash == path)
+        return gi_xstrdup("/");
+    size_t n = (size_t)(slash - path);
+    char *d = gi_xmalloc(n + 1);
+    memcpy(d, path, n);
+    d[n] = '\0';
+    return d;
+}
+
+char *gi_path_join(const char *dir, const char *name)
+{
+    if (name[0] == '/' || !dir[0] || strcmp(dir, ".") == 0)
+        return gi_xstrdup(name);
+    size_t n = strlen(dir) + strlen(name) + 2;
+    char *p = gi_xmalloc(n);
+    snprintf(p, n, "%s/%s", dir, name);
+    return p;
+}
+
+char *gi_path_normalize(const char *path)
+{
+    size_t n = strlen(path);
+    char *out = gi_xmalloc(n + 2);
+    int absolute = path[0] == '/';
+    /* Stack of component start offsets in `out`. */
+    size_t *starts = gi_xmalloc((n / 2 + 2) * sizeof *starts);
+    size_t depth = 0, len = 0, ups = 0;
+    if (absolute)
+        out[len++] = '/';
+    const char *s = path;
+    while (*s) {
+        while (*s == '/')
+            s++;
+        const char *e = s;
+        while (*e && *e != '/')
+            e++;
+        size_t cl = (size_t)(e - s);
+        if (cl == 0)
+            break;
+        if (cl == 1 && s[0] == '.') {
+            /* skip */
+        } else if (cl == 2 && s[0] == '.' && s[1] == '.' && depth > ups) {
+            len = starts[--depth];
+            if (len > (size_t)absolute)
+                len--; /* drop the separator before the component */
+        } else if (cl == 2 && s[0] == '.' && s[1] == '.' && absolute) {
+            /* "/.." is "/" */
+        } else {
+            if (len > (size_t)absolute)
+                out[len++] = '/';
+            starts[depth++] = len;
+            if (cl == 2 && s[0] == '.' && s[1] == '.')
+                ups++;
+            memcpy(out + len, s, cl);
+            len += cl;
+        }
+        s = e;
+    }
+    if (len == 0)
+        out[len++] = '.';
+    out[len] = '\0';
+    free(starts);
+    return out;
+}

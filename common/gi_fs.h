@@ -1,0 +1,32 @@
+/* gi_fs: whole-file reads and atomic writes.
+ *
+ * Outputs are never half-written: writers produce `<path>.tmp-<pid>-<n>` in
+ * the same directory, fsync it, and rename it over the final name. */
+#ifndef GI_FS_H
+#define GI_FS_H
+
+#include <stddef.h>
+
+#include "gi_buf.h"
+#include "gi_error.h"
+
+/* Reads a whole file; refuses files larger than max_bytes. */
+int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err);
+
+/* A fresh temporary name next to `path` (malloc'ed). */
+char *gi_temp_path(const char *path);
+/* fsyncs `tmp` and renames it to `path`; removes tmp on failure. */
+int gi_commit_file(const char *tmp, const char *path, gi_error *err);
+/* Writes bytes to path atomically (temp + fsync + rename). */
+int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err);
+
+/* mkdir -p. */
+int gi_mkdirs(const char *dir, gi_error *err);
+/* Directory part of a path ("." if none), malloc'ed. */
+char *gi_dirname(const char *path);
+/* dir + "/" + name, unless name is absolute or dir is "" or "."; malloc'ed. */
+char *gi_path_join(const char *dir, const char *name);
+/* Lexical normalization: removes "." and "x/.." pairs, repeated slashes. */
+char *gi_path_normalize(const char *path);
+
+#endif

@@ -1,0 +1,309 @@
+/* gi_json: strict JSON validation over cJSON. */
+#include "gi_json.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
+                  gi_error *err)
+{
+    *out = NULL;
+    if (len == 0)
+        return gi_fail(err, GI_EINVAL, "%s: empty file, expected a JSON object", file);
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    if (!root) {
+        size_t off = end && end >= text ? (size_t)(end - text) : 0;
+        if (off > len)
+            off = len;
+        int line = 1, col = 1;
+        for (size_t i = 0; i < off; i++) {
+            if (text[i] == '\n') {
+                line++;
+                col = 1;
+            } else {
+                col++;
+            }
+        }
+        return gi_fail(err, GI_EINVAL, "%s:%d:%d: invalid JSON", file, line, col);
+    }
+    /* Trailing garbage after the root value is an error too. */
+    if (end) {
+        size_t off = (size_t)(end - text);
+        while (off < len && (text[off] == ' ' || text[off] == '\n' || text[off] == '\r' ||
+                             text[off] == '\t'))
+            off++;
+        if (off < len && text[off] != '\0') {
+            cJSON_Delete(root);
+            return gi_fail(err, GI_EINVAL, "%s: unexpected text after the JSON document",
+                           file);
+        }
+    }
+    if (!cJSON_IsObject(root)) {
+        cJSON_Delete(root);
+        return gi_fail(err, GI_EINVAL, "%s: the document must be a JSON object", file);
+    }
+    *out = root;
+    return 0;
+}
+
+const char *gi_json_path(char *buf, size_t n, const char *path, const char *key)
+{
+    if (path && path[0])
+        snprintf(buf, n, "%s.%s", path, key);
+    else
+        snprintf(buf, n, "%s", key);
+    return buf;
+}
+
+const char *gi_json_index_path(char *buf, size_t n, const char *path, int i)
+{
+    snprintf(buf, n, "%s[%d]", path, i);
+    return buf;
+}
+
+int gi_jv_fail(gi_jv *v, const char *path, const char *fmt, ...)
+{
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (path && path[0])
+        return gi_fail(v->err, GI_EINVAL, "%s: %s: %s", v->file, path, msg);
+    return gi_fail(v->err, GI_EINVAL, "%s: %s", v->file, msg);
+}
+
+static const char *type_name(const cJSON *item)
+{
+    if (!item)
+        return "nothing";
+    if (cJSON_IsNumber(item))
+        return "a number";
+    if (cJSON_IsString(item))
+        return "a string";
+    if (cJSON_IsBool(item))
+        return "a boolean";
+    if (cJSON_IsNull(item))
+        return "null";
+    if (cJSON_IsArray(item))
+        return "an array";
+    if (cJSON_IsObject(item))
+        return "an object";
+    return "an invalid value";
+}
+
+int gi_jv_object(gi_jv *v, const cJSON *obj, const char *path)
+{
+    if (!cJSON_IsObject(obj))
+        return gi_jv_fail(v, path, "expected an object, got %s", type_name(obj));
+    return 0;
+}
+
+int gi_jv_keys(gi_jv *v, const cJSON *obj, const char *path, const char *const *allowed)
+{
+    if (gi_jv_object(v, obj, path))
+        return -1;
+    for (const cJSON *it = obj->child; it; it = it->next) {
+        int known = 0;
+        for (const char *const *a = allowed; *a; a++)
+            if (it->string && strcmp(it->string, *a) == 0)
+                known = 1;
+        char p[512];
+        if (!known) {
+            char list[512] = "";
+            size_t len = 0;
+            for (const char *const *a = allowed; *a && len < sizeof list - 64; a++)
+                len += (size_t)snprintf(list + len, sizeof list - len, "%s%s",
+                                        a == allowed ? "" : ", ", *a);
+            return gi_jv_fail(v, gi_json_path(p, sizeof p, path, it->string ? it->string : "?"),
+                              "unknown key (expected one of: %s)", list);
+        }
+        for (const cJSON *o = obj->child; o != it; o = o->next)
+            if (strcmp(o->string, it->string) == 0)
+                return gi_jv_fail(v, gi_json_path(p, sizeof p, path, it->string),
+                                  "key appears twice");
+    }
+    return 0;
+}
+
+static const cJSON *member(const cJSON *obj, const char *key)
+{
+    return cJSON_GetObjectItemCaseSensitive(obj, key);
+}
+
+static int absent(gi_jv *v, const char *p, int required, const cJSON *item)
+{
+    if (item)
+        return 0;
+    if (required)
+        return gi_jv_fail(v, p, "missing (required)");
+    return 1;
+}
+
+int gi_jv_value_number(gi_jv *v, const cJSON *item, const char *path, double lo,
+                       double hi, double *out)
+{
+    if (!cJSON_IsNumber(item))
+        return gi_jv_fail(v, path, "expected a number, got %s", type_name(item));
+    double d = item->valuedouble;
+    if (!isfinite(d))
+        return gi_jv_fail(v, path, "number is not finite");
+    if (d < lo || d > hi)
+        return gi_jv_fail(v, path, "%g is out of range [%g, %g]", d, lo, hi);
+    *out = d;
+    return 0;
+}
+
+int gi_jv_number(gi_jv *v, const cJSON *obj, const char *path, const char *key,
+                 int required, double lo, double hi, double *out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    return gi_jv_value_number(v, item, p, lo, hi, out);
+}
+
+int gi_jv_int(gi_jv *v, const cJSON *obj, const char *path, const char *key, int required,
+              int64_t lo, int64_t hi, int64_t *out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsNumber(item))
+        return gi_jv_fail(v, p, "expected an integer, got %s", type_name(item));
+    double d = item->valuedouble;
+    if (!isfinite(d) || d != floor(d))
+        return gi_jv_fail(v, p, "expected an integer, got %g", d);
+    if (d < (double)lo || d > (double)hi)
+        return gi_jv_fail(v, p, "%.0f is out of range [%lld, %lld]", d, (long long)lo,
+                          (long long)hi);
+    *out = (int64_t)d;
+    return 0;
+}
+
+int gi_jv_bool(gi_jv *v, const cJSON *obj, const char *path, const char *key, int required,
+               int *out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsBool(item))
+        return gi_jv_fail(v, p, "expected true or false, got %s", type_name(item));
+    *out = cJSON_IsTrue(item);
+    return 0;
+}
+
+int gi_jv_string(gi_jv *v, const cJSON *obj, const char *path, const char *key,
+                 int required, const char **out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsString(item) || !item->valuestring)
+        return gi_jv_fail(v, p, "expected a string, got %s", type_name(item));
+    *out = item->valuestring;
+    return 0;
+}
+
+int gi_jv_enum(gi_jv *v, const cJSON *obj, const char *path, const char *key, int required,
+               const char *const *choices, int *out)
+{
+    const char *s = NULL;
+    if (gi_jv_string(v, obj, path, key, required, &s))
+        return -1;
+    if (!s)
+        return 0;
+    for (int i = 0; choices[i]; i++)
+        if (strcmp(s, choices[i]) == 0) {
+            *out = i;
+            return 0;
+        }
+    char list[512] = "";
+    size_t len = 0;
+    for (int i = 0; choices[i] && len < sizeof list - 64; i++)
+        len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", i ? ", " : "",
+                                choices[i]);
+    char p[512];
+    return gi_jv_fail(v, gi_json_path(p, sizeof p, path, key),
+                      "\"%s\" is not one of: %s", s, list);
+}
+
+int gi_jv_vec3d(gi_jv *v, const cJSON *obj, const char *path, const char *key,
+                int required, double lo, double hi, double out[3])
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
+        return gi_jv_fail(v, p, "expected an array of 3 numbers, got %s",
+                          cJSON_IsArray(item) ? "an array of another length" : type_name(item));
+    int i = 0;
+    for (const cJSON *e = item->child; e; e = e->next, i++) {
+        char q[540];
+        if (gi_jv_value_number(v, e, gi_json_index_path(q, sizeof q, p, i), lo, hi, &out[i]))
+            return -1;
+    }
+    return 0;
+}
+
+int gi_jv_vec3(gi_jv *v, const cJSON *obj, const char *path, const char *key, int required,
+               double lo, double hi, gi_vec3 *out)
+{
+    double d[3];
+    if (!member(obj, key))
+        return gi_jv_vec3d(v, obj, path, key, required, lo, hi, d);
+    if (gi_jv_vec3d(v, obj, path, key, required, lo, hi, d))
+        return -1;
+    *out = gi_v3((float)d[0], (float)d[1], (float)d[2]);
+    return 0;
+}
+
+int gi_jv_member_object(gi_jv *v, const cJSON *obj, const char *path, const char *key,
+                        int required, const cJSON **out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    *out = NULL;
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsObject(item))
+        return gi_jv_fail(v, p, "expected an object, got %s", type_name(item));
+    *out = item;
+    return 0;
+}
+
+int gi_jv_member_array(gi_jv *v, const cJSON *obj, const char *path, const char *key,
+                       int required, const cJSON **out)
+{
+    char p[512];
+    gi_json_path(p, sizeof p, path, key);
+    const cJSON *item = member(obj, key);
+    *out = NULL;
+    int a = absent(v, p, required, item);
+    if (a)
+        return a < 0 ? -1 : 0;
+    if (!cJSON_IsArray(item))
+        return gi_jv_fail(v, p, "expected an array, got %s", type_name(item));
+    *out = item;
+    return 0;
+}

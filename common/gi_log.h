@@ -1,0 +1,19 @@
+/* gi_log: leveled log lines on stderr, "gi[pid] level: message".
+ * The level comes from GI_LOG (error, warn, info, debug); default warn, so
+ * a normal render prints only its progress and summary. */
+#ifndef GI_LOG_H
+#define GI_LOG_H
+
+typedef enum { GI_LOG_ERROR, GI_LOG_WARN, GI_LOG_INFO, GI_LOG_DEBUG } gi_log_level;
+
+void gi_log_init(const char *program);
+void gi_log_set_level(gi_log_level level);
+int gi_log_enabled(gi_log_level level);
+void gi_log(gi_log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+#define gi_error_log(...) gi_log(GI_LOG_ERROR, __VA_ARGS__)
+#define gi_warn(...) gi_log(GI_LOG_WARN, __VA_ARGS__)
+#define gi_info(...) gi_log(GI_LOG_INFO, __VA_ARGS__)
+#define gi_debug(...) gi_log(GI_LOG_DEBUG, __VA_ARGS__)
+
+#endif

@@ -1,0 +1,220 @@
+/* Unit tests: RNG, buffers, paths, JSON validation. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_buf.h"
+#include "gi_fs.h"
+#include "gi_json.h"
+#include "gi_rng.h"
+#include "gi_test.h"
+
+GI_TEST(test_rng_splitmix_reference_values)
+{
+    /* SplitMix64 seeded with 1234567 (the reference generator's published
+     * first outputs): our Weyl + mix is the same sequence. */
+    gi_rng r;
+    r.state = 1234567;
+    r.has_spare = 0;
+    GI_CHECK(gi_rng_u64(&r) == 6457827717110365317ull);
+    GI_CHECK(gi_rng_u64(&r) == 3203168211198807973ull);
+    GI_CHECK(gi_rng_u64(&r) == 9817491932198370423ull);
+}
+
+GI_TEST(test_rng_neighbouring_streams_are_uncorrelated)
+{
+    /* Streams that differ by one in stream or sample index (adjacent pixels,
+     * consecutive samples) must not be correlated. */
+    for (int which = 0; which < 2; which++) {
+        double sxy = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+        int n = 20000;
+        for (int i = 0; i < n; i++) {
+            gi_rng a, b;
+            gi_rng_init(&a, 5, (uint64_t)i, 0);
+            if (which == 0)
+                gi_rng_init(&b, 5, (uint64_t)i + 1, 0);
+            else
+                gi_rng_init(&b, 5, (uint64_t)i, 1);
+            for (int k = 0; k < 4; k++) {
+                double x = gi_rng_float(&a), y = gi_rng_float(&b);
+                sxy += x * y;
+                sx += x;
+                sy += y;
+                sxx += x * x;
+                syy += y * y;
+            }
+        }
+        double m = 4.0 * n;
+        double cov = sxy / m - (sx / m) * (sy / m);
+        double corr = cov / sqrt((sxx / m - (sx / m) * (sx / m)) * (syy / m - (sy / m) * (sy / m)));
+        GI_CHECK_MSG(fabs(corr) < 0.02, "correlation %g (case %d)", corr, which);
+    }
+}
+
+GI_TEST(test_rng_streams_are_keyed_and_uniform)
+{
+    gi_rng a, b, c;
+    gi_rng_init(&a, 7, 100, 3);
+    gi_rng_init(&b, 7, 100, 3);
+    gi_rng_init(&c, 7, 100, 4);
+    int same = 1, differ = 0;
+    for (int i = 0; i < 64; i++) {
+        uint32_t x = gi_rng_u32(&a), y = gi_rng_u32(&b), z = gi_rng_u32(&c);
+        same &= x == y;
+        differ |= x != z;
+    }
+    GI_CHECK(same);
+    GI_CHECK(differ);
+    /* Uniformity: mean and variance of 1e6 floats, and the range. */
+    gi_rng r;
+    gi_rng_init(&r, 1, 2, 3);
+    double s = 0, s2 = 0;
+    int n = 1000000, out_of_range = 0;
+    for (int i = 0; i < n; i++) {
+        float u = gi_rng_float(&r);
+        out_of_range += !(u >= 0.0f && u < 1.0f);
+        s += u;
+        s2 += (double)u * u;
+    }
+    GI_CHECK(out_of_range == 0);
+    GI_CHECK_NEAR(s / n, 0.5, 0.002);
+    GI_CHECK_NEAR(s2 / n - (s / n) * (s / n), 1.0 / 12.0, 0.001);
+    uint32_t counts[10] = {0};
+    for (int i = 0; i < 100000; i++)
+        counts[gi_rng_below(&r, 10)]++;
+    for (int i = 0; i < 10; i++)
+        GI_CHECK_NEAR(counts[i], 10000, 500);
+}
+
+GI_TEST(test_buf_roundtrip_and_reader_limits)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_u8(&b, 0xab);
+    gi_buf_put_u16(&b, 0x1234);
+    gi_buf_put_u32(&b, 0xdeadbeefu);
+    gi_buf_put_u64(&b, 0x0123456789abcdefull);
+    gi_buf_put_f32(&b, -1.5f);
+    gi_buf_put_f64(&b, 3.25);
+    gi_buf_put_str(&b, "hello");
+    gi_buf_put_blob(&b, "xyz", 3);
+    /* Little-endian on the wire whatever the host. */
+    GI_CHECK(b.data[1] == 0x34 && b.data[2] == 0x12);
+    gi_reader r;
+    gi_reader_init(&r, b.data, b.len, "test");
+    GI_CHECK(gi_get_u8(&r) == 0xab);
+    GI_CHECK(gi_get_u16(&r) == 0x1234);
+    GI_CHECK(gi_get_u32(&r) == 0xdeadbeefu);
+    GI_CHECK(gi_get_u64(&r) == 0x0123456789abcdefull);
+    GI_CHECK(gi_get_f32(&r) == -1.5f);
+    GI_CHECK(gi_get_f64(&r) == 3.25);
+    char *s = gi_get_str(&r, 100);
+    GI_CHECK(s && strcmp(s, "hello") == 0);
+    free(s);
+    size_t len;
+    const uint8_t *p = gi_get_blob(&r, 100, &len);
+    GI_CHECK(p && len == 3 && memcmp(p, "xyz", 3) == 0);
+    gi_error err;
+    GI_CHECK(gi_reader_finish(&r, &err) == 0);
+
+    /* A string longer than its limit fails without allocating it. */
+    gi_reader_init(&r, b.data, b.len, "test");
+    gi_get(&r, NULL, 1 + 2 + 4 + 8 + 4 + 8);
+    GI_CHECK(gi_get_str(&r, 4) == NULL);
+    GI_CHECK(gi_reader_finish(&r, &err) == -1 && err.code == GI_EPROTO);
+    /* A declared length beyond the data fails. */
+    gi_buf c;
+    gi_buf_init(&c);
+    gi_buf_put_u64(&c, 1ull << 60);
+    gi_reader_init(&r, c.data, c.len, "huge");
+    GI_CHECK(gi_get_blob(&r, (size_t)-1, &len) == NULL);
+    GI_CHECK(r.failed);
+    /* Trailing bytes are an error. */
+    gi_reader_init(&r, b.data, b.len, "trailing");
+    gi_get_u8(&r);
+    GI_CHECK(gi_reader_finish(&r, &err) == -1);
+    GI_CHECK(strstr(err.msg, "trailing") != NULL);
+    gi_buf_free(&b);
+    gi_buf_free(&c);
+}
+
+GI_TEST(test_path_normalize)
+{
+    static const char *cases[][2] = {
+        {"a/b/c", "a/b/c"},     {"a/./b", "a/b"},       {"a/../b", "b"},
+        {"a/b/../../c", "c"},   {"../a", "../a"},       {"../../a/../b", "../../b"},
+        {"/x/../y", "/y"},      {"/..", "/"},           {"a//b///c/", "a/b/c"},
+        {".", "."},             {"a/..", "."},          {"./a/./b/.", "a/b"},
+        {"scenes/x/../y.json", "scenes/y.json"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *n = gi_path_normalize(cases[i][0]);
+        GI_CHECK_MSG(strcmp(n, cases[i][1]) == 0, "normalize(%s) = %s, expected %s",
+                     cases[i][0], n, cases[i][1]);
+        free(n);
+    }
+}
+
+GI_TEST(test_atomic_write_and_read_limits)
+{
+    gi_error err;
+    char path[512];
+    snprintf(path, sizeof path, "%s/atomic.txt", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_write_file_atomic(path, "hello", 5, &err));
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_REQUIRE_OK(gi_read_file(path, 100, &b, &err));
+    GI_CHECK(b.len == 5 && memcmp(b.data, "hello", 5) == 0);
+    GI_CHECK(gi_read_file(path, 4, &b, &err) == -1 && err.code == GI_EINVAL);
+    GI_CHECK(gi_write_file_atomic("/nonexistent-dir/x", "a", 1, &err) == -1);
+    gi_buf_free(&b);
+}
+
+static int parse_doc(const char *text, cJSON **out, gi_error *err)
+{
+    return gi_json_parse(text, strlen(text), "t.json", out, err);
+}
+
+GI_TEST(test_json_errors_name_file_and_field)
+{
+    gi_error err;
+    cJSON *doc;
+    GI_CHECK(parse_doc("{\"a\": 1,\n \"b\": }", &doc, &err) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json:2:") != NULL, "%s", err.msg);
+    GI_CHECK(parse_doc("[1]", &doc, &err) == -1);
+    GI_CHECK(parse_doc("{} x", &doc, &err) == -1);
+    GI_CHECK(parse_doc("", &doc, &err) == -1);
+
+    GI_REQUIRE_OK(parse_doc("{\"n\": 1.5, \"i\": 3, \"s\": \"x\", \"big\": 1e999, "
+                            "\"v\": [1, 2], \"o\": {\"k\": true}, \"dup\": 1, \"dup\": 2}",
+                            &doc, &err));
+    gi_jv v = {"t.json", &err};
+    double d = 0;
+    int64_t i = 0;
+    GI_CHECK(gi_jv_number(&v, doc, "", "n", 1, 0, 10, &d) == 0 && d == 1.5);
+    GI_CHECK(gi_jv_int(&v, doc, "", "n", 1, 0, 10, &i) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json: n: expected an integer") != NULL, "%s", err.msg);
+    GI_CHECK(gi_jv_int(&v, doc, "", "i", 1, 0, 2, &i) == -1);
+    GI_CHECK(strstr(err.msg, "out of range") != NULL);
+    GI_CHECK(gi_jv_int(&v, doc, "", "s", 1, 0, 2, &i) == -1);
+    GI_CHECK(strstr(err.msg, "got a string") != NULL);
+    GI_CHECK(gi_jv_number(&v, doc, "", "big", 1, -1e300, 1e300, &d) == -1);
+    GI_CHECK(strstr(err.msg, "not finite") != NULL);
+    GI_CHECK(gi_jv_number(&v, doc, "", "missing", 1, 0, 1, &d) == -1);
+    GI_CHECK(strstr(err.msg, "missing: missing (required)") != NULL);
+    d = 42;
+    GI_CHECK(gi_jv_number(&v, doc, "", "missing", 0, 0, 1, &d) == 0 && d == 42);
+    gi_vec3 v3;
+    GI_CHECK(gi_jv_vec3(&v, doc, "", "v", 1, 0, 1, &v3) == -1);
+    static const char *const allowed[] = {"n", "i", "s", "big", "v", "o", NULL};
+    GI_CHECK(gi_jv_keys(&v, doc, "", allowed) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "dup: unknown key") != NULL, "%s", err.msg);
+    static const char *const allowed2[] = {"n", "i", "s", "big", "v", "o", "dup", NULL};
+    GI_CHECK(gi_jv_keys(&v, doc, "", allowed2) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "dup: key appears twice") != NULL, "%s", err.msg);
+    const cJSON *o;
+    GI_CHECK(gi_jv_member_object(&v, doc, "", "o", 1, &o) == 0 && o);
+    static const char *const okeys[] = {"x", NULL};
+    GI_CHECK(gi_jv_keys(&v, o, "o", okeys) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "o.k: unknown key (expected one of: x)") != NULL, "%s", err.msg);
+    cJSON_Delete(doc);
+}
