@@ -1,0 +1,55 @@
+/* gi_mesh: triangle meshes as read from files or generated from built-in
+ * shapes, before they are placed in a scene (object coordinates). */
+#ifndef GI_MESH_H
+#define GI_MESH_H
+
+#include <stdint.h>
+
+#include "gi_assets.h"
+#include "gi_error.h"
+#include "gi_math.h"
+
+/* A material as a mesh file describes it (OBJ .mtl Kd/Ke, glTF baseColor and
+ * emissive, PLY has none). */
+typedef struct gi_mesh_material {
+    char *name;
+    gi_vec3 diffuse;
+    gi_vec3 emission;
+} gi_mesh_material;
+
+typedef struct gi_mesh_data {
+    uint32_t vertex_count;
+    gi_vec3 *positions;
+    gi_vec3 *normals; /* NULL when the file has none: computed at scene build */
+    uint32_t triangle_count;
+    uint32_t *indices;      /* 3 per triangle, into positions */
+    uint32_t *tri_material; /* per triangle, into materials (0 if none) */
+    uint32_t material_count;
+    gi_mesh_material *materials;
+} gi_mesh_data;
+
+void gi_mesh_data_init(gi_mesh_data *m);
+void gi_mesh_data_free(gi_mesh_data *m);
+/* Appends src (indices shifted) to dst; src materials are appended too. */
+void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src);
+
+/* Loads OBJ (+ the .mtl files it names), PLY or glTF 2.0 (.gltf + .bin, or
+ * .glb) through assimp. Every file is read through `src`, so the same call
+ * works from disk, from a pool parent or from a farm coordinator. Errors name
+ * the file: unreadable, unknown format, no triangles, bad indices. */
+int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
+                   gi_error *err);
+
+/* Refuses files whose headers declare more data than they hold (assimp
+ * would allocate what the header says): used by gi_mesh_import. */
+int gi_mesh_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err);
+
+/* Built-in shapes, centred at the origin (see docs/scene-format.md). */
+void gi_mesh_quad(gi_mesh_data *out, double size_x, double size_z); /* y = 0, normal +y */
+void gi_mesh_box(gi_mesh_data *out, double sx, double sy, double sz, int inward);
+void gi_mesh_sphere(gi_mesh_data *out, double radius, int subdivisions); /* icosphere */
+
+/* Area-weighted vertex normals (for meshes without normals). */
+void gi_mesh_compute_normals(gi_mesh_data *m);
+
+#endif

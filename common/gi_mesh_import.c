@@ -1,0 +1,466 @@
+/* gi_mesh_import: OBJ / PLY / glTF 2.0 meshes through assimp's C API.
+ *
+ * assimp never touches the disk: every file it opens (the mesh, an OBJ's
+ * .mtl, a glTF's .bin) is read whole through the job's gi_asset_source and
+ * served from memory, so imports work the same on a farm worker that has
+ * only the job's assets, and the source's manifest lists every file used. */
+#include "gi_mesh.h"
+
+#include <assimp/cfileio.h>
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "gi_fs.h"
+#include "gi_log.h"
+
+/* More would not fit the uint32 indices with room for the rest of a scene. */
+#define MAX_MESH_VERTICES ((uint64_t)1 << 31)
+#define MAX_MESH_TRIANGLES ((uint64_t)1 << 31)
+
+/* One file asked for during an import, read once (assimp opens the main
+ * file several times: to check it exists, to detect the format, to read). */
+typedef struct import_file {
+    char *name; /* normalized */
+    int ok;
+    gi_buf bytes;
+    gi_error err; /* why it could not be read, when !ok */
+} import_file;
+
+typedef struct import_ctx {
+    const gi_asset_source *src;
+    import_file **files; /* each allocated apart: open handles point into them */
+    size_t count, cap;
+    size_t open_handles; /* to free what assimp might leave open */
+    struct handle **handles;
+    size_t handles_cap;
+} import_ctx;
+
+/* An open file: a read cursor over a cached import_file. */
+typedef struct handle {
+    struct aiFile file;
+    const gi_buf *bytes;
+    size_t pos;
+} handle;
+
+static import_file *ctx_fetch(import_ctx *c, const char *raw_name)
+{
+    char *name = gi_path_normalize(raw_name);
+    for (size_t i = 0; i < c->count; i++)
+        if (strcmp(c->files[i]->name, name) == 0) {
+            free(name);
+            return c->files[i];
+        }
+    if (c->count == c->cap) {
+        c->cap = c->cap ? 2 * c->cap : 4;
+        c->files = gi_xrealloc(c->files, c->cap * sizeof *c->files);
+    }
+    import_file *f = gi_xcalloc(1, sizeof *f);
+    c->files[c->count++] = f;
+    f->name = name;
+    gi_buf_init(&f->bytes);
+    gi_error_clear(&f->err);
+    f->ok = gi_asset_read(c->src, name, &f->bytes, &f->err) == 0;
+    if (!f->ok)
+        gi_debug("mesh import: %s", f->err.msg);
+    return f;
+}
+
+static size_t file_read(struct aiFile *af, char *buf, size_t size, size_t count)
+{
+    handle *h = (handle *)af->UserData;
+    if (size == 0 || count == 0)
+        return 0;
+    size_t left = h->bytes->len - h->pos;
+    size_t n = left / size < count ? left / size : count; /* whole elements, as fread */
+    if (n == 0)
+        return 0; /* also keeps an empty file's NULL data out of memcpy */
+    memcpy(buf, h->bytes->data + h->pos, n * size);
+    h->pos += n * size;
+    return n;
+}
+
+static size_t file_write(struct aiFile *af, const char *buf, size_t size, size_t count)
+{
+    return 0; /* imports only read */
+}
+
+static size_t file_tell(struct aiFile *af) { return ((handle *)af->UserData)->pos; }
+
+static size_t file_size(struct aiFile *af) { return ((handle *)af->UserData)->bytes->len; }
+
+static void file_flush(struct aiFile *af) {}
+
+static enum aiReturn file_seek(struct aiFile *af, size_t offset, enum aiOrigin origin)
+{
+    handle *h = (handle *)af->UserData;
+    size_t len = h->bytes->len, base;
+    switch (origin) {
+    case aiOrigin_SET: base = 0; break;
+    case aiOrigin_CUR: base = h->pos; break;
+    case aiOrigin_END: base = len; break;
+    default: return aiReturn_FAILURE;
+    }
+    /* offset is unsigned in this API: seeks only go forward from base. */
+    if (offset > len - base)
+        return aiReturn_FAILURE;
+    h->pos = base + offset;
+    return aiReturn_SUCCESS;
+}
+
+static struct aiFile *fs_open(struct aiFileIO *io, const char *name, const char *mode)
+{
+    import_ctx *c = (import_ctx *)io->UserData;
+    if (strpbrk(mode, "wa+"))
+        return NULL;
+    import_file *f = ctx_fetch(c, name);
+    /* A file that is not there fails quietly: assimp probes for optional
+     * files (an OBJ's fallback .mtl) and carries on without them. */
+    if (!f->ok)
+        return NULL;
+    handle *h = gi_xcalloc(1, sizeof *h);
+    h->file.ReadProc = file_read;
+    h->file.WriteProc = file_write;
+    h->file.TellProc = file_tell;
+    h->file.FileSizeProc = file_size;
+    h->file.SeekProc = file_seek;
+    h->file.FlushProc = file_flush;
+    h->file.UserData = (aiUserData)h;
+    h->bytes = &f->bytes;
+    if (c->open_handles == c->handles_cap) {
+        c->handles_cap = c->handles_cap ? 2 * c->handles_cap : 8;
+        c->handles = gi_xrealloc(c->handles, c->handles_cap * sizeof *c->handles);
+    }
+    c->handles[c->open_handles++] = h;
+    return &h->file;
+}
+
+static void fs_close(struct aiFileIO *io, struct aiFile *af)
+{
+    import_ctx *c = (import_ctx *)io->UserData;
+    if (!af)
+        return;
+    handle *h = (handle *)af->UserData;
+    for (size_t i = 0; i < c->open_handles; i++)
+        if (c->handles[i] == h) {
+            c->handles[i] = c->handles[--c->open_handles];
+            break;
+        }
+    free(h);
+}
+
+static void ctx_free(import_ctx *c)
+{
+    for (size_t i = 0; i < c->open_handles; i++)
+        free(c->handles[i]);
+    free(c->handles);
+    for (size_t i = 0; i < c->count; i++) {
+        free(c->files[i]->name);
+        gi_buf_free(&c->files[i]->bytes);
+        free(c->files[i]);
+    }
+    free(c->files);
+}
+
+/* What assimp puts where a file gives no material: its
+ * AI_DEFAULT_MATERIAL_NAME (OBJ without usemtl), or an unnamed plain white
+ * one (PLY; glTF's spec default for a primitive without material). A white
+ * reflectance of 1 is not physical anyway, so an unnamed white material the
+ * file did give is treated the same. */
+static int is_stand_in(const struct aiMaterial *am)
+{
+    struct aiString name;
+    if (aiGetMaterialString(am, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS)
+        return strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0;
+    struct aiColor4D c;
+    if (aiGetMaterialColor(am, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS &&
+        (c.r != 0 || c.g != 0 || c.b != 0))
+        return 0;
+    return aiGetMaterialColor(am, AI_MATKEY_COLOR_DIFFUSE, &c) != aiReturn_SUCCESS ||
+           (c.r == 1 && c.g == 1 && c.b == 1);
+}
+
+/* Whether a "newmtl <name>" line in one of the material libraries read
+ * for an OBJ defines `mat`. assimp gives a material that usemtl names but
+ * no library defines (or whose library is missing) its own grey; we want
+ * the default material there, and assimp does not say which case it was. */
+static int mtl_defines(const import_ctx *c, const char *mat)
+{
+    size_t ml = strlen(mat);
+    for (size_t i = 1; i < c->count; i++) {
+        if (!c->files[i]->ok || c->files[i]->bytes.len == 0)
+            continue;
+        const char *p = (const char *)c->files[i]->bytes.data;
+        const char *end = p + c->files[i]->bytes.len;
+        while (p < end) {
+            const char *eol = memchr(p, '\n', (size_t)(end - p));
+            if (!eol)
+                eol = end;
+            const char *b = p;
+            while (b < eol && (*b == ' ' || *b == '\t'))
+                b++;
+            if (eol - b > 7 && strncasecmp(b, "newmtl", 6) == 0 &&
+                (b[6] == ' ' || b[6] == '\t')) {
+                b += 7;
+                while (b < eol && (*b == ' ' || *b == '\t'))
+                    b++;
+                const char *e = eol;
+                while (e > b && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\r'))
+                    e--;
+                if ((size_t)(e - b) == ml && memcmp(b, mat, ml) == 0)
+                    return 1;
+            }
+            p = eol + 1;
+        }
+    }
+    return 0;
+}
+
+static void default_material(gi_mesh_material *m)
+{
+    m->name = gi_xstrdup("default");
+    m->diffuse = gi_v3(0.8f, 0.8f, 0.8f);
+    m->emission = gi_v3(0.0f, 0.0f, 0.0f);
+}
+
+static void read_material(const struct aiMaterial *am, uint32_t index, gi_mesh_material *m)
+{
+    if (is_stand_in(am)) {
+        default_material(m);
+        return;
+    }
+    struct aiString name;
+    if (aiGetMaterialString(am, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.data[0]) {
+        m->name = gi_xstrdup(name.data);
+    } else {
+        char buf[32];
+        snprintf(buf, sizeof buf, "material%u", index);
+        m->name = gi_xstrdup(buf);
+    }
+    /* OBJ Kd and glTF's base colour factor both land in COLOR_DIFFUSE
+     * (assimp 5.2 also copies the latter to BASE_COLOR). */
+    struct aiColor4D c;
+    m->diffuse = gi_v3(0.8f, 0.8f, 0.8f);
+    if (aiGetMaterialColor(am, AI_MATKEY_COLOR_DIFFUSE, &c) == aiReturn_SUCCESS ||
+        aiGetMaterialColor(am, AI_MATKEY_BASE_COLOR, &c) == aiReturn_SUCCESS)
+        m->diffuse = gi_v3(c.r, c.g, c.b);
+    m->emission = gi_v3(0.0f, 0.0f, 0.0f);
+    if (aiGetMaterialColor(am, AI_MATKEY_COLOR_EMISSIVE, &c) == aiReturn_SUCCESS)
+        m->emission = gi_v3(c.r, c.g, c.b);
+    /* An emissive intensity scales the emissive colour (glTF's
+     * KHR_materials_emissive_strength semantics) where an importer sets it. */
+    float strength;
+    unsigned int one = 1;
+    if (aiGetMaterialFloatArray(am, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
+            aiReturn_SUCCESS &&
+        one == 1)
+        m->emission = gi_scale(m->emission, strength);
+}
+
+/* Material names must be unique within a mesh (the scene looks them up by
+ * name): a repeated name gets "#<file index>" appended. */
+static void make_names_unique(gi_mesh_data *out, const uint32_t *file_index)
+{
+    for (uint32_t i = 1; i < out->material_count; i++)
+        for (uint32_t j = 0; j < i; j++)
+            if (strcmp(out->materials[i].name, out->materials[j].name) == 0) {
+                size_t n = strlen(out->materials[i].name) + 16;
+                char *s = gi_xmalloc(n);
+                snprintf(s, n, "%s#%u", out->materials[i].name, file_index[i]);
+                free(out->materials[i].name);
+                out->materials[i].name = s;
+                j = (uint32_t)-1; /* check the new name from the start */
+            }
+}
+
+static uint32_t mesh_triangles(const struct aiMesh *am)
+{
+    uint32_t n = 0;
+    for (unsigned f = 0; f < am->mNumFaces; f++)
+        n += am->mFaces[f].mNumIndices == 3;
+    return n;
+}
+
+/* Copies the (flattened, triangulated) assimp scene into out. */
+static int convert(const struct aiScene *sc, const import_ctx *c, const char *name,
+                   gi_mesh_data *out, gi_error *err)
+{
+    uint64_t nv = 0, nt = 0;
+    int all_normals = 1;
+    for (unsigned i = 0; i < sc->mNumMeshes; i++) {
+        const struct aiMesh *am = sc->mMeshes[i];
+        uint32_t t = mesh_triangles(am);
+        if (t == 0)
+            continue;
+        nv += am->mNumVertices;
+        nt += t;
+        all_normals &= am->mNormals != NULL;
+        if (sc->mNumMaterials && am->mMaterialIndex >= sc->mNumMaterials)
+            return gi_fail(err, GI_EINVAL, "%s: mesh %u uses material %u of %u", name, i,
+                           am->mMaterialIndex, sc->mNumMaterials);
+    }
+    if (nt == 0)
+        return gi_fail(err, GI_EINVAL, "%s: no triangles", name);
+    if (nv > MAX_MESH_VERTICES || nt > MAX_MESH_TRIANGLES)
+        return gi_fail(err, GI_ENOMEM,
+                       "%s: %llu vertices and %llu triangles, over the limit of 2^31 each",
+                       name, (unsigned long long)nv, (unsigned long long)nt);
+
+    /* Only materials some triangle uses, in the file's order (assimp adds
+     * unused ones: the OBJ stand-in, glTF's default). */
+    uint32_t nm = sc->mNumMaterials;
+    uint32_t *map = gi_xcalloc((size_t)nm + 1, sizeof *map);
+    uint32_t *file_index = gi_xcalloc((size_t)nm + 1, sizeof *file_index);
+    for (unsigned i = 0; i < sc->mNumMeshes; i++)
+        if (nm && mesh_triangles(sc->mMeshes[i]))
+            map[sc->mMeshes[i]->mMaterialIndex] = 1;
+    uint32_t used = 0;
+    for (uint32_t i = 0; i < nm; i++)
+        if (map[i]) {
+            file_index[used] = i;
+            map[i] = used++;
+        }
+
+    out->positions = gi_try_malloc((size_t)(nv + 1) * sizeof *out->positions, err, name);
+    out->normals = all_normals
+                       ? gi_try_malloc((size_t)(nv + 1) * sizeof *out->normals, err, name)
+                       : NULL;
+    out->indices = gi_try_malloc((size_t)(3 * nt) * sizeof *out->indices, err, name);
+    out->tri_material = gi_try_malloc((size_t)nt * sizeof *out->tri_material, err, name);
+    if (!out->positions || (all_normals && !out->normals) || !out->indices ||
+        !out->tri_material) {
+        free(map);
+        free(file_index);
+        return -1;
+    }
+    out->material_count = used ? used : 1;
+    out->materials = gi_xcalloc(out->material_count, sizeof *out->materials);
+    if (used == 0)
+        default_material(&out->materials[0]);
+    size_t nl = strlen(name);
+    int is_obj = nl >= 4 && strcasecmp(name + nl - 4, ".obj") == 0;
+    for (uint32_t i = 0; i < used; i++) {
+        gi_mesh_material *m = &out->materials[i];
+        read_material(sc->mMaterials[file_index[i]], file_index[i], m);
+        if (is_obj && strcmp(m->name, "default") != 0 && !mtl_defines(c, m->name)) {
+            gi_warn("%s: material \"%s\" is not defined by any material library read; "
+                    "using the default material's colours",
+                    name, m->name);
+            m->diffuse = gi_v3(0.8f, 0.8f, 0.8f);
+            m->emission = gi_v3(0.0f, 0.0f, 0.0f);
+        }
+    }
+    make_names_unique(out, file_index);
+
+    uint32_t v0 = 0, t0 = 0;
+    int rc = 0;
+    for (unsigned i = 0; i < sc->mNumMeshes && rc == 0; i++) {
+        const struct aiMesh *am = sc->mMeshes[i];
+        if (mesh_triangles(am) == 0)
+            continue;
+        for (unsigned v = 0; v < am->mNumVertices; v++) {
+            const struct aiVector3D *p = &am->mVertices[v];
+            out->positions[v0 + v] = gi_v3(p->x, p->y, p->z);
+            if (all_normals) {
+                const struct aiVector3D *n = &am->mNormals[v];
+                out->normals[v0 + v] = gi_v3(n->x, n->y, n->z);
+            }
+        }
+        uint32_t mat = nm ? map[am->mMaterialIndex] : 0;
+        for (unsigned f = 0; f < am->mNumFaces && rc == 0; f++) {
+            const struct aiFace *face = &am->mFaces[f];
+            if (face->mNumIndices != 3)
+                continue;
+            for (int k = 0; k < 3; k++) {
+                if (face->mIndices[k] >= am->mNumVertices) {
+                    rc = gi_fail(err, GI_EINVAL, "%s: mesh %u face %u uses vertex %u of %u",
+                                 name, i, f, face->mIndices[k], am->mNumVertices);
+                    break;
+                }
+                out->indices[3 * (size_t)t0 + k] = v0 + face->mIndices[k];
+            }
+            out->tri_material[t0++] = mat;
+        }
+        v0 += am->mNumVertices;
+    }
+    free(map);
+    free(file_index);
+    if (rc)
+        return -1;
+    out->vertex_count = v0;
+    out->triangle_count = t0;
+    return 0;
+}
+
+/* assimp's C API keeps the last error in a process-wide string: an import
+ * and the reading of its error are one critical section. */
+static pthread_mutex_t assimp_lock = PTHREAD_MUTEX_INITIALIZER;
+
+int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
+                   gi_error *err)
+{
+    gi_mesh_data_init(out);
+    import_ctx c;
+    memset(&c, 0, sizeof c);
+    c.src = src;
+    /* Read the main file first, so a missing one is reported as the
+     * source says it (and not as assimp's "unable to open"). */
+    import_file *main_file = ctx_fetch(&c, name);
+    if (!main_file->ok) {
+        if (err && main_file->err.code == GI_OK)
+            gi_fail(err, GI_EIO, "%s: the asset source could not read it", name);
+        else if (err)
+            *err = main_file->err;
+        ctx_free(&c);
+        return -1;
+    }
+
+    if (gi_mesh_precheck(name, main_file->bytes.data, main_file->bytes.len, err)) {
+        ctx_free(&c);
+        return -1;
+    }
+
+    struct aiFileIO io = {fs_open, fs_close, (aiUserData)&c};
+    /* SortByPType leaves every mesh one primitive type; convert() skips
+     * the point and line meshes. (Not AI_CONFIG_PP_SBP_REMOVE: a file with
+     * nothing but lines would then fail as "No meshes remaining" instead of
+     * "no triangles".) No aiProcess_GenNormals: the scene computes
+     * area-weighted normals for meshes without, the same way for every
+     * format. */
+    unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                     aiProcess_PreTransformVertices | aiProcess_SortByPType |
+                     aiProcess_ValidateDataStructure;
+    char aimsg[600] = "";
+    pthread_mutex_lock(&assimp_lock);
+    const struct aiScene *sc = aiImportFileEx(main_file->name, flags, &io);
+    if (!sc)
+        snprintf(aimsg, sizeof aimsg, "%s", aiGetErrorString());
+    pthread_mutex_unlock(&assimp_lock);
+
+    int rc;
+    if (!sc) {
+        /* A referenced file (.mtl, .bin) that could not be read is the
+         * likely cause: say which, and keep its code (a failed fetch is
+         * not bad input). */
+        const import_file *missing = NULL;
+        for (size_t i = 1; i < c.count && !missing; i++)
+            if (!c.files[i]->ok)
+                missing = c.files[i];
+        rc = gi_fail(err, missing && missing->err.code != GI_OK ? missing->err.code : GI_EINVAL,
+                     "%s: cannot import: %s%s%s", name, aimsg[0] ? aimsg : "unknown assimp error",
+                     missing ? "; " : "", missing ? missing->err.msg : "");
+    } else {
+        rc = convert(sc, &c, name, out, err);
+        aiReleaseImport(sc);
+    }
+    ctx_free(&c);
+    if (rc)
+        gi_mesh_data_free(out);
+    return rc;
+}

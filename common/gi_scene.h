@@ -1,0 +1,108 @@
+/* gi_scene: the scene every method renders.
+ *
+ * All geometry is triangles in world space. Each object owns a contiguous
+ * range of vertices and a contiguous range of triangles, so that an object
+ * can become one Embree geometry and can later be moved on its own. Indices
+ * are global (into the scene's vertex arrays).
+ *
+ * Conventions (docs/scene-format.md): right-handed, y up; units are those of
+ * the scene file (the Cornell box is in millimetres). A triangle's front face
+ * is the side its counter-clockwise winding faces; emitters emit from the
+ * front face only unless the material says "two_sided". Reflection is
+ * diffuse from both faces. */
+#ifndef GI_SCENE_H
+#define GI_SCENE_H
+
+#include <stdint.h>
+
+#include "gi_assets.h"
+#include "gi_error.h"
+#include "gi_math.h"
+
+typedef struct gi_material {
+    char *name;
+    gi_vec3 diffuse;  /* reflectance rho, each channel in [0, 1) */
+    gi_vec3 emission; /* emitted radiance */
+    int two_sided;    /* emits from both faces */
+} gi_material;
+
+typedef struct gi_camera {
+    gi_vec3 position, look_at, up;
+    float fov_y_deg; /* vertical field of view */
+} gi_camera;
+
+typedef struct gi_object {
+    char *name;
+    int mobile; /* may move between frames (animation) */
+    uint32_t first_vertex, vertex_count;
+    uint32_t first_triangle, triangle_count;
+    gi_mat4 transform; /* object to world, as given */
+} gi_object;
+
+typedef struct gi_scene {
+    char *name; /* the file it came from */
+    gi_camera camera;
+    int has_camera;
+
+    uint32_t material_count;
+    gi_material *materials;
+    uint32_t object_count;
+    gi_object *objects;
+
+    uint32_t vertex_count;
+    gi_vec3 *positions; /* world space; one spare element for Embree's padded reads */
+    gi_vec3 *normals;   /* unit shading normals, per vertex */
+    uint32_t triangle_count;
+    uint32_t *indices;      /* 3 per triangle */
+    uint32_t *tri_material; /* per triangle */
+    uint32_t *tri_object;   /* per triangle */
+
+    /* Derived per triangle (gi_scene_update_derived): the unit front-face
+     * normal, and whether shading normals vary over it (else the geometric
+     * normal is the shading normal, and the tracer skips interpolation). */
+    gi_vec3 *tri_normal;
+    uint8_t *tri_smooth;
+
+    gi_vec3 bbox_min, bbox_max;
+
+    /* Emissive triangles, sampled in proportion to emitted power. */
+    uint32_t light_count;
+    uint32_t *light_tris;
+    double *light_cdf;   /* light_count + 1 entries, cdf[0] = 0, cdf[n] = 1 */
+    double *light_power; /* per light: pi * area * luminance(emission) * sides */
+    double total_power;  /* sum of light_power (luminance watts, scene units) */
+} gi_scene;
+
+/* Loads a scene from `name` through src: a scene JSON file, or a bare OBJ
+ * (with its MTL) / PLY / glTF taken as a whole scene. */
+int gi_scene_load(const gi_asset_source *src, const char *name, gi_scene *out,
+                  gi_error *err);
+void gi_scene_free(gi_scene *s);
+
+/* Geometry helpers. */
+static inline void gi_scene_triangle(const gi_scene *s, uint32_t t, gi_vec3 *a, gi_vec3 *b,
+                                     gi_vec3 *c)
+{
+    const uint32_t *ix = &s->indices[3 * t];
+    *a = s->positions[ix[0]];
+    *b = s->positions[ix[1]];
+    *c = s->positions[ix[2]];
+}
+double gi_scene_triangle_area(const gi_scene *s, uint32_t t);
+/* Unit front-face normal (valid after gi_scene_update_derived). */
+static inline gi_vec3 gi_scene_triangle_normal(const gi_scene *s, uint32_t t)
+{
+    return s->tri_normal[t];
+}
+static inline const gi_material *gi_scene_tri_material(const gi_scene *s, uint32_t t)
+{
+    return &s->materials[s->tri_material[t]];
+}
+
+/* Recomputes bbox and the light distribution (after loading or moving). */
+int gi_scene_update_derived(gi_scene *s, gi_error *err);
+
+/* Index of the object named `name`, or -1. */
+int gi_scene_find_object(const gi_scene *s, const char *name);
+
+#endif

@@ -1,0 +1,174 @@
+/* Unit tests: scene files (JSON), assembly checks, lights, camera. */
+#include <string.h>
+
+#include "gi_camera.h"
+#include "gi_light.h"
+#include "gi_rng.h"
+#include "gi_test.h"
+#include "test_helpers.h"
+
+GI_TEST(test_cornell_box_scene_matches_the_measured_data)
+{
+    gi_error err;
+    gi_scene s;
+    GI_REQUIRE_OK(gi_test_load_scene_file("scenes/cornell-box/scene.json", &s, &err));
+    GI_CHECK(s.object_count == 8);
+    GI_CHECK(s.triangle_count == 32);
+    GI_CHECK(s.has_camera);
+    GI_CHECK_NEAR(s.camera.fov_y_deg, 39.3, 1e-5);
+    int light = gi_scene_find_object(&s, "light");
+    GI_REQUIRE(light >= 0);
+    GI_CHECK(s.light_count == 2);
+    double area = 0;
+    for (uint32_t i = 0; i < s.light_count; i++) {
+        uint32_t t = s.light_tris[i];
+        GI_CHECK(s.tri_object[t] == (uint32_t)light);
+        area += gi_scene_triangle_area(&s, t);
+        gi_vec3 n = gi_scene_triangle_normal(&s, t);
+        /* The light faces down into the box. */
+        GI_CHECK_NEAR(n.y, -1.0, 1e-6);
+    }
+    GI_CHECK_NEAR(area, 130.0 * 105.0, 1e-3);
+    double lum = 0.2126 * 17 + 0.7152 * 12 + 0.0722 * 4;
+    GI_CHECK_REL(s.total_power, GI_PI * area * lum, 1e-6);
+    const gi_material *red = gi_scene_tri_material(&s, s.objects[gi_scene_find_object(&s, "left_wall")].first_triangle);
+    GI_CHECK(strcmp(red->name, "red") == 0);
+    GI_CHECK_NEAR(red->diffuse.y, 0.065, 1e-7);
+    GI_CHECK_NEAR(s.bbox_max.x, 556.0, 1e-3);
+    GI_CHECK_NEAR(s.bbox_max.y, 548.8, 1e-3);
+    GI_CHECK_NEAR(s.bbox_max.z, 559.2, 1e-3);
+    /* Image right is -x: the red wall (x ~ 550) is on the left. */
+    gi_camera_frame f;
+    gi_camera_frame_init(&f, &s.camera, 256, 256);
+    GI_CHECK(gi_camera_dir(&f, 0.0f, 128.0f).x > 0.0f);
+    GI_CHECK(gi_camera_dir(&f, 256.0f, 128.0f).x < 0.0f);
+    GI_CHECK(gi_camera_dir(&f, 128.0f, 0.0f).y > 0.0f);
+    gi_scene_free(&s);
+}
+
+GI_TEST(test_scene_shapes_transforms_and_mobile)
+{
+    gi_error err;
+    gi_scene s;
+    const char *text =
+        "{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+        "                 \"l\": {\"emission\": [1, 1, 1], \"two_sided\": true}},"
+        " \"objects\": ["
+        "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [2, 3]},"
+        "   \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 90}},"
+        "                   {\"translate\": [0, 5, 0]}]},"
+        "  {\"name\": \"ball\", \"material\": \"w\", \"mobile\": true,"
+        "   \"sphere\": {\"radius\": 2, \"subdivisions\": 2},"
+        "   \"transform\": [{\"scale\": 0.5}, {\"translate\": [10, 0, 0]}]},"
+        "  {\"name\": \"room\", \"material\": \"w\", \"box\": {\"size\": [20, 20, 20], \"inward\": true}}"
+        " ]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("shapes.json", text, &s, &err));
+    GI_CHECK(s.object_count == 3);
+    GI_CHECK(!s.has_camera); /* a default camera is still provided */
+    GI_CHECK(gi_length(gi_sub(s.camera.position, s.camera.look_at)) > 0);
+    const gi_object *lamp = &s.objects[0], *ball = &s.objects[1];
+    GI_CHECK(!lamp->mobile && ball->mobile);
+    /* The lamp quad was rotated to face -z... or +z: normal along z, at y 5. */
+    gi_vec3 n = gi_scene_triangle_normal(&s, lamp->first_triangle);
+    GI_CHECK_NEAR(fabs(n.z), 1.0, 1e-5);
+    for (uint32_t v = lamp->first_vertex; v < lamp->first_vertex + lamp->vertex_count; v++)
+        GI_CHECK_NEAR(s.positions[v].y, 5.0, 1.6);
+    /* Scale then translate: every ball vertex at distance 1 from (10, 0, 0). */
+    for (uint32_t v = ball->first_vertex; v < ball->first_vertex + ball->vertex_count; v++) {
+        GI_CHECK_NEAR(gi_length(gi_sub(s.positions[v], gi_v3(10, 0, 0))), 1.0, 1e-5);
+        /* Normals point outwards after the transform. */
+        GI_CHECK(gi_dot(s.normals[v], gi_sub(s.positions[v], gi_v3(10, 0, 0))) > 0.99f);
+    }
+    /* Two-sided emitter: twice the power of one face. */
+    GI_CHECK_REL(s.total_power, 2.0 * GI_PI * 6.0, 1e-5);
+    gi_scene_free(&s);
+}
+
+typedef struct bad_case {
+    const char *text, *expect;
+} bad_case;
+
+GI_TEST(test_bad_scenes_are_refused_with_a_clear_message)
+{
+    static const bad_case cases[] = {
+        {"{\"materials\": {}, \"objects\": []}", "no objects"},
+        {"{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5]}}, \"objects\": [{\"material\": "
+         "\"w\", \"quad\": {\"size\": [1, 1]}}]}",
+         "no light"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"x\", "
+         "\"quad\": {\"size\": [1, 1]}}]}",
+         "material \"x\" is not defined"},
+        {"{\"materials\": {\"l\": {\"diffuse\": [1.5, 0, 0]}}, \"objects\": []}",
+         "materials.l.diffuse[0]: 1.5 is out of range"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"polygons\": {\"vertices\": [], \"faces\": []}}]}",
+         "empty mesh"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"polygons\": {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"faces\": [[0,1,3]]}}]}",
+         "faces[0][2]: 3 is out of range"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"polygons\": {\"vertices\": [[0,0,0],[1,0,0],[0,1,0],[0,0,1],[0,-1,0]], "
+         "\"faces\": [[0,1,2],[0,1,3],[0,1,4]]}}]}",
+         "non-manifold"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"polygons\": {\"vertices\": [[0,0,0],[1,0,0],[2,0,0]], \"faces\": [[0,1,2]]}}]}",
+         "degenerate"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"quad\": {\"size\": [1, 1]}, \"transform\": [{\"scale\": 0}]}]}",
+         "zero scale"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"quad\": {\"size\": [1, 1]}, \"box\": {\"size\": [1, 1, 1]}}]}",
+         "one geometry per object"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"quad\": {\"size\": [1, 1e999]}}]}",
+         "not finite"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"material\": \"l\", "
+         "\"mesh\": \"nowhere.obj\"}]}",
+         "nowhere.obj"},
+        {"{\"camera\": {\"position\": [0,0,0], \"look_at\": [0,0,0], \"fov_y\": 40}, "
+         "\"materials\": {}, \"objects\": []}",
+         "same point"},
+        {"{\"materials\": {\"l\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"name\": \"a\", "
+         "\"material\": \"l\", \"quad\": {\"size\": [1, 1]}}, {\"name\": \"a\", \"material\": "
+         "\"l\", \"quad\": {\"size\": [1, 1]}}]}",
+         "used twice"},
+        {"{\"materials\": {}, \"objects\": [], \"lights\": []}", "lights: unknown key"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        gi_error err;
+        gi_error_clear(&err);
+        gi_scene s;
+        int rc = gi_test_load_scene_text("bad.json", cases[i].text, &s, &err);
+        GI_CHECK_MSG(rc == -1, "case %zu loaded", i);
+        GI_CHECK_MSG(err.code == GI_EINVAL, "case %zu: code %d (%s)", i, err.code, err.msg);
+        GI_CHECK_MSG(strstr(err.msg, cases[i].expect) != NULL && strstr(err.msg, "bad.json"),
+                     "case %zu: \"%s\" does not say \"%s\"", i, err.msg, cases[i].expect);
+        if (rc == 0)
+            gi_scene_free(&s);
+    }
+}
+
+GI_TEST(test_light_sampling_is_proportional_to_power)
+{
+    gi_error err;
+    gi_scene s;
+    const char *text =
+        "{\"materials\": {\"a\": {\"emission\": [1, 1, 1]}, \"b\": {\"emission\": [3, 3, 3]}},"
+        " \"objects\": [{\"name\": \"a\", \"material\": \"a\", \"quad\": {\"size\": [1, 1]}},"
+        "  {\"name\": \"b\", \"material\": \"b\", \"quad\": {\"size\": [2, 1]},"
+        "   \"transform\": [{\"translate\": [5, 0, 0]}]}]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("lights.json", text, &s, &err));
+    /* Powers 1 and 6: b is picked 6/7 of the time; pdf_area matches. */
+    gi_rng rng;
+    gi_rng_init(&rng, 3, 0, 0);
+    int nb = 0, n = 200000;
+    for (int i = 0; i < n; i++) {
+        gi_light_sample ls;
+        gi_light_sample_point(&s, gi_rng_double(&rng), gi_rng_float(&rng), gi_rng_float(&rng), &ls);
+        int is_b = ls.p.x > 2.0f;
+        nb += is_b;
+        GI_CHECK_NEAR(ls.pdf_area, is_b ? (6.0 / 7.0) / 2.0 : (1.0 / 7.0) / 1.0, 1e-6);
+    }
+    GI_CHECK_NEAR((double)nb / n, 6.0 / 7.0, 0.005);
+    gi_scene_free(&s);
+}
