@@ -1,0 +1,254 @@
+/* gi_job: job documents (docs/job-format.md): parsing, validation, scene
+ * loading, outputs. */
+#include "gi_job.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_camera.h"
+#include "gi_fs.h"
+#include "gi_json.h"
+
+static int valid_file_name(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n > 200 || s[0] == '.')
+        return 0;
+    for (const char *p = s; *p; p++) {
+        char c = *p;
+        if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+              c == '.' || c == '_' || c == '-'))
+            return 0;
+    }
+    return 1;
+}
+
+static char *default_name(const char *file)
+{
+    const char *base = strrchr(file, '/');
+    base = base ? base + 1 : file;
+    char *name = gi_xstrdup(base);
+    char *dot = strrchr(name, '.');
+    if (dot && dot != name)
+        *dot = '\0';
+    if (!valid_file_name(name)) {
+        free(name);
+        name = gi_xstrdup("job");
+    }
+    return name;
+}
+
+static int parse_outputs(gi_jv *v, gi_job *job, const cJSON *outs)
+{
+    const gi_method *m = job->method;
+    if (!outs) {
+        for (int i = 0; m->default_outputs[i]; i++) {
+            char file[300];
+            snprintf(file, sizeof file, "%s.%s", job->name, m->default_outputs[i]);
+            job->outputs[job->output_count].kind = gi_xstrdup(m->default_outputs[i]);
+            job->outputs[job->output_count].file = gi_xstrdup(file);
+            job->output_count++;
+        }
+        return 0;
+    }
+    if (gi_jv_keys(v, outs, "outputs", m->output_kinds))
+        return -1;
+    for (const cJSON *o = outs->child; o; o = o->next) {
+        char p[512];
+        gi_json_path(p, sizeof p, "outputs", o->string);
+        if (!cJSON_IsString(o) || !valid_file_name(o->valuestring))
+            return gi_jv_fail(v, p,
+                              "expected a plain file name (letters, digits, '.', '_', '-'; "
+                              "no directories)");
+        for (int i = 0; i < job->output_count; i++)
+            if (strcmp(job->outputs[i].file, o->valuestring) == 0)
+                return gi_jv_fail(v, p, "\"%s\" is already the %s output", o->valuestring,
+                                  job->outputs[i].kind);
+        job->outputs[job->output_count].kind = gi_xstrdup(o->string);
+        job->outputs[job->output_count].file = gi_xstrdup(o->valuestring);
+        job->output_count++;
+    }
+    if (job->output_count == 0)
+        return gi_jv_fail(v, "outputs", "no outputs requested");
+    return 0;
+}
+
+int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi_error *err)
+{
+    memset(job, 0, sizeof *job);
+    job->file = gi_xstrdup(file);
+    gi_manifest_init(&job->manifest);
+    if (len > GI_JOB_MAX_BYTES)
+        return gi_fail(err, GI_EINVAL, "%s: job is %zu bytes (limit %u)", file, len,
+                       GI_JOB_MAX_BYTES);
+    job->text = gi_xmalloc(len + 1);
+    memcpy(job->text, text, len);
+    job->text[len] = '\0';
+    if (gi_json_parse(job->text, len, file, &job->doc, err))
+        return -1;
+    gi_jv v = {file, err};
+    const cJSON *root = job->doc;
+
+    /* The method first: its name decides which parameter block is allowed. */
+    const char *method = NULL;
+    if (gi_jv_string(&v, root, "", "method", 1, &method))
+        return -1;
+    job->method = gi_method_find(method);
+    if (!job->method) {
+        char list[256] = "";
+        size_t n = 0;
+        for (const gi_method *const *m = gi_methods(); *m; m++)
+            n += (size_t)snprintf(list + n, sizeof list - n, "%s%s", n ? ", " : "", (*m)->name);
+        return gi_jv_fail(&v, "method", "unknown method \"%s\" (available: %s)", method, list);
+    }
+    for (const cJSON *it = root->child; it; it = it->next) {
+        const gi_method *other = gi_method_find(it->string);
+        if (other && other != job->method)
+            return gi_jv_fail(&v, it->string,
+                              "parameters for method \"%s\", but the job's method is \"%s\"",
+                              other->name, job->method->name);
+    }
+    const char *keys[] = {"name",   "description", "scene",   "method", "seed",
+                          "image",  "camera",      "outputs", job->method->name, NULL};
+    if (gi_jv_keys(&v, root, "", keys))
+        return -1;
+
+    const char *name = NULL, *scene = NULL, *desc = NULL;
+    int64_t seed = 1;
+    const cJSON *image, *camera, *outputs, *params;
+    if (gi_jv_string(&v, root, "", "name", 0, &name) ||
+        gi_jv_string(&v, root, "", "description", 0, &desc) ||
+        gi_jv_string(&v, root, "", "scene", 1, &scene) ||
+        gi_jv_int(&v, root, "", "seed", 0, 0, (int64_t)1 << 53, &seed) ||
+        gi_jv_member_object(&v, root, "", "image", 0, &image) ||
+        gi_jv_member_object(&v, root, "", "camera", 0, &camera) ||
+        gi_jv_member_object(&v, root, "", "outputs", 0, &outputs) ||
+        gi_jv_member_object(&v, root, "", job->method->name, 0, &params))
+        return -1;
+    if (name && !valid_file_name(name))
+        return gi_jv_fail(&v, "name",
+                          "must be 1-200 letters, digits, '.', '_' or '-', not starting with '.'");
+    job->name = name ? gi_xstrdup(name) : default_name(file);
+    if (!scene[0])
+        return gi_jv_fail(&v, "scene", "is empty");
+    job->scene_name = gi_path_normalize(scene);
+    job->seed = (uint64_t)seed;
+
+    job->width = job->height = 512;
+    if (image) {
+        static const char *const ikeys[] = {"width", "height", "exposure", NULL};
+        int64_t w = 512, h = 512;
+        if (gi_jv_keys(&v, image, "image", ikeys) ||
+            gi_jv_int(&v, image, "image", "width", 0, 1, GI_JOB_MAX_SIDE, &w) ||
+            gi_jv_int(&v, image, "image", "height", 0, 1, GI_JOB_MAX_SIDE, &h) ||
+            gi_jv_number(&v, image, "image", "exposure", 0, -30, 30, &job->exposure))
+            return -1;
+        job->width = (int)w;
+        job->height = (int)h;
+    }
+    if (camera) {
+        if (gi_camera_parse(&v, camera, "camera", &job->camera))
+            return -1;
+        job->has_camera = 1;
+    }
+    if (parse_outputs(&v, job, outputs))
+        return -1;
+    return job->method->parse(job, params, &v);
+}
+
+void gi_job_free(gi_job *job)
+{
+    if (job->method && job->method->release)
+        job->method->release(job);
+    free(job->file);
+    free(job->text);
+    cJSON_Delete(job->doc);
+    free(job->name);
+    free(job->scene_name);
+    for (int i = 0; i < job->output_count; i++) {
+        free(job->outputs[i].kind);
+        free(job->outputs[i].file);
+    }
+    free(job->out_dir);
+    if (job->scene_loaded)
+        gi_scene_free(&job->scene);
+    gi_manifest_free(&job->manifest);
+    gi_asset_store_free(job->assets);
+    for (int i = 0; i < job->written_count; i++)
+        free(job->written[i]);
+    memset(job, 0, sizeof *job);
+}
+
+int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err)
+{
+    if (gi_scene_load(src, job->scene_name, &job->scene, err))
+        return gi_error_prefix(err, "%s: scene", job->file);
+    job->scene_loaded = 1;
+    if (job->method->check_scene && job->method->check_scene(job, err))
+        return -1;
+    return 0;
+}
+
+int gi_job_load(const char *path, gi_job *job, gi_error *err)
+{
+    gi_buf text;
+    gi_buf_init(&text);
+    if (gi_read_file(path, GI_JOB_MAX_BYTES, &text, err)) {
+        gi_buf_free(&text);
+        memset(job, 0, sizeof *job);
+        return -1;
+    }
+    int rc = gi_job_parse((const char *)text.data, text.len, path, job, err);
+    gi_buf_free(&text);
+    if (rc)
+        return -1;
+    char *dir = gi_dirname(path);
+    gi_dir_source ds;
+    gi_dir_source_init(&ds, dir);
+    free(dir);
+    gi_asset_source src = gi_dir_source_as_source(&ds);
+    rc = gi_job_load_scene(job, &src, err);
+    /* The job keeps what it read: the manifest and the bytes, so workers
+     * get exactly these files whatever happens on disk meanwhile. */
+    job->manifest = ds.manifest;
+    gi_manifest_init(&ds.manifest);
+    job->assets = ds.store;
+    ds.store = NULL;
+    gi_dir_source_free(&ds);
+    return rc;
+}
+
+const gi_camera *gi_job_camera(const gi_job *job)
+{
+    return job->has_camera ? &job->camera : &job->scene.camera;
+}
+
+const char *gi_job_output(const gi_job *job, const char *kind)
+{
+    for (int i = 0; i < job->output_count; i++)
+        if (strcmp(job->outputs[i].kind, kind) == 0)
+            return job->outputs[i].file;
+    return NULL;
+}
+
+char *gi_job_output_path(const gi_job *job, const char *file)
+{
+    return gi_path_join(job->out_dir ? job->out_dir : ".", file);
+}
+
+void gi_job_note_output(gi_job *job, const char *kind, const char *path)
+{
+    if (job->written_count + 2 > (int)GI_ARRAY_LEN(job->written))
+        return;
+    job->written[job->written_count++] = gi_xstrdup(kind);
+    job->written[job->written_count++] = gi_xstrdup(path);
+}
+
+void gi_job_publish(gi_job *job, const void *data, size_t len, char hash[GI_HASH_HEX])
+{
+    gi_hash_hex(data, len, hash);
+    if (!job->assets)
+        job->assets = gi_asset_store_new();
+    gi_asset_store_put(job->assets, hash, data, len);
+}

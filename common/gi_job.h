@@ -1,0 +1,78 @@
+/* gi_job: a rendering job, as parsed from its JSON (docs/job-format.md).
+ *
+ * The same job text is parsed on the coordinator (which also loads the
+ * scene without Embree, records the asset manifest, plans, merges and writes
+ * outputs) and in every worker process (which loads the scene from the
+ * manifest and runs tasks). */
+#ifndef GI_JOB_H
+#define GI_JOB_H
+
+#include <stdint.h>
+
+#include "gi_assets.h"
+#include "gi_error.h"
+#include "gi_method.h"
+#include "gi_scene.h"
+
+#define GI_JOB_MAX_BYTES (16u << 20)
+#define GI_JOB_MAX_SIDE 16384
+#define GI_JOB_MAX_OUTPUTS 16
+
+typedef struct gi_output_spec {
+    char *kind; /* "exr", "png", "ply", ... */
+    char *file; /* a plain file name inside the output directory */
+} gi_output_spec;
+
+struct gi_job {
+    char *file; /* where the job came from, for messages */
+    char *text; /* the job JSON as given (travels to workers) */
+    cJSON *doc;
+    char *name;
+    char *scene_name; /* asset name of the scene, relative to the job */
+    const gi_method *method;
+    uint64_t seed;
+    int width, height;
+    double exposure; /* PNG preview, in stops */
+    int has_camera;  /* job overrides the scene's camera */
+    gi_camera camera;
+    gi_output_spec outputs[GI_JOB_MAX_OUTPUTS];
+    int output_count;
+    void *params; /* method parameters (method->parse) */
+
+    /* Coordinator side. */
+    char *out_dir;
+    gi_scene scene;
+    int scene_loaded;
+    gi_manifest manifest;   /* name -> hash of every file the scene read */
+    gi_asset_store *assets; /* their bytes, plus blobs methods publish */
+    void *state;            /* method accumulators (method->plan .. release) */
+    /* Written outputs, for the summary: "kind path" lines. */
+    char *written[GI_JOB_MAX_OUTPUTS * 2];
+    int written_count;
+};
+
+/* Parses and validates a job document. `file` names it in messages. Does not
+ * touch the scene or the disk. */
+int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi_error *err);
+void gi_job_free(gi_job *job);
+
+/* Reads a job file, parses it, and loads its scene from the job file's
+ * directory (recording the manifest); then the method's scene checks. */
+int gi_job_load(const char *path, gi_job *job, gi_error *err);
+/* Loads the scene through `src` (used by gi_job_load and by workers). */
+int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err);
+
+/* The camera the job renders with (job override, else the scene's). */
+const gi_camera *gi_job_camera(const gi_job *job);
+/* The output file of a kind ("exr"), or NULL if the job does not ask for it. */
+const char *gi_job_output(const gi_job *job, const char *kind);
+/* Full path of an output in out_dir (malloc'ed). */
+char *gi_job_output_path(const gi_job *job, const char *file);
+/* Records a written output for the summary. */
+void gi_job_note_output(gi_job *job, const char *kind, const char *path);
+
+/* Coordinator-published data that tasks need (e.g. per-vertex radiance for
+ * image tiles): stored by content hash; workers fetch it like any asset. */
+void gi_job_publish(gi_job *job, const void *data, size_t len, char hash[GI_HASH_HEX]);
+
+#endif

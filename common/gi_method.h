@@ -1,0 +1,48 @@
+/* gi_method: the interface every rendering method implements.
+ *
+ * A method is one module with these entry points and nothing else in the
+ * system knows its internals (DESIGN.md). The coordinator side (parse, plan,
+ * merge, finish) never calls Embree; the worker side (run) does. merge is
+ * called in task-id order; merge and finish may add follow-up tasks (e.g.
+ * image tiles after a bake), and finish is called again whenever the tasks
+ * it added have all been merged, until it adds none. */
+#ifndef GI_METHOD_H
+#define GI_METHOD_H
+
+#include <cjson/cJSON.h>
+
+#include "gi_buf.h"
+#include "gi_error.h"
+#include "gi_json.h"
+#include "gi_task.h"
+
+typedef struct gi_job gi_job;
+typedef struct gi_worker_ctx gi_worker_ctx;
+
+typedef struct gi_method {
+    const char *name;
+    const char *summary;              /* one line for `gi methods` */
+    const char *unit;                 /* what task cost counts: "samples", "photons" */
+    const char *const *output_kinds;  /* keys allowed in "outputs", NULL-terminated */
+    const char *const *default_outputs; /* kinds written when "outputs" is absent */
+
+    /* Validates the method's parameter block (params may be NULL when the
+     * job has none) and stores the parsed parameters in job->params. */
+    int (*parse)(gi_job *job, const cJSON *params, gi_jv *v);
+    /* Checks that need the loaded scene (coordinator side, after parse). */
+    int (*check_scene)(gi_job *job, gi_error *err);
+    int (*plan)(gi_job *job, gi_task_queue *tasks, gi_error *err);
+    int (*run)(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
+    int (*merge)(gi_job *job, const gi_task *task, const gi_buf *result,
+                 gi_task_queue *followups, gi_error *err);
+    int (*finish)(gi_job *job, gi_task_queue *followups, gi_error *err);
+    /* Frees job->params and job->state. */
+    void (*release)(gi_job *job);
+} gi_method;
+
+/* The registry (gi_methods.c). */
+const gi_method *gi_method_find(const char *name);
+/* NULL-terminated list of all methods. */
+const gi_method *const *gi_methods(void);
+
+#endif

@@ -1,0 +1,110 @@
+/* gi_rt: ray tracing through Embree 3.
+ *
+ * One Embree device and scene per process, created after fork() (never
+ * inherited), single-threaded: a pool already runs one process per core.
+ * Each scene object is its own triangle geometry whose geomID is the object
+ * index, so objects can move on their own later; a hit reports the global
+ * triangle index. Embree errors go through an error callback into gi_error. */
+#ifndef GI_RT_H
+#define GI_RT_H
+
+#include <stdint.h>
+
+#include <embree3/rtcore.h>
+
+#include "gi_error.h"
+#include "gi_math.h"
+#include "gi_scene.h"
+
+typedef struct gi_rt {
+    RTCDevice device;
+    RTCScene scene;
+    const gi_scene *src; /* geometry buffers are shared with the gi_scene */
+    uint64_t rays;       /* rays traced (closest hit + occlusion) */
+    int failed;          /* set by the Embree error callback */
+    char error[256];
+} gi_rt;
+
+typedef struct gi_hit {
+    float t;      /* distance along the (unit) direction */
+    uint32_t tri; /* global triangle index */
+    float u, v;   /* barycentrics: p = (1-u-v) a + u b + v c */
+    gi_vec3 ng;   /* geometric normal (unnormalized, front face side) */
+} gi_hit;
+
+/* Builds the acceleration structure over every object of `scene`. The scene
+ * must outlive the gi_rt (its vertex and index arrays are shared). */
+int gi_rt_create(gi_rt *rt, const gi_scene *scene, gi_error *err);
+void gi_rt_free(gi_rt *rt);
+/* Re-reads the object's vertices from the gi_scene (it moved) and rebuilds. */
+int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err);
+
+/* Closest hit along org + t dir, t in [tnear, tfar]; dir need not be unit
+ * (t is then in units of |dir|). Returns 1 on a hit, 0 on a miss. */
+static inline int gi_rt_intersect(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tnear,
+                                  float tfar, gi_hit *hit)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    rh.ray.org_x = org.x;
+    rh.ray.org_y = org.y;
+    rh.ray.org_z = org.z;
+    rh.ray.tnear = tnear;
+    rh.ray.dir_x = dir.x;
+    rh.ray.dir_y = dir.y;
+    rh.ray.dir_z = dir.z;
+    rh.ray.time = 0.0f;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &ctx, &rh);
+    rt->rays++;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    hit->t = rh.ray.tfar;
+    hit->tri = rt->src->objects[rh.hit.geomID].first_triangle + rh.hit.primID;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+    hit->ng = gi_v3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    return 1;
+}
+
+/* 1 if anything blocks the segment org + t dir, t in [tnear, tfar]. */
+static inline int gi_rt_occluded(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tnear,
+                                 float tfar)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay r;
+    r.org_x = org.x;
+    r.org_y = org.y;
+    r.org_z = org.z;
+    r.tnear = tnear;
+    r.dir_x = dir.x;
+    r.dir_y = dir.y;
+    r.dir_z = dir.z;
+    r.time = 0.0f;
+    r.tfar = tfar;
+    r.mask = 0xFFFFFFFFu;
+    r.id = 0;
+    r.flags = 0;
+    rtcOccluded1(rt->scene, &ctx, &r);
+    rt->rays++;
+    return r.tfar < 0.0f;
+}
+
+/* A ray origin moved off the surface at p (geometric normal ng) towards the
+ * side `dir` leaves through, by an amount relative to p's magnitude, so the
+ * new ray does not hit the surface it starts on. */
+static inline gi_vec3 gi_rt_offset(gi_vec3 p, gi_vec3 ng_unit, gi_vec3 dir)
+{
+    float m = gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
+    float eps = 2e-5f * m;
+    return gi_madd(p, ng_unit, gi_dot(ng_unit, dir) >= 0.0f ? eps : -eps);
+}
+
+#endif

@@ -1,0 +1,211 @@
+/* gi_jobrun: task bookkeeping and in-order merging for one job. */
+#include "gi_jobrun.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_log.h"
+
+#define DEFAULT_MAX_ATTEMPTS 4
+
+static void pending_push(gi_jobrun *jr, uint64_t id, int front)
+{
+    if (jr->pending_head > 0 && jr->pending_head == jr->pending_count) {
+        jr->pending_head = jr->pending_count = 0;
+    }
+    if (front && jr->pending_head > 0) {
+        jr->pending[--jr->pending_head] = id;
+        return;
+    }
+    if (jr->pending_count == jr->pending_cap) {
+        jr->pending_cap = jr->pending_cap ? 2 * jr->pending_cap : 256;
+        jr->pending = gi_xrealloc(jr->pending, jr->pending_cap * sizeof *jr->pending);
+    }
+    if (front) {
+        memmove(jr->pending + jr->pending_head + 1, jr->pending + jr->pending_head,
+                (jr->pending_count - jr->pending_head) * sizeof *jr->pending);
+        jr->pending[jr->pending_head] = id;
+        jr->pending_count++;
+    } else {
+        jr->pending[jr->pending_count++] = id;
+    }
+}
+
+/* Takes the queue's tasks (ids are consecutive from task_count). */
+static int absorb(gi_jobrun *jr, gi_task_queue *q, gi_error *err)
+{
+    for (size_t i = 0; i < q->count; i++) {
+        gi_task *t = &q->tasks[i];
+        if (t->id != jr->task_count)
+            return gi_fail(err, GI_EINTERNAL, "task id %llu out of sequence (expected %llu)",
+                           (unsigned long long)t->id, (unsigned long long)jr->task_count);
+        if (jr->task_count == jr->task_cap) {
+            jr->task_cap = jr->task_cap ? 2 * jr->task_cap : 256;
+            jr->tasks = gi_xrealloc(jr->tasks, jr->task_cap * sizeof *jr->tasks);
+        }
+        gi_jobrun_task *jt = &jr->tasks[jr->task_count++];
+        memset(jt, 0, sizeof *jt);
+        jt->task = *t;
+        gi_buf_init(&t->payload); /* moved */
+        jt->state = GI_TASK_PENDING;
+        gi_buf_init(&jt->result);
+        jr->cost_total += t->cost;
+        pending_push(jr, t->id, 0);
+    }
+    q->count = 0;
+    return 0;
+}
+
+static int job_fail(gi_jobrun *jr, const gi_error *e)
+{
+    if (!jr->failed) {
+        jr->failed = 1;
+        jr->error = *e;
+    }
+    return -1;
+}
+
+int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
+{
+    memset(jr, 0, sizeof *jr);
+    jr->job = job;
+    jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
+    gi_task_queue q;
+    gi_task_queue_init(&q, 0);
+    int rc = job->method->plan(job, &q, err);
+    if (rc == 0)
+        rc = absorb(jr, &q, err);
+    gi_task_queue_free(&q);
+    if (rc == 0 && jr->task_count == 0)
+        rc = gi_fail(err, GI_EINTERNAL, "%s: the plan has no tasks", job->file);
+    return rc;
+}
+
+void gi_jobrun_free(gi_jobrun *jr)
+{
+    for (uint64_t i = 0; i < jr->task_count; i++) {
+        gi_task_free(&jr->tasks[i].task);
+        gi_buf_free(&jr->tasks[i].result);
+    }
+    free(jr->tasks);
+    free(jr->pending);
+    memset(jr, 0, sizeof *jr);
+}
+
+const gi_task *gi_jobrun_lease(gi_jobrun *jr)
+{
+    while (!gi_jobrun_done(jr) && jr->pending_head < jr->pending_count) {
+        gi_jobrun_task *jt = &jr->tasks[jr->pending[jr->pending_head++]];
+        if (jt->state != GI_TASK_PENDING)
+            continue;
+        jt->state = GI_TASK_LEASED;
+        jr->leased++;
+        return &jt->task;
+    }
+    return NULL;
+}
+
+/* Merges every result whose turn has come; calls finish when all is merged. */
+static int advance(gi_jobrun *jr)
+{
+    gi_job *job = jr->job;
+    gi_error err;
+    gi_error_clear(&err);
+    for (;;) {
+        while (jr->merge_next < jr->task_count &&
+               jr->tasks[jr->merge_next].state == GI_TASK_DONE) {
+            gi_jobrun_task *jt = &jr->tasks[jr->merge_next];
+            gi_task_queue q;
+            gi_task_queue_init(&q, jr->task_count);
+            int rc = job->method->merge(job, &jt->task, &jt->result, &q, &err);
+            if (rc == 0)
+                rc = absorb(jr, &q, &err);
+            gi_task_queue_free(&q);
+            jt = &jr->tasks[jr->merge_next]; /* absorb may have moved the array */
+            if (rc)
+                return job_fail(jr, &err);
+            jr->held_results_bytes -= jt->result.len;
+            gi_buf_free(&jt->result);
+            gi_task_free(&jt->task);
+            jt->state = GI_TASK_MERGED;
+            jr->merge_next++;
+        }
+        if (jr->merge_next < jr->task_count)
+            return 0;
+        gi_task_queue q;
+        gi_task_queue_init(&q, jr->task_count);
+        int rc = job->method->finish(job, &q, &err);
+        if (rc == 0)
+            rc = absorb(jr, &q, &err);
+        gi_task_queue_free(&q);
+        if (rc)
+            return job_fail(jr, &err);
+        if (jr->merge_next == jr->task_count) {
+            jr->finished = 1;
+            return 0;
+        }
+    }
+}
+
+int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf *result,
+                       const gi_task_stats *stats)
+{
+    if (gi_jobrun_done(jr))
+        return jr->failed ? -1 : 0;
+    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED ||
+        jr->tasks[task_id].task.attempt != attempt) {
+        gi_debug("ignoring a stale result for task %llu (attempt %u)",
+                 (unsigned long long)task_id, attempt);
+        return 0;
+    }
+    gi_jobrun_task *jt = &jr->tasks[task_id];
+    gi_buf_move(&jt->result, result);
+    jt->state = GI_TASK_DONE;
+    jr->leased--;
+    jr->cost_done += jt->task.cost;
+    jr->stats.rays += stats->rays;
+    jr->stats.samples += stats->samples;
+    jr->stats.seconds += stats->seconds;
+    jr->held_results_bytes += jt->result.len;
+    if (jr->held_results_bytes > jr->held_results_peak)
+        jr->held_results_peak = jr->held_results_bytes;
+    return advance(jr);
+}
+
+int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why)
+{
+    if (gi_jobrun_done(jr))
+        return jr->failed ? -1 : 0;
+    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED ||
+        jr->tasks[task_id].task.attempt != attempt)
+        return 0;
+    gi_jobrun_task *jt = &jr->tasks[task_id];
+    jt->last_error = *why;
+    jr->leased--;
+    jt->task.attempt++;
+    if (why->code == GI_EINVAL || jt->task.attempt >= jr->max_attempts) {
+        gi_error e;
+        if (why->code == GI_EINVAL)
+            gi_fail(&e, GI_EINVAL, "%s", why->msg);
+        else
+            gi_fail(&e, why->code, "task %llu failed %u times; last error: %s",
+                    (unsigned long long)task_id, jt->task.attempt, why->msg);
+        jt->state = GI_TASK_PENDING;
+        return job_fail(jr, &e);
+    }
+    gi_info("retrying task %llu (attempt %u): %s", (unsigned long long)task_id,
+            jt->task.attempt, why->msg);
+    jr->retries++;
+    jt->state = GI_TASK_PENDING;
+    pending_push(jr, task_id, 1);
+    return 0;
+}
+
+void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
+{
+    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED)
+        return;
+    jr->tasks[task_id].state = GI_TASK_PENDING;
+    jr->leased--;
+    pending_push(jr, task_id, 1);
+}

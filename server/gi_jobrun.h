@@ -1,0 +1,69 @@
+/* gi_jobrun: the life of one job on a coordinator: plan, lease tasks, take
+ * results, merge them in task-id order, retry failures, finish.
+ *
+ * It knows nothing about who runs tasks: `gi render` drives it with a local
+ * pool, gi-farmd with remote workers. Results may arrive in any order and
+ * more than once (a retried task whose first run was late); each task is
+ * merged exactly once, in id order, so outputs are bit-identical however the
+ * work was spread. */
+#ifndef GI_JOBRUN_H
+#define GI_JOBRUN_H
+
+#include <stdint.h>
+
+#include "gi_job.h"
+#include "gi_task.h"
+
+typedef enum {
+    GI_TASK_PENDING,
+    GI_TASK_LEASED,
+    GI_TASK_DONE,   /* result held, waiting for its turn to merge */
+    GI_TASK_MERGED
+} gi_task_state;
+
+typedef struct gi_jobrun_task {
+    gi_task task;
+    gi_task_state state;
+    gi_buf result;
+    gi_error last_error;
+} gi_jobrun_task;
+
+typedef struct gi_jobrun {
+    gi_job *job;
+    gi_jobrun_task *tasks; /* indexed by task id */
+    uint64_t task_count, task_cap;
+    uint64_t *pending; /* ids waiting for a lease; retries go first */
+    uint64_t pending_head, pending_count, pending_cap;
+    uint64_t leased;
+    uint64_t merge_next; /* every id below this is merged */
+    uint32_t max_attempts;
+    int finished, failed;
+    gi_error error;
+    /* Progress and statistics. */
+    double cost_total, cost_done;
+    gi_task_stats stats; /* summed over merged tasks */
+    uint64_t retries;
+    uint64_t held_results_bytes, held_results_peak;
+} gi_jobrun;
+
+/* Plans the job (method->plan). */
+int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err);
+void gi_jobrun_free(gi_jobrun *jr);
+
+/* The next task to run (its state becomes LEASED), or NULL if none is
+ * pending right now. */
+const gi_task *gi_jobrun_lease(gi_jobrun *jr);
+/* A result for a leased task: taken over (result is left empty). Stale or
+ * duplicate results are ignored. Returns -1 if the job failed (merge or
+ * finish error): see jr->error. */
+int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf *result,
+                       const gi_task_stats *stats);
+/* A leased task failed (error from the worker, or a crash). It is retried up
+ * to max_attempts; bad input (GI_EINVAL) fails the job at once. */
+int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why);
+/* A lease given back without running (worker shutting down). */
+void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
+
+static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
+
+#endif

@@ -1,0 +1,138 @@
+/* gi_local: the embedded coordinator behind `gi render`. */
+#include "gi_local.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "gi_log.h"
+#include "gi_pool.h"
+
+#define LOCAL_JOB_ID 1
+
+volatile int gi_local_interrupted;
+
+typedef struct local_run {
+    gi_job *job;
+    gi_jobrun jr;
+    gi_pool pool;
+    uint64_t crashes;
+    unsigned respawn_budget;
+} local_run;
+
+static void on_result(void *user, int child, gi_msg_result *r)
+{
+    local_run *lr = user;
+    gi_jobrun_complete(&lr->jr, r->task_id, r->attempt, &r->data, &r->stats);
+}
+
+static void on_fail(void *user, int child, gi_msg_fail *f)
+{
+    local_run *lr = user;
+    gi_warn("task %llu failed: %s", (unsigned long long)f->task_id, f->error.msg);
+    gi_jobrun_fail(&lr->jr, f->task_id, f->attempt, &f->error);
+}
+
+static void on_crash(void *user, int child, uint64_t job_id, uint64_t task_id,
+                     uint32_t attempt, const char *why)
+{
+    local_run *lr = user;
+    lr->crashes++;
+    gi_error e;
+    gi_fail(&e, GI_ECRASH, "%s", why);
+    gi_jobrun_fail(&lr->jr, task_id, attempt, &e);
+}
+
+static const gi_buf *on_asset(void *user, const char *hash)
+{
+    local_run *lr = user;
+    return lr->job->assets ? gi_asset_store_get(lr->job->assets, hash) : NULL;
+}
+
+static int default_workers(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (int)n : 1;
+}
+
+int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *summary,
+                    gi_error *err)
+{
+    local_run lr;
+    memset(&lr, 0, sizeof lr);
+    memset(summary, 0, sizeof *summary);
+    lr.job = job;
+    double t0 = gi_now();
+    if (gi_jobrun_start(&lr.jr, job, err)) {
+        gi_jobrun_free(&lr.jr);
+        return -1;
+    }
+    int workers = opts->workers > 0 ? opts->workers : default_workers();
+    if ((uint64_t)workers > lr.jr.task_count)
+        workers = (int)lr.jr.task_count;
+    summary->workers = workers;
+    if (gi_pool_start(&lr.pool, workers, err)) {
+        gi_jobrun_free(&lr.jr);
+        return -1;
+    }
+    /* Crashes are retried on fresh children, but a job whose tasks kill every
+     * child is failing, not unlucky: bound the respawns. */
+    lr.respawn_budget = 4u * (unsigned)workers + 16u;
+
+    gi_progress prog;
+    gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
+    gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset};
+    int rc = 0;
+    while (!gi_jobrun_done(&lr.jr)) {
+        if (gi_local_interrupted) {
+            rc = gi_fail(err, GI_ECANCEL, "%s: interrupted", job->file);
+            break;
+        }
+        for (int i = 0; i < lr.pool.count; i++) {
+            if (gi_pool_alive(&lr.pool, i))
+                continue;
+            if (lr.respawn_budget == 0) {
+                rc = gi_fail(err, GI_ECRASH, "%s: pool children keep dying (%llu crashes); giving up",
+                             job->file, (unsigned long long)lr.crashes);
+                break;
+            }
+            lr.respawn_budget--;
+            if (gi_pool_spawn(&lr.pool, i, err)) {
+                rc = -1;
+                break;
+            }
+        }
+        if (rc)
+            break;
+        int idle;
+        while ((idle = gi_pool_idle_child(&lr.pool)) >= 0) {
+            const gi_task *t = gi_jobrun_lease(&lr.jr);
+            if (!t)
+                break;
+            gi_error serr;
+            if (gi_pool_assign(&lr.pool, idle, LOCAL_JOB_ID, job->file, job->text,
+                               &job->manifest, t, &serr))
+                gi_debug("sending a task to child %d failed: %s", idle, serr.msg);
+        }
+        gi_pool_poll(&lr.pool, 200, &ev);
+        gi_progress_update(&prog, lr.jr.cost_done, lr.jr.cost_total, (double)lr.jr.stats.rays, 0);
+    }
+    if (rc == 0 && lr.jr.failed) {
+        if (err)
+            *err = lr.jr.error;
+        rc = -1;
+    }
+    if (rc == 0)
+        gi_progress_update(&prog, lr.jr.cost_done, lr.jr.cost_total, (double)lr.jr.stats.rays, 1);
+    gi_progress_end(&prog);
+    gi_pool_stop(&lr.pool);
+    gi_debug("%s: peak bytes of results held for in-order merging: %llu", job->name,
+             (unsigned long long)lr.jr.held_results_peak);
+    summary->seconds = gi_now() - t0;
+    summary->tasks = lr.jr.task_count;
+    summary->retries = lr.jr.retries;
+    summary->crashes = lr.crashes;
+    summary->stats = lr.jr.stats;
+    gi_jobrun_free(&lr.jr);
+    return rc;
+}

@@ -1,0 +1,30 @@
+/* gi_local: `gi render` - the embedded coordinator. Runs a job on this
+ * machine with a fork-based pool, the same plan -> tasks -> workers -> merge
+ * path as the farm. */
+#ifndef GI_LOCAL_H
+#define GI_LOCAL_H
+
+#include "gi_job.h"
+#include "gi_jobrun.h"
+#include "gi_progress.h"
+
+typedef struct gi_local_opts {
+    int workers; /* pool children; <= 0: one per core */
+    gi_progress_mode progress;
+} gi_local_opts;
+
+typedef struct gi_local_summary {
+    double seconds;
+    uint64_t tasks, retries, crashes;
+    gi_task_stats stats;
+    int workers;
+} gi_local_summary;
+
+/* Renders a loaded job (gi_job_load) into job->out_dir. */
+int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *summary,
+                    gi_error *err);
+
+/* Set by a SIGINT/SIGTERM handler to stop the render (no outputs written). */
+extern volatile int gi_local_interrupted;
+
+#endif

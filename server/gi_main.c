@@ -1,0 +1,202 @@
+/* gi: the command line.
+ *
+ *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE]
+ *   gi validate JOB.json
+ *   gi methods
+ *
+ * Exit status: 0 success, 2 invalid input (job, scene, mesh, arguments),
+ * 1 any other failure, 130 interrupted. */
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_fs.h"
+#include "gi_job.h"
+#include "gi_local.h"
+#include "gi_log.h"
+#include "gi_progress.h"
+#include "gi_version.h"
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
+            "       gi validate JOB.json\n"
+            "       gi methods\n"
+            "       gi --version\n"
+            "\n"
+            "render    renders a job on this machine with a pool of N worker processes\n"
+            "          (default: one per core) and writes its outputs into DIR (default: out)\n"
+            "          MODE: auto (a bar on a terminal, lines otherwise), bar, lines, json, none\n"
+            "validate  checks a job and its scene without rendering\n"
+            "methods   lists the rendering methods\n"
+            "\n"
+            "Job format: docs/job-format.md; scene format: docs/scene-format.md.\n");
+}
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    gi_local_interrupted = 1;
+}
+
+static int arg_value(int argc, char **argv, int *i, const char *name, const char **out)
+{
+    size_t n = strlen(name);
+    if (strncmp(argv[*i], name, n) == 0 && argv[*i][n] == '=') {
+        *out = argv[*i] + n + 1;
+        return 1;
+    }
+    if (strcmp(argv[*i], name) == 0) {
+        if (*i + 1 >= argc) {
+            fprintf(stderr, "gi: %s needs a value\n", name);
+            exit(2);
+        }
+        *out = argv[++*i];
+        return 1;
+    }
+    return 0;
+}
+
+static void print_summary(const gi_job *job, const gi_local_summary *s)
+{
+    char a[32], b[32], c[32], d[32], e[32];
+    double secs = s->seconds > 0 ? s->seconds : 1e-9;
+    double worker_secs = s->stats.seconds > 0 ? s->stats.seconds : 1e-9;
+    printf("%s: %s done in %s with %d worker%s\n", job->name, job->method->name,
+           gi_duration(s->seconds, a, sizeof a), s->workers, s->workers == 1 ? "" : "s");
+    printf("  %s%s (%s%s/s), %srays (%srays/s, %srays/s per worker)\n",
+           gi_si((double)s->stats.samples, a, sizeof a), job->method->unit,
+           gi_si((double)s->stats.samples / secs, b, sizeof b), job->method->unit,
+           gi_si((double)s->stats.rays, c, sizeof c), gi_si((double)s->stats.rays / secs, d, sizeof d),
+           gi_si((double)s->stats.rays / worker_secs, e, sizeof e));
+    printf("  %llu tasks", (unsigned long long)s->tasks);
+    if (s->retries)
+        printf(", %llu retried (%llu worker crashes)", (unsigned long long)s->retries,
+               (unsigned long long)s->crashes);
+    printf("\n");
+    for (int i = 0; i + 1 < job->written_count; i += 2)
+        printf("  %-4s %s\n", job->written[i], job->written[i + 1]);
+}
+
+static int cmd_render(int argc, char **argv)
+{
+    const char *job_path = NULL, *out_dir = "out", *progress = "auto", *workers_s = NULL;
+    for (int i = 2; i < argc; i++) {
+        const char *v;
+        if (arg_value(argc, argv, &i, "--workers", &workers_s) ||
+            arg_value(argc, argv, &i, "--out", &out_dir) ||
+            arg_value(argc, argv, &i, "--progress", &progress))
+            continue;
+        if (argv[i][0] == '-' && argv[i][1]) {
+            fprintf(stderr, "gi render: unknown option %s\n", argv[i]);
+            return 2;
+        }
+        if (job_path) {
+            fprintf(stderr, "gi render: more than one job file (%s, %s)\n", job_path, argv[i]);
+            return 2;
+        }
+        job_path = argv[i];
+        (void)v;
+    }
+    if (!job_path) {
+        usage(stderr);
+        return 2;
+    }
+    gi_local_opts opts = {0, GI_PROGRESS_AUTO};
+    if (workers_s) {
+        char *end;
+        long n = strtol(workers_s, &end, 10);
+        if (*end || n < 1 || n > 1024) {
+            fprintf(stderr, "gi render: --workers must be an integer in [1, 1024], got \"%s\"\n",
+                    workers_s);
+            return 2;
+        }
+        opts.workers = (int)n;
+    }
+    if (gi_progress_mode_parse(progress, &opts.progress)) {
+        fprintf(stderr, "gi render: --progress must be auto, bar, lines, json or none\n");
+        return 2;
+    }
+    gi_error err;
+    gi_error_clear(&err);
+    gi_job job;
+    if (gi_job_load(job_path, &job, &err)) {
+        fprintf(stderr, "gi: %s\n", err.msg);
+        gi_job_free(&job);
+        return gi_error_exit_status(&err);
+    }
+    if (gi_mkdirs(out_dir, &err)) {
+        fprintf(stderr, "gi: --out: %s\n", err.msg);
+        gi_job_free(&job);
+        return 1;
+    }
+    job.out_dir = gi_xstrdup(out_dir);
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    gi_local_summary summary;
+    int rc = gi_render_local(&job, &opts, &summary, &err);
+    int status = 0;
+    if (rc) {
+        fprintf(stderr, "gi: %s\n", err.msg);
+        status = err.code == GI_ECANCEL ? 130 : gi_error_exit_status(&err);
+    } else {
+        print_summary(&job, &summary);
+    }
+    gi_job_free(&job);
+    return status;
+}
+
+static int cmd_validate(int argc, char **argv)
+{
+    if (argc != 3) {
+        usage(stderr);
+        return 2;
+    }
+    gi_error err;
+    gi_job job;
+    int rc = gi_job_load(argv[2], &job, &err);
+    if (rc)
+        fprintf(stderr, "gi: %s\n", err.msg);
+    else
+        printf("%s: ok (%s, scene %s: %u objects, %u triangles, %u emissive)\n", argv[2],
+               job.method->name, job.scene_name, job.scene.object_count,
+               job.scene.triangle_count, job.scene.light_count);
+    gi_job_free(&job);
+    return rc ? gi_error_exit_status(&err) : 0;
+}
+
+static int cmd_methods(void)
+{
+    for (const gi_method *const *m = gi_methods(); *m; m++)
+        printf("%-12s %s\n", (*m)->name, (*m)->summary);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    gi_log_init("gi");
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "render") == 0)
+        return cmd_render(argc, argv);
+    if (strcmp(cmd, "validate") == 0)
+        return cmd_validate(argc, argv);
+    if (strcmp(cmd, "methods") == 0)
+        return cmd_methods();
+    if (strcmp(cmd, "--version") == 0) {
+        printf("gi %s\n", GI_VERSION);
+        return 0;
+    }
+    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    fprintf(stderr, "gi: unknown command \"%s\"\n", cmd);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,168 @@
+/* Unit tests: the job state machine (ordered merge, retries, follow-ups). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_jobrun.h"
+#include "gi_rng.h"
+#include "gi_test.h"
+
+#define FAKE_TASKS 40
+
+typedef struct fake_state {
+    uint64_t order[256];
+    int merged;
+    int finish_calls;
+    double sum; /* non-associative float sum: order matters */
+} fake_state;
+
+static int fake_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    job->state = gi_xcalloc(1, sizeof(fake_state));
+    for (int i = 0; i < FAKE_TASKS; i++)
+        gi_task_queue_add(q, 1, 1.0);
+    return 0;
+}
+
+static int fake_merge(gi_job *job, const gi_task *t, const gi_buf *r, gi_task_queue *fq,
+                      gi_error *err)
+{
+    fake_state *st = job->state;
+    st->order[st->merged++] = t->id;
+    double v;
+    memcpy(&v, r->data, sizeof v);
+    st->sum += v;
+    /* Task 5 spawns two follow-ups (like a refinement). */
+    if (t->id == 5) {
+        gi_task_queue_add(fq, 2, 1.0);
+        gi_task_queue_add(fq, 2, 1.0);
+    }
+    return 0;
+}
+
+static int fake_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    fake_state *st = job->state;
+    /* The first finish adds a final pass of one task (like image tiles). */
+    if (st->finish_calls++ == 0)
+        gi_task_queue_add(fq, 3, 1.0);
+    return 0;
+}
+
+static void fake_release(gi_job *job)
+{
+    free(job->state);
+    job->state = NULL;
+}
+
+static const gi_method fake_method = {
+    .name = "fake", .plan = fake_plan, .merge = fake_merge, .finish = fake_finish,
+    .release = fake_release,
+};
+
+static double task_value(uint64_t id) { return 1.0 / (double)(id + 3) * 1e-3 + (id % 7) * 1e10; }
+
+/* Runs the job completing leased tasks in a shuffled order, with some
+ * failures and stale duplicates; returns the merge sum. */
+static double run_shuffled(uint64_t seed, fake_state *out)
+{
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    gi_jobrun jr;
+    gi_error err;
+    if (gi_jobrun_start(&jr, &job, &err))
+        return -1;
+    gi_rng rng;
+    gi_rng_init(&rng, seed, 0, 0);
+    uint64_t leased[512];
+    uint32_t attempts[512];
+    int nleased = 0;
+    while (!gi_jobrun_done(&jr)) {
+        const gi_task *t;
+        while (nleased < 8 && (t = gi_jobrun_lease(&jr))) {
+            leased[nleased] = t->id;
+            attempts[nleased++] = t->attempt;
+        }
+        if (nleased == 0)
+            break;
+        int k = (int)gi_rng_below(&rng, (uint32_t)nleased);
+        uint64_t id = leased[k];
+        uint32_t at = attempts[k];
+        leased[k] = leased[--nleased];
+        attempts[k] = attempts[nleased];
+        if (seed != 0 && at == 0 && gi_rng_below(&rng, 5) == 0) {
+            gi_error e;
+            gi_fail(&e, GI_ECRASH, "simulated crash");
+            gi_jobrun_fail(&jr, id, at, &e);
+            continue;
+        }
+        gi_buf r;
+        gi_buf_init(&r);
+        double v = task_value(id);
+        gi_buf_put(&r, &v, sizeof v);
+        gi_task_stats s = {1, 1, 0.0};
+        gi_jobrun_complete(&jr, id, at, &r, &s);
+        /* A stale duplicate of the same result changes nothing. */
+        gi_buf_put(&r, &v, sizeof v);
+        gi_jobrun_complete(&jr, id, at, &r, &s);
+        gi_buf_free(&r);
+    }
+    fake_state *st = job.state;
+    double sum = jr.finished ? st->sum : -1;
+    if (out && st)
+        *out = *st;
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    return sum;
+}
+
+GI_TEST(test_jobrun_merges_in_id_order_whatever_the_completion_order)
+{
+    fake_state ref, st;
+    double a = run_shuffled(0, &ref);
+    GI_REQUIRE(a >= 0);
+    /* 40 planned + 2 follow-ups + 1 from finish. */
+    GI_CHECK(ref.merged == FAKE_TASKS + 3);
+    for (int i = 0; i < ref.merged; i++)
+        GI_CHECK(ref.order[i] == (uint64_t)i);
+    GI_CHECK(ref.finish_calls == 2);
+    for (uint64_t seed = 1; seed < 20; seed++) {
+        double b = run_shuffled(seed, &st);
+        GI_CHECK_MSG(memcmp(&a, &b, sizeof a) == 0, "seed %llu: sum %.17g != %.17g",
+                     (unsigned long long)seed, b, a);
+        GI_CHECK(st.merged == ref.merged);
+    }
+}
+
+GI_TEST(test_jobrun_fails_after_max_attempts_and_on_bad_input)
+{
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    gi_error crash;
+    gi_fail(&crash, GI_ECRASH, "boom");
+    for (uint32_t attempt = 0; attempt < jr.max_attempts; attempt++) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t && t->id == 0 && t->attempt == attempt);
+        gi_jobrun_fail(&jr, 0, attempt, &crash);
+    }
+    GI_CHECK(jr.failed);
+    GI_CHECK_MSG(strstr(jr.error.msg, "task 0 failed 4 times; last error: boom") != NULL, "%s",
+                 jr.error.msg);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    const gi_task *t = gi_jobrun_lease(&jr);
+    gi_error bad;
+    gi_fail(&bad, GI_EINVAL, "mesh.obj: garbage");
+    gi_jobrun_fail(&jr, t->id, t->attempt, &bad);
+    GI_CHECK(jr.failed && jr.error.code == GI_EINVAL);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}

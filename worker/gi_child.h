@@ -1,0 +1,20 @@
+/* gi_child: the task loop of a pool child process.
+ *
+ * A child talks to its parent over one socket with protocol frames: it
+ * receives JOB and TASK, asks for the bytes of assets it lacks (ASSET_NEED,
+ * answered by ASSET_PUT), and answers each task with RESULT or FAIL. It
+ * creates its own Embree device after the fork, and uses nothing it
+ * inherited, so a remote worker's children and gi render's children run the
+ * same code. */
+#ifndef GI_CHILD_H
+#define GI_CHILD_H
+
+/* Runs until BYE or the parent goes away; returns the exit status. */
+int gi_child_main(int fd);
+
+/* Fault injection for tests: GI_FAULT_CRASH_TASK="ID[:ATTEMPT][,ID[:ATTEMPT]...]"
+ * makes a child kill itself with SIGKILL after computing task ID on that
+ * attempt (default 0), before sending the result. */
+#define GI_FAULT_CRASH_ENV "GI_FAULT_CRASH_TASK"
+
+#endif
