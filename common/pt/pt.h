@@ -1,0 +1,54 @@
+/* pt: the reference path tracer (unbiased; the ground truth the other
+ * methods are compared against).
+ *
+ * Estimator: paths from the camera; at each diffuse vertex, next-event
+ * estimation on the emissive triangles and BSDF sampling, combined with
+ * multiple importance sampling (power heuristic, Veach 1997); Russian
+ * roulette after rr_depth bounces. Random numbers are keyed by (seed, pixel,
+ * sample), so the image does not depend on tiles, passes or workers. */
+#ifndef GI_PT_H
+#define GI_PT_H
+
+#include <stdint.h>
+
+#include "gi_method.h"
+#include "gi_rng.h"
+#include "gi_rt.h"
+#include "gi_scene.h"
+
+typedef enum {
+    GI_PT_MIS,   /* light + BSDF sampling, power heuristic (default) */
+    GI_PT_BSDF,  /* BSDF sampling only: emission found by hitting it */
+    GI_PT_LIGHT  /* next-event estimation only */
+} gi_pt_strategy;
+
+typedef struct gi_pt_params {
+    int spp;          /* samples per pixel */
+    int max_bounces;  /* -1: unlimited (Russian roulette decides) */
+    int rr_depth;     /* bounces before Russian roulette starts */
+    int tile;         /* task tile side, pixels */
+    int pass_spp;     /* samples per pixel per task */
+    gi_pt_strategy strategy;
+} gi_pt_params;
+
+/* For benchmarks: sees every ray the tracer casts. */
+typedef struct gi_pt_ray_log {
+    void (*ray)(void *user, gi_vec3 org, gi_vec3 dir, float tnear, float tfar, int occlusion);
+    void *user;
+} gi_pt_ray_log;
+
+typedef struct gi_pt_tracer {
+    gi_rt *rt;
+    const gi_scene *scene;
+    const gi_pt_params *params;
+    const gi_pt_ray_log *log; /* NULL normally */
+} gi_pt_tracer;
+
+/* Radiance arriving at org from direction -dir (dir unit). */
+gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng);
+
+void gi_pt_params_default(gi_pt_params *p);
+
+extern const gi_method gi_method_pt;
+
+#endif

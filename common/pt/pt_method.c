@@ -1,0 +1,240 @@
+/* pt_method: the path tracer as a farm method. A task is an image tile and
+ * a range of samples; its result is the tile's per-pixel sums; merge adds
+ * them; finish divides by the sample count and writes the image. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_camera.h"
+#include "gi_job.h"
+#include "gi_log.h"
+#include "gi_outputs.h"
+#include "gi_worker_ctx.h"
+#include "pt.h"
+
+#define PT_TASK_TILE 1
+#define PT_MAX_SPP (1 << 24)
+
+/* Per pixel in a result: R, G, B sums and the sum of squared luminance. */
+#define PT_VALUES_PER_PIXEL 4
+
+typedef struct pt_state {
+    double *sum;   /* width * height * 4 */
+    uint64_t spp_merged;
+} pt_state;
+
+void gi_pt_params_default(gi_pt_params *p)
+{
+    p->spp = 64;
+    p->max_bounces = -1;
+    p->rr_depth = 3;
+    p->tile = 32;
+    p->pass_spp = 16;
+    p->strategy = GI_PT_MIS;
+}
+
+static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
+{
+    gi_pt_params *p = gi_xcalloc(1, sizeof *p);
+    job->params = p;
+    gi_pt_params_default(p);
+    if (!params)
+        return 0;
+    static const char *const keys[] = {"spp", "max_bounces", "rr_depth", "tile",
+                                       "pass_spp", "strategy", NULL};
+    static const char *const strategies[] = {"mis", "bsdf", "light", NULL};
+    int64_t spp = p->spp, maxb = p->max_bounces, rr = p->rr_depth, tile = p->tile,
+            pass = -1;
+    int strategy = 0;
+    if (gi_jv_keys(v, params, "pt", keys) ||
+        gi_jv_int(v, params, "pt", "spp", 0, 1, PT_MAX_SPP, &spp) ||
+        gi_jv_int(v, params, "pt", "max_bounces", 0, -1, 100000, &maxb) ||
+        gi_jv_int(v, params, "pt", "rr_depth", 0, 0, 100000, &rr) ||
+        gi_jv_int(v, params, "pt", "tile", 0, 4, 4096, &tile) ||
+        gi_jv_int(v, params, "pt", "pass_spp", 0, 1, PT_MAX_SPP, &pass) ||
+        gi_jv_enum(v, params, "pt", "strategy", 0, strategies, &strategy))
+        return -1;
+    p->spp = (int)spp;
+    p->max_bounces = (int)maxb;
+    p->rr_depth = (int)rr;
+    p->tile = (int)tile;
+    p->pass_spp = pass > 0 ? (int)pass : (p->spp < 16 ? p->spp : 16);
+    if (p->pass_spp > p->spp)
+        return gi_jv_fail(v, "pt.pass_spp", "%d is more than spp (%d)", p->pass_spp, p->spp);
+    p->strategy = (gi_pt_strategy)strategy;
+    return 0;
+}
+
+static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    const gi_pt_params *p = job->params;
+    pt_state *st = gi_xcalloc(1, sizeof *st);
+    st->sum = gi_try_calloc((size_t)job->width * (size_t)job->height,
+                            PT_VALUES_PER_PIXEL * sizeof(double), err, "pt accumulator");
+    if (!st->sum) {
+        free(st);
+        return -1;
+    }
+    job->state = st;
+    /* Passes outermost: the first pass covers the whole image, so a
+     * cancelled or previewed job has a complete (noisier) image early. */
+    for (int s0 = 0; s0 < p->spp; s0 += p->pass_spp) {
+        int s1 = s0 + p->pass_spp < p->spp ? s0 + p->pass_spp : p->spp;
+        for (int y0 = 0; y0 < job->height; y0 += p->tile)
+            for (int x0 = 0; x0 < job->width; x0 += p->tile) {
+                int x1 = x0 + p->tile < job->width ? x0 + p->tile : job->width;
+                int y1 = y0 + p->tile < job->height ? y0 + p->tile : job->height;
+                gi_task *t = gi_task_queue_add(q, PT_TASK_TILE,
+                                               (double)(x1 - x0) * (y1 - y0) * (s1 - s0));
+                gi_buf_put_u32(&t->payload, (uint32_t)x0);
+                gi_buf_put_u32(&t->payload, (uint32_t)y0);
+                gi_buf_put_u32(&t->payload, (uint32_t)x1);
+                gi_buf_put_u32(&t->payload, (uint32_t)y1);
+                gi_buf_put_u32(&t->payload, (uint32_t)s0);
+                gi_buf_put_u32(&t->payload, (uint32_t)s1);
+            }
+    }
+    return 0;
+}
+
+typedef struct pt_tile {
+    uint32_t x0, y0, x1, y1, s0, s1;
+} pt_tile;
+
+static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_error *err)
+{
+    gi_reader r;
+    gi_reader_init(&r, t->payload.data, t->payload.len, "pt task");
+    tl->x0 = gi_get_u32(&r);
+    tl->y0 = gi_get_u32(&r);
+    tl->x1 = gi_get_u32(&r);
+    tl->y1 = gi_get_u32(&r);
+    tl->s0 = gi_get_u32(&r);
+    tl->s1 = gi_get_u32(&r);
+    if (gi_reader_finish(&r, err))
+        return -1;
+    if (tl->x0 >= tl->x1 || tl->y0 >= tl->y1 || tl->x1 > (uint32_t)job->width ||
+        tl->y1 > (uint32_t)job->height || tl->s0 >= tl->s1)
+        return gi_fail(err, GI_EPROTO, "pt task %llu: tile out of range",
+                       (unsigned long long)t->id);
+    return 0;
+}
+
+static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
+{
+    const gi_job *job = &ctx->job;
+    const gi_pt_params *p = job->params;
+    pt_tile tl;
+    if (decode_tile(job, t, &tl, err))
+        return -1;
+    gi_camera_frame cam;
+    gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
+    gi_pt_tracer tr = {&ctx->rt, &job->scene, p, NULL};
+    size_t npix = (size_t)(tl.x1 - tl.x0) * (tl.y1 - tl.y0);
+    double *acc = gi_xcalloc(npix * PT_VALUES_PER_PIXEL, sizeof *acc);
+    size_t k = 0;
+    for (uint32_t y = tl.y0; y < tl.y1; y++)
+        for (uint32_t x = tl.x0; x < tl.x1; x++, k++) {
+            uint64_t pixel = (uint64_t)y * (uint64_t)job->width + x;
+            double r = 0, g = 0, b = 0, y2 = 0;
+            for (uint32_t s = tl.s0; s < tl.s1; s++) {
+                gi_rng rng;
+                gi_rng_init(&rng, job->seed, pixel, s);
+                float jx = gi_rng_float(&rng), jy = gi_rng_float(&rng);
+                gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
+                gi_vec3 L = gi_pt_radiance(&tr, cam.origin, dir, &rng);
+                r += L.x;
+                g += L.y;
+                b += L.z;
+                double lum = gi_luminance(L);
+                y2 += lum * lum;
+            }
+            acc[4 * k + 0] = r;
+            acc[4 * k + 1] = g;
+            acc[4 * k + 2] = b;
+            acc[4 * k + 3] = y2;
+        }
+    ctx->stats.samples = npix * (tl.s1 - tl.s0);
+    gi_buf_put_f64s(result, acc, npix * PT_VALUES_PER_PIXEL);
+    free(acc);
+    return 0;
+}
+
+static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
+                    gi_error *err)
+{
+    pt_state *st = job->state;
+    pt_tile tl;
+    if (decode_tile(job, t, &tl, err))
+        return -1;
+    size_t npix = (size_t)(tl.x1 - tl.x0) * (tl.y1 - tl.y0);
+    if (result->len != npix * PT_VALUES_PER_PIXEL * 8)
+        return gi_fail(err, GI_EPROTO, "pt task %llu: result has %zu bytes, expected %zu",
+                       (unsigned long long)t->id, result->len, npix * PT_VALUES_PER_PIXEL * 8);
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "pt result");
+    for (uint32_t y = tl.y0; y < tl.y1; y++) {
+        double *row = st->sum + ((size_t)y * job->width + tl.x0) * PT_VALUES_PER_PIXEL;
+        for (uint32_t i = 0; i < (tl.x1 - tl.x0) * PT_VALUES_PER_PIXEL; i++)
+            row[i] += gi_get_f64(&r);
+    }
+    return gi_reader_finish(&r, err);
+}
+
+static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    const gi_pt_params *p = job->params;
+    pt_state *st = job->state;
+    gi_image img;
+    static const char *const names[] = {"R", "G", "B"};
+    if (gi_image_init(&img, job->width, job->height, 3, names, err))
+        return -1;
+    double inv = 1.0 / p->spp, rel_err_sum = 0.0;
+    size_t n = (size_t)job->width * job->height, counted = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double *s = &st->sum[PT_VALUES_PER_PIXEL * i];
+        for (int c = 0; c < 3; c++)
+            img.pixels[3 * i + c] = (float)(s[c] * inv);
+        /* Standard error of the pixel's luminance mean, for the report. */
+        double mean = gi_luminance(gi_v3((float)(s[0] * inv), (float)(s[1] * inv),
+                                         (float)(s[2] * inv)));
+        double var = p->spp > 1 ? (s[3] * inv - mean * mean) / (p->spp - 1) : 0.0;
+        if (mean > 0) {
+            rel_err_sum += sqrt(var > 0 ? var : 0) / mean;
+            counted++;
+        }
+    }
+    gi_info("%s: mean relative standard error per pixel %.4f", job->name,
+            counted ? rel_err_sum / counted : 0.0);
+    int rc = gi_write_image_outputs(job, &img, err);
+    gi_image_free(&img);
+    return rc;
+}
+
+static void pt_release(gi_job *job)
+{
+    pt_state *st = job->state;
+    if (st) {
+        free(st->sum);
+        free(st);
+    }
+    free(job->params);
+    job->state = job->params = NULL;
+}
+
+static const char *const pt_outputs[] = {"exr", "png", NULL};
+
+const gi_method gi_method_pt = {
+    .name = "pt",
+    .summary = "reference path tracer (next-event estimation + MIS, Russian roulette)",
+    .unit = "samples",
+    .output_kinds = pt_outputs,
+    .default_outputs = pt_outputs,
+    .parse = pt_parse,
+    .check_scene = NULL,
+    .plan = pt_plan,
+    .run = pt_run,
+    .merge = pt_merge,
+    .finish = pt_finish,
+    .release = pt_release,
+};

@@ -1,0 +1,100 @@
+/* Unit tests: the path tracer's estimator against closed forms. */
+#include <string.h>
+
+#include "gi_rt.h"
+#include "gi_test.h"
+#include "pt/pt.h"
+#include "test_helpers.h"
+
+/* Irradiance at x (normal n) from a Lambertian polygon of radiance L:
+ * Lambert's formula E = L/2 sum_i theta_i (n . gamma_i) (e.g. Arvo 1995). */
+static double polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 n, double L)
+{
+    double sum = 0;
+    for (int i = 0; i < k; i++) {
+        gi_vec3 a = gi_normalize(gi_sub(poly[i], x));
+        gi_vec3 b = gi_normalize(gi_sub(poly[(i + 1) % k], x));
+        double theta = acos(fmax(-1.0, fmin(1.0, gi_dot(a, b))));
+        gi_vec3 g = gi_normalize(gi_cross(a, b));
+        sum += theta * gi_dot(n, g);
+    }
+    return 0.5 * L * fabs(sum);
+}
+
+GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
+{
+    gi_error err;
+    gi_scene s;
+    /* A unit square emitter (radiance 2) facing down at height 1, over a
+     * large diffuse floor (rho 0.5). */
+    const char *text =
+        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
+        " \"objects\": ["
+        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
+        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
+        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", text, &s, &err));
+    gi_rt rt;
+    GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
+    gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
+    gi_vec3 points[] = {{0, 0, 0}, {0.3f, 0, 0.2f}, {0.5f, 0, 0.5f}, {1.0f, 0, 0}, {2.0f, 0, -1.5f}};
+    gi_pt_strategy strategies[] = {GI_PT_MIS, GI_PT_LIGHT, GI_PT_BSDF};
+    for (int si = 0; si < 3; si++) {
+        gi_pt_params p;
+        gi_pt_params_default(&p);
+        p.max_bounces = 1; /* direct light only */
+        p.strategy = strategies[si];
+        gi_pt_tracer tr = {&rt, &s, &p, NULL};
+        /* BSDF sampling alone finds a small, far light too rarely for a 1%
+         * check at a test's sample count: it covers the near points. */
+        size_t npoints = si == 2 ? 3 : sizeof points / sizeof points[0];
+        for (size_t i = 0; i < npoints; i++) {
+            gi_vec3 x = points[i];
+            double E = polygon_irradiance(poly, 4, x, gi_v3(0, 1, 0), 2.0);
+            double expect = 0.5 * E / GI_PI; /* L = rho E / pi */
+            int n = si == 2 ? 400000 : 100000;
+            double sum = 0;
+            for (int k = 0; k < n; k++) {
+                gi_rng rng;
+                gi_rng_init(&rng, 11, i, (uint32_t)k);
+                gi_vec3 L = gi_pt_radiance(&tr, gi_add(x, gi_v3(0, 0.01f, 0)), gi_v3(0, -1, 0), &rng);
+                sum += L.y;
+            }
+            GI_CHECK_MSG(fabs(sum / n - expect) <= 0.01 * expect,
+                         "strategy %d point %zu: %.6f vs Lambert %.6f (%.3f%%)", si, i, sum / n,
+                         expect, 100.0 * (sum / n - expect) / expect);
+        }
+    }
+    gi_rt_free(&rt);
+    gi_scene_free(&s);
+}
+
+GI_TEST(test_rt_hits_report_distance_triangle_and_barycentrics)
+{
+    gi_error err;
+    gi_scene s;
+    GI_REQUIRE_OK(gi_test_load_scene_file("scenes/cornell-box/scene.json", &s, &err));
+    gi_rt rt;
+    GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
+    /* Straight down from the middle of the box onto the floor at y = 0. */
+    gi_hit h;
+    GI_REQUIRE(gi_rt_intersect(&rt, gi_v3(100, 500, 500), gi_v3(0, -1, 0), 0, 1e30f, &h));
+    GI_CHECK_NEAR(h.t, 500.0, 1e-3);
+    GI_CHECK(s.tri_object[h.tri] == (uint32_t)gi_scene_find_object(&s, "floor"));
+    gi_vec3 a, b, c;
+    gi_scene_triangle(&s, h.tri, &a, &b, &c);
+    gi_vec3 p = gi_add(gi_add(gi_scale(a, 1 - h.u - h.v), gi_scale(b, h.u)), gi_scale(c, h.v));
+    GI_CHECK_NEAR(p.x, 100.0, 1e-3);
+    GI_CHECK_NEAR(p.z, 500.0, 1e-3);
+    /* Up onto the light, and occlusion by the tall block. */
+    GI_REQUIRE(gi_rt_intersect(&rt, gi_v3(278, 100, 280), gi_v3(0, 1, 0), 0, 1e30f, &h));
+    GI_CHECK(s.tri_object[h.tri] == (uint32_t)gi_scene_find_object(&s, "light"));
+    GI_CHECK_NEAR(h.t, 448.7, 1e-3);
+    GI_CHECK(gi_rt_occluded(&rt, gi_v3(370, 100, 350), gi_v3(0, 1, 0), 0, 1000));
+    GI_CHECK(!gi_rt_occluded(&rt, gi_v3(370, 400, 350), gi_v3(0, 1, 0), 0, 100));
+    GI_CHECK(!gi_rt_intersect(&rt, gi_v3(278, 273, -10), gi_v3(0, 0, -1), 0, 1e30f, &h));
+    GI_CHECK(rt.rays == 5);
+    gi_rt_free(&rt);
+    gi_scene_free(&s);
+}
