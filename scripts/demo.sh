@@ -1,0 +1,18 @@
+#!/bin/sh
+# make demo: renders the Cornell box with every method into out/.
+#   scripts/demo.sh BUILD_DIR OUT_DIR
+set -eu
+BIN=${1:-build/release}
+OUT=${2:-out}
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+mkdir -p "$OUT"
+for job in "$SRC"/scenes/cornell-box/*.json; do
+    [ "$(basename "$job")" = scene.json ] && continue
+    # Only job files (they name a method) are rendered.
+    grep -q '"method"' "$job" || continue
+    echo "== $(basename "$job")"
+    "$BIN/gi" render "$job" --out "$OUT"
+done
+echo
+echo "Outputs are in $OUT/:"
+ls -1 "$OUT" | sed "s|^|  $OUT/|"
