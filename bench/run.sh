@@ -7,4 +7,4 @@ BIN=${1:-build/release}
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC"
 echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
-"$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 3
+"$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9

@@ -36,6 +36,13 @@ typedef struct gi_method {
     int (*merge)(gi_job *job, const gi_task *task, const gi_buf *result,
                  gi_task_queue *followups, gi_error *err);
     int (*finish)(gi_job *job, gi_task_queue *followups, gi_error *err);
+    /* Checkpoints: save writes job->state as it stands after the merges so
+     * far (everything merge and finish need later, explicitly serialized);
+     * load rebuilds job->state from it in a freshly parsed and loaded job,
+     * instead of plan. A restarted coordinator resumes from the last
+     * checkpoint without redoing merged work (gi_jobrun_checkpoint). */
+    int (*save)(const gi_job *job, gi_buf *out, gi_error *err);
+    int (*load)(gi_job *job, gi_reader *in, gi_error *err);
     /* Frees job->params and job->state. */
     void (*release)(gi_job *job);
 } gi_method;

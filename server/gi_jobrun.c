@@ -209,3 +209,110 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
     jr->leased--;
     pending_push(jr, task_id, 1);
 }
+
+#define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
+#define CHECKPOINT_VERSION 1u
+
+int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
+{
+    const gi_job *job = jr->job;
+    if (!job->method->save)
+        return gi_fail(err, GI_EINTERNAL, "method %s cannot checkpoint", job->method->name);
+    gi_buf_put_u32(out, CHECKPOINT_MAGIC);
+    gi_buf_put_u32(out, CHECKPOINT_VERSION);
+    gi_buf_put_str(out, job->method->name);
+    gi_buf_put_u64(out, jr->task_count);
+    gi_buf_put_u64(out, jr->merge_next);
+    gi_buf_put_u64(out, jr->retries);
+    gi_buf_put_u64(out, jr->stats.rays);
+    gi_buf_put_u64(out, jr->stats.samples);
+    gi_buf_put_f64(out, jr->stats.seconds);
+    gi_buf_put_f64(out, jr->cost_total);
+    for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
+        const gi_task *t = &jr->tasks[i].task;
+        gi_buf_put_u32(out, t->kind);
+        gi_buf_put_u32(out, t->attempt);
+        gi_buf_put_f64(out, t->cost);
+        gi_buf_put_blob(out, t->payload.data, t->payload.len);
+    }
+    gi_buf state;
+    gi_buf_init(&state);
+    int rc = job->method->save(job, &state, err);
+    if (rc == 0)
+        gi_buf_put_blob(out, state.data, state.len);
+    gi_buf_free(&state);
+    return rc;
+}
+
+int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err)
+{
+    memset(jr, 0, sizeof *jr);
+    jr->job = job;
+    jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
+    if (!job->method->load)
+        return gi_fail(err, GI_EINTERNAL, "method %s cannot restore", job->method->name);
+    gi_reader r;
+    gi_reader_init(&r, in->data, in->len, "checkpoint");
+    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    char *method = gi_get_str(&r, 64);
+    if (r.failed || magic != CHECKPOINT_MAGIC || version != CHECKPOINT_VERSION || !method ||
+        strcmp(method, job->method->name) != 0) {
+        free(method);
+        return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of a %s job (version %u)",
+                       job->file, job->method->name, CHECKPOINT_VERSION);
+    }
+    free(method);
+    uint64_t count = gi_get_u64(&r), merged = gi_get_u64(&r);
+    jr->retries = gi_get_u64(&r);
+    jr->stats.rays = gi_get_u64(&r);
+    jr->stats.samples = gi_get_u64(&r);
+    jr->stats.seconds = gi_get_f64(&r);
+    jr->cost_total = gi_get_f64(&r);
+    if (r.failed || merged > count || count - merged > r.left / 24)
+        return gi_fail(err, GI_EPROTO, "%s: checkpoint: bad task counts", job->file);
+    jr->task_cap = count ? count : 1;
+    jr->tasks = gi_xcalloc(jr->task_cap, sizeof *jr->tasks);
+    jr->task_count = count;
+    jr->merge_next = merged;
+    double unmerged_cost = 0;
+    for (uint64_t i = 0; i < count; i++) {
+        gi_jobrun_task *jt = &jr->tasks[i];
+        jt->task.id = i;
+        gi_buf_init(&jt->task.payload);
+        gi_buf_init(&jt->result);
+        if (i < merged) {
+            jt->state = GI_TASK_MERGED;
+            continue;
+        }
+        jt->task.kind = gi_get_u32(&r);
+        jt->task.attempt = gi_get_u32(&r);
+        jt->task.cost = gi_get_f64(&r);
+        size_t len;
+        const uint8_t *p = gi_get_blob(&r, (size_t)1 << 30, &len);
+        if (r.failed)
+            return gi_fail(err, GI_EPROTO, "%s: checkpoint: truncated task %llu", job->file,
+                           (unsigned long long)i);
+        gi_buf_put(&jt->task.payload, p, len);
+        jt->state = GI_TASK_PENDING;
+        unmerged_cost += jt->task.cost;
+        pending_push(jr, i, 0);
+    }
+    jr->cost_done = jr->cost_total - unmerged_cost;
+    size_t len;
+    const uint8_t *p = gi_get_blob(&r, (size_t)1 << 40, &len);
+    if (gi_reader_finish(&r, err))
+        return gi_error_prefix(err, "%s", job->file);
+    gi_reader sr;
+    gi_reader_init(&sr, p, len, "checkpoint method state");
+    if (job->method->load(job, &sr, err))
+        return -1;
+    if (gi_reader_finish(&sr, err))
+        return gi_error_prefix(err, "%s", job->file);
+    /* Everything was merged when the checkpoint was taken: only finish is left. */
+    if (jr->merge_next == jr->task_count && advance(jr)) {
+        if (err)
+            *err = jr->error;
+        return -1;
+    }
+    return 0;
+}

@@ -66,4 +66,13 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
 
 static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
 
+/* Checkpoints. The checkpoint holds the merge position, every task not yet
+ * merged (id, kind, attempt, cost, payload), the statistics, and the
+ * method's state (method->save). Results received but not yet merged are
+ * not in it: their tasks run again after a restore. */
+int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
+/* Rebuilds the run of `job` (parsed and loaded again from the same text and
+ * assets) from a checkpoint, in place of gi_jobrun_start. */
+int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err);
+
 #endif

@@ -9,6 +9,7 @@
 #include "gi_job.h"
 #include "gi_log.h"
 #include "gi_outputs.h"
+#include "gi_tiles.h"
 #include "gi_worker_ctx.h"
 #include "pt.h"
 
@@ -19,8 +20,7 @@
 #define PT_VALUES_PER_PIXEL 4
 
 typedef struct pt_state {
-    double *sum;   /* width * height * 4 */
-    uint64_t spp_merged;
+    double *sum; /* width * height * PT_VALUES_PER_PIXEL */
 } pt_state;
 
 void gi_pt_params_default(gi_pt_params *p)
@@ -78,44 +78,37 @@ static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     job->state = st;
     /* Passes outermost: the first pass covers the whole image, so a
      * cancelled or previewed job has a complete (noisier) image early. */
+    gi_buf extra;
+    gi_buf_init(&extra);
     for (int s0 = 0; s0 < p->spp; s0 += p->pass_spp) {
         int s1 = s0 + p->pass_spp < p->spp ? s0 + p->pass_spp : p->spp;
-        for (int y0 = 0; y0 < job->height; y0 += p->tile)
-            for (int x0 = 0; x0 < job->width; x0 += p->tile) {
-                int x1 = x0 + p->tile < job->width ? x0 + p->tile : job->width;
-                int y1 = y0 + p->tile < job->height ? y0 + p->tile : job->height;
-                gi_task *t = gi_task_queue_add(q, PT_TASK_TILE,
-                                               (double)(x1 - x0) * (y1 - y0) * (s1 - s0));
-                gi_buf_put_u32(&t->payload, (uint32_t)x0);
-                gi_buf_put_u32(&t->payload, (uint32_t)y0);
-                gi_buf_put_u32(&t->payload, (uint32_t)x1);
-                gi_buf_put_u32(&t->payload, (uint32_t)y1);
-                gi_buf_put_u32(&t->payload, (uint32_t)s0);
-                gi_buf_put_u32(&t->payload, (uint32_t)s1);
-            }
+        gi_buf_reset(&extra);
+        gi_buf_put_u32(&extra, (uint32_t)s0);
+        gi_buf_put_u32(&extra, (uint32_t)s1);
+        gi_tiles_plan(q, PT_TASK_TILE, job->width, job->height, p->tile, s1 - s0, &extra);
     }
+    gi_buf_free(&extra);
     return 0;
 }
 
+/* A task: an image tile and the sample indices [s0, s1) of its pixels. */
 typedef struct pt_tile {
-    uint32_t x0, y0, x1, y1, s0, s1;
+    gi_tile tile;
+    uint32_t s0, s1;
 } pt_tile;
 
 static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "pt task");
-    tl->x0 = gi_get_u32(&r);
-    tl->y0 = gi_get_u32(&r);
-    tl->x1 = gi_get_u32(&r);
-    tl->y1 = gi_get_u32(&r);
+    if (gi_tile_read(&r, job->width, job->height, &tl->tile, err))
+        return -1;
     tl->s0 = gi_get_u32(&r);
     tl->s1 = gi_get_u32(&r);
     if (gi_reader_finish(&r, err))
         return -1;
-    if (tl->x0 >= tl->x1 || tl->y0 >= tl->y1 || tl->x1 > (uint32_t)job->width ||
-        tl->y1 > (uint32_t)job->height || tl->s0 >= tl->s1)
-        return gi_fail(err, GI_EPROTO, "pt task %llu: tile out of range",
+    if (tl->s0 >= tl->s1)
+        return gi_fail(err, GI_EPROTO, "pt task %llu: empty sample range",
                        (unsigned long long)t->id);
     return 0;
 }
@@ -130,11 +123,11 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
     gi_pt_tracer tr = {&ctx->rt, &job->scene, p, NULL};
-    size_t npix = (size_t)(tl.x1 - tl.x0) * (tl.y1 - tl.y0);
+    size_t npix = (size_t)(tl.tile.x1 - tl.tile.x0) * (tl.tile.y1 - tl.tile.y0);
     double *acc = gi_xcalloc(npix * PT_VALUES_PER_PIXEL, sizeof *acc);
     size_t k = 0;
-    for (uint32_t y = tl.y0; y < tl.y1; y++)
-        for (uint32_t x = tl.x0; x < tl.x1; x++, k++) {
+    for (uint32_t y = tl.tile.y0; y < tl.tile.y1; y++)
+        for (uint32_t x = tl.tile.x0; x < tl.tile.x1; x++, k++) {
             uint64_t pixel = (uint64_t)y * (uint64_t)job->width + x;
             double r = 0, g = 0, b = 0, y2 = 0;
             for (uint32_t s = tl.s0; s < tl.s1; s++) {
@@ -167,15 +160,15 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
     pt_tile tl;
     if (decode_tile(job, t, &tl, err))
         return -1;
-    size_t npix = (size_t)(tl.x1 - tl.x0) * (tl.y1 - tl.y0);
+    size_t npix = (size_t)(tl.tile.x1 - tl.tile.x0) * (tl.tile.y1 - tl.tile.y0);
     if (result->len != npix * PT_VALUES_PER_PIXEL * 8)
         return gi_fail(err, GI_EPROTO, "pt task %llu: result has %zu bytes, expected %zu",
                        (unsigned long long)t->id, result->len, npix * PT_VALUES_PER_PIXEL * 8);
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "pt result");
-    for (uint32_t y = tl.y0; y < tl.y1; y++) {
-        double *row = st->sum + ((size_t)y * job->width + tl.x0) * PT_VALUES_PER_PIXEL;
-        for (uint32_t i = 0; i < (tl.x1 - tl.x0) * PT_VALUES_PER_PIXEL; i++)
+    for (uint32_t y = tl.tile.y0; y < tl.tile.y1; y++) {
+        double *row = st->sum + ((size_t)y * job->width + tl.tile.x0) * PT_VALUES_PER_PIXEL;
+        for (uint32_t i = 0; i < (tl.tile.x1 - tl.tile.x0) * PT_VALUES_PER_PIXEL; i++)
             row[i] += gi_get_f64(&r);
     }
     return gi_reader_finish(&r, err);
@@ -211,6 +204,26 @@ static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return rc;
 }
 
+static int pt_save(const gi_job *job, gi_buf *out, gi_error *err)
+{
+    const pt_state *st = job->state;
+    gi_buf_put_f64s(out, st->sum, (size_t)job->width * job->height * PT_VALUES_PER_PIXEL);
+    return 0;
+}
+
+static int pt_load(gi_job *job, gi_reader *in, gi_error *err)
+{
+    pt_state *st = gi_xcalloc(1, sizeof *st);
+    size_t n = (size_t)job->width * job->height * PT_VALUES_PER_PIXEL;
+    st->sum = gi_try_calloc(n, sizeof(double), err, "pt accumulator");
+    job->state = st;
+    if (!st->sum)
+        return -1;
+    if (gi_get_f64s(in, st->sum, n))
+        return gi_fail(err, GI_EPROTO, "pt checkpoint: truncated accumulator");
+    return 0;
+}
+
 static void pt_release(gi_job *job)
 {
     pt_state *st = job->state;
@@ -236,5 +249,7 @@ const gi_method gi_method_pt = {
     .run = pt_run,
     .merge = pt_merge,
     .finish = pt_finish,
+    .save = pt_save,
+    .load = pt_load,
     .release = pt_release,
 };

@@ -1,0 +1,90 @@
+/* gi_tiles: tile tasks for images shaded from precomputed surface data. */
+#include "gi_tiles.h"
+
+#include <float.h>
+#include <stdlib.h>
+
+#include "gi_camera.h"
+#include "gi_rng.h"
+
+void gi_tiles_plan(gi_task_queue *q, uint32_t kind, int width, int height, int tile, int spp,
+                   const gi_buf *extra)
+{
+    for (int y0 = 0; y0 < height; y0 += tile)
+        for (int x0 = 0; x0 < width; x0 += tile) {
+            int x1 = x0 + tile < width ? x0 + tile : width;
+            int y1 = y0 + tile < height ? y0 + tile : height;
+            gi_task *t = gi_task_queue_add(q, kind, (double)(x1 - x0) * (y1 - y0) * spp);
+            gi_buf_put_u32(&t->payload, (uint32_t)x0);
+            gi_buf_put_u32(&t->payload, (uint32_t)y0);
+            gi_buf_put_u32(&t->payload, (uint32_t)x1);
+            gi_buf_put_u32(&t->payload, (uint32_t)y1);
+            if (extra)
+                gi_buf_put(&t->payload, extra->data, extra->len);
+        }
+}
+
+int gi_tile_read(gi_reader *r, int width, int height, gi_tile *t, gi_error *err)
+{
+    t->x0 = gi_get_u32(r);
+    t->y0 = gi_get_u32(r);
+    t->x1 = gi_get_u32(r);
+    t->y1 = gi_get_u32(r);
+    if (r->failed || t->x0 >= t->x1 || t->y0 >= t->y1 || t->x1 > (uint32_t)width ||
+        t->y1 > (uint32_t)height)
+        return gi_fail(err, GI_EPROTO, "%s: tile out of range", r->what);
+    return 0;
+}
+
+int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+                   gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
+{
+    gi_camera_frame cam;
+    gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
+    size_t npix = (size_t)(t->x1 - t->x0) * (t->y1 - t->y0);
+    float *px = gi_xcalloc(npix * 3, sizeof *px);
+    size_t k = 0;
+    for (uint32_t y = t->y0; y < t->y1; y++)
+        for (uint32_t x = t->x0; x < t->x1; x++, k++) {
+            uint64_t pixel = (uint64_t)y * (uint64_t)job->width + x;
+            double sum[3] = {0, 0, 0};
+            for (int s = 0; s < spp; s++) {
+                gi_rng rng;
+                gi_rng_init(&rng, job->seed, pixel, (uint32_t)s);
+                float jx = spp > 1 ? gi_rng_float(&rng) : 0.5f;
+                float jy = spp > 1 ? gi_rng_float(&rng) : 0.5f;
+                gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
+                gi_hit h;
+                if (!gi_rt_intersect(rt, cam.origin, dir, 0.0f, FLT_MAX, &h))
+                    continue;
+                gi_vec3 L = shade(user, &h, gi_madd(cam.origin, dir, h.t), gi_neg(dir));
+                sum[0] += L.x;
+                sum[1] += L.y;
+                sum[2] += L.z;
+            }
+            for (int c = 0; c < 3; c++)
+                px[3 * k + c] = (float)(sum[c] / spp);
+        }
+    gi_buf_put_f32s(result, px, npix * 3);
+    free(px);
+    return 0;
+}
+
+int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_error *err)
+{
+    size_t npix = (size_t)(t->x1 - t->x0) * (t->y1 - t->y0);
+    if (img->channels < 3 || t->x1 > (uint32_t)img->width || t->y1 > (uint32_t)img->height)
+        return gi_fail(err, GI_EINTERNAL, "tile does not fit the image");
+    if (result->len != npix * 3 * 4)
+        return gi_fail(err, GI_EPROTO, "tile result has %zu bytes, expected %zu", result->len,
+                       npix * 12);
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "tile result");
+    for (uint32_t y = t->y0; y < t->y1; y++)
+        for (uint32_t x = t->x0; x < t->x1; x++) {
+            float *p = gi_image_at(img, (int)x, (int)y);
+            for (int c = 0; c < 3; c++)
+                p[c] = gi_get_f32(&r);
+        }
+    return gi_reader_finish(&r, err);
+}

@@ -1,0 +1,45 @@
+/* gi_tiles: images made of tile tasks, for methods whose image is a view of
+ * something computed elsewhere (per-vertex radiance from a bake, radiosity
+ * per element): the coordinator plans tiles and adds their results; a
+ * worker casts the primary rays of a tile and asks the method's shader for
+ * the radiance leaving each visible point.
+ *
+ * Each pixel averages `spp` jittered primary rays (box filter), with random
+ * numbers keyed by (job seed, pixel, sample): the image does not depend on
+ * the tile size or on which worker ran which tile. */
+#ifndef GI_TILES_H
+#define GI_TILES_H
+
+#include <stdint.h>
+
+#include "gi_buf.h"
+#include "gi_image.h"
+#include "gi_job.h"
+#include "gi_rt.h"
+#include "gi_task.h"
+
+typedef struct gi_tile {
+    uint32_t x0, y0, x1, y1; /* pixels [x0, x1) x [y0, y1) */
+} gi_tile;
+
+/* Adds one task of `kind` per tile (side `tile` pixels) of a width x height
+ * image; each payload is the tile followed by `extra` (may be NULL). The
+ * task cost is pixels * spp. */
+void gi_tiles_plan(gi_task_queue *q, uint32_t kind, int width, int height, int tile, int spp,
+                   const gi_buf *extra);
+/* Reads a tile from the front of a task payload (checks it against the
+ * image size); the reader is left after it, at the method's extra bytes. */
+int gi_tile_read(gi_reader *r, int width, int height, gi_tile *out, gi_error *err);
+
+/* Radiance leaving the surface point hit (p, unit direction wo towards the
+ * camera) for the method. */
+typedef gi_vec3 (*gi_surface_shader)(void *user, const gi_hit *hit, gi_vec3 p, gi_vec3 wo);
+
+/* Renders a tile on a worker: result = per-pixel RGB means as f32. Misses
+ * are black. */
+int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+                   gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
+/* Puts a tile result into img (RGB; coordinator side). */
+int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_error *err);
+
+#endif
