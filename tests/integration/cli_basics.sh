@@ -1,0 +1,51 @@
+# The command line: validate, methods, JSON progress, the summary, a bare
+# OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, and an
+# interrupted render leaving no output.
+. "$(dirname "$0")/lib.sh"
+cp "$SRC/tests/data/meshes/two_materials.obj" "$SRC/tests/data/meshes/two_materials.mtl" "$TMP/"
+write_job "$TMP/obj.json" <<JOB
+{"scene": "two_materials.obj", "method": "pt", "image": {"width": 32, "height": 24},
+ "pt": {"spp": 8}, "outputs": {"exr": "obj.exr", "png": "obj.png"}}
+JOB
+"$GI" validate "$TMP/obj.json" >"$TMP/validate.txt" || fail "validate"
+grep -q "ok (pt, scene two_materials.obj: 1 objects, 3 triangles, 1 emissive)" "$TMP/validate.txt" ||
+    { cat "$TMP/validate.txt"; fail "validate output"; }
+"$GI" methods | grep -q "^pt " || fail "methods does not list pt"
+"$GI" --version | grep -q "^gi [0-9]" || fail "--version"
+
+"$GI" render "$TMP/obj.json" --workers 2 --out "$TMP/out" --progress json >"$TMP/summary.txt" 2>"$TMP/progress.txt" ||
+    { cat "$TMP/progress.txt"; fail "render"; }
+# Every progress line is a JSON object with the fields a program needs.
+while read -r line; do
+    case "$line" in
+    '{"event":"progress","job":"obj",'*'"fraction":'*'"eta_s":'*) ;;
+    *) fail "not a JSON progress line: $line" ;;
+    esac
+done <"$TMP/progress.txt"
+grep -q '"fraction":1.000000' "$TMP/progress.txt" || fail "no final progress line"
+grep -q "^obj: pt done in" "$TMP/summary.txt" || fail "no summary"
+grep -q "samples/s" "$TMP/summary.txt" || fail "summary has no rate"
+grep -q "exr  $TMP/out/obj.exr" "$TMP/summary.txt" || fail "summary does not list the EXR"
+# The default camera sees the lit floor (Kd 0.7 0.6 0.5 under Ke 10 9 8).
+"$IMGTOOL" stats "$TMP/out/obj.exr" >"$TMP/stats.txt"
+awk '/^mean/ { exit !($2 > 0.01 && $2 > $3 && $3 > $4) }' "$TMP/stats.txt" ||
+    { cat "$TMP/stats.txt"; fail "the OBJ scene renders dark or with the wrong colours"; }
+ls "$TMP/out" | grep -q tmp && fail "temporary files left in the output directory"
+
+# SIGINT mid-render: exit 130, no output.
+write_job "$TMP/long.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "image": {"width": 128, "height": 128},
+ "pt": {"spp": 4096}, "outputs": {"exr": "long.exr"}}
+JOB
+"$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/int" --progress none >/dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -INT $pid
+set +e
+wait $pid
+rc=$?
+set -e
+[ $rc -eq 130 ] || fail "interrupted render exited $rc, expected 130"
+[ ! -e "$TMP/int/long.exr" ] || fail "interrupted render wrote an output"
+pgrep -f "$TMP/long.json" >/dev/null && fail "pool children outlived the interrupted render"
+echo ok
