@@ -4,7 +4,8 @@
  *
  *   pt_vs_embree [SCENE] [WIDTH] [SPP] [ROUNDS]
  *
- * Renders WIDTH^2 pixels x SPP samples once with a ray log that records
+ * Renders WIDTH^2 pixels x SPP samples (as pt tasks do: the paths of a
+ * tile advanced together) once with a ray log that records
  * every ray the tracer casts; then, ROUNDS times, renders again (timed) and
  * casts the recorded rays with nothing around them (timed). The ratio is
  * t_bare / t_pt = (rays / t_pt) / (rays / t_bare): the share of Embree's raw
@@ -56,19 +57,30 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* Renders like the pt method's tasks do: the paths of 64 x 64 pixel tiles
+ * advanced together (gi_pt_trace_paths). */
 static double render(const gi_pt_tracer *tr, const gi_camera_frame *cam, int w, int spp)
 {
     double sum = 0;
-    for (int y = 0; y < w; y++)
-        for (int x = 0; x < w; x++)
-            for (int s = 0; s < spp; s++) {
-                gi_rng rng;
-                gi_rng_init(&rng, 1, (uint64_t)y * w + x, (uint32_t)s);
-                float jx = gi_rng_float(&rng), jy = gi_rng_float(&rng);
-                gi_vec3 d = gi_camera_dir(cam, (float)x + jx, (float)y + jy);
-                gi_vec3 L = gi_pt_radiance(tr, cam->origin, d, &rng);
-                sum += L.x + L.y + L.z;
-            }
+    enum { TILE = 32 };
+    gi_pt_path *paths = malloc((size_t)TILE * TILE * spp * sizeof *paths);
+    for (int ty = 0; ty < w; ty += TILE)
+        for (int tx = 0; tx < w; tx += TILE) {
+            size_t n = 0;
+            for (int y = ty; y < ty + TILE && y < w; y++)
+                for (int x = tx; x < tx + TILE && x < w; x++)
+                    for (int s = 0; s < spp; s++) {
+                        gi_rng rng;
+                        gi_rng_init(&rng, 1, (uint64_t)y * w + x, (uint32_t)s);
+                        float jx = gi_rng_float(&rng), jy = gi_rng_float(&rng);
+                        gi_vec3 d = gi_camera_dir(cam, (float)x + jx, (float)y + jy);
+                        gi_pt_path_start(&paths[n++], cam->origin, d, &rng);
+                    }
+            gi_pt_trace_paths(tr, paths, n);
+            for (size_t i = 0; i < n; i++)
+                sum += paths[i].L.x + paths[i].L.y + paths[i].L.z;
+        }
+    free(paths);
     return sum;
 }
 

@@ -24,14 +24,13 @@ static inline float gi_light_pdf_area(const gi_scene *s, const gi_material *m)
 static inline void gi_light_sample_point(const gi_scene *s, double u_select, float u1,
                                          float u2, gi_light_sample *out)
 {
-    uint32_t k = gi_sample_cdf(s->light_cdf, s->light_count, u_select);
-    uint32_t t = s->light_tris[k];
-    gi_vec3 a, b, c;
-    gi_scene_triangle(s, t, &a, &b, &c);
-    out->p = gi_sample_triangle(a, b, c, u1, u2);
-    out->n = gi_scene_triangle_normal(s, t);
-    out->tri = t;
-    out->pdf_area = gi_light_pdf_area(s, gi_scene_tri_material(s, t));
+    const gi_light_tri *L = &s->light_geom[gi_sample_cdf(s->light_cdf, s->light_count, u_select)];
+    /* Turk's map: a + sqrt(u1) (1 - u2) e1 + sqrt(u1) u2 e2. */
+    float su = sqrtf(u1);
+    out->p = gi_add(L->a, gi_add(gi_scale(L->e1, su * (1.0f - u2)), gi_scale(L->e2, su * u2)));
+    out->n = L->n;
+    out->tri = L->tri;
+    out->pdf_area = L->pdf_area;
 }
 
 /* Emitted radiance leaving emitter triangle t towards direction w (unit,

@@ -33,16 +33,33 @@ static inline void gi_sample_disc(float u1, float u2, float *x, float *y)
     }
 }
 
-/* Cosine-weighted direction around unit n; pdf = cos(theta) / pi
- * (Malley's method: a uniform disc point lifted to the hemisphere). */
+/* sin and cos of 2 pi u for u in [0, 1), without branches or library
+ * calls: h = pi (u - 1/2) in [-pi/2, pi/2), Taylor polynomials of sin h and
+ * cos h (to h^11 / h^12), then the double angle: sin 2h = 2 sin h cos h,
+ * cos 2h = cos^2 h - sin^2 h, and 2 pi u = 2h + pi flips both signs.
+ * Error < 5e-7. */
+static inline void gi_sincos_turn(float u, float *s, float *c)
+{
+    float h = (float)GI_PI * (u - 0.5f), h2 = h * h;
+    float sh = h * (1.0f + h2 * (-1.0f / 6 + h2 * (1.0f / 120 + h2 * (-1.0f / 5040 +
+                    h2 * (1.0f / 362880 + h2 * (-1.0f / 39916800))))));
+    float ch = 1.0f + h2 * (-1.0f / 2 + h2 * (1.0f / 24 + h2 * (-1.0f / 720 +
+                    h2 * (1.0f / 40320 + h2 * (-1.0f / 3628800 + h2 * (1.0f / 479001600))))));
+    *s = -2.0f * sh * ch;
+    *c = sh * sh - ch * ch;
+}
+
+/* Cosine-weighted direction around unit n; pdf = cos(theta) / pi.
+ * Malley's method on the polar disc map (r = sqrt(u1), phi = 2 pi u2): the
+ * three transcendentals are independent, so they overlap in the CPU (the
+ * concentric map chains a division, a polynomial and a square root). */
 static inline gi_vec3 gi_sample_cosine(gi_vec3 n, float u1, float u2)
 {
-    float x, y;
-    gi_sample_disc(u1, u2, &x, &y);
-    float z = sqrtf(gi_maxf(0.0f, 1.0f - x * x - y * y));
+    float r = sqrtf(u1), z = sqrtf(1.0f - u1), s, c;
+    gi_sincos_turn(u2, &s, &c);
     gi_vec3 t, bt;
     gi_onb(n, &t, &bt);
-    return gi_add(gi_add(gi_scale(t, x), gi_scale(bt, y)), gi_scale(n, z));
+    return gi_add(gi_add(gi_scale(t, r * c), gi_scale(bt, r * s)), gi_scale(n, z));
 }
 
 /* Uniform point on triangle (a, b, c) (Turk's square-root map). */

@@ -32,6 +32,7 @@ void gi_scene_free(gi_scene *s)
     free(s->tri_normal);
     free(s->tri_smooth);
     free(s->light_tris);
+    free(s->light_geom);
     free(s->light_cdf);
     free(s->light_power);
     memset(s, 0, sizeof *s);
@@ -324,6 +325,20 @@ int gi_scene_update_derived(gi_scene *s, gi_error *err)
             s->light_cdf[i] /= total;
     if (s->light_count)
         s->light_cdf[k] = 1.0;
+    free(s->light_geom);
+    s->light_geom = gi_xmalloc((s->light_count + 1) * sizeof *s->light_geom);
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        uint32_t t = s->light_tris[i];
+        gi_vec3 a, b, c;
+        gi_scene_triangle(s, t, &a, &b, &c);
+        gi_light_tri *L = &s->light_geom[i];
+        L->a = a;
+        L->e1 = gi_sub(b, a);
+        L->e2 = gi_sub(c, a);
+        L->n = s->tri_normal[t];
+        L->pdf_area = (float)(s->light_power[i] / total / gi_scene_triangle_area(s, t));
+        L->tri = t;
+    }
     if (!isfinite(total))
         return gi_fail(err, GI_EINVAL, "%s: total emitted power is not finite", s->name);
     return 0;

@@ -26,6 +26,15 @@ typedef struct gi_material {
     int two_sided;    /* emits from both faces */
 } gi_material;
 
+/* An emissive triangle as light sampling sees it (one cache line, no
+ * indirections): vertex a, edges to b and c, unit front normal, and the
+ * density per unit area with which a light sample lands on it. */
+typedef struct gi_light_tri {
+    gi_vec3 a, e1, e2, n;
+    float pdf_area;
+    uint32_t tri;
+} gi_light_tri;
+
 typedef struct gi_camera {
     gi_vec3 position, look_at, up;
     float fov_y_deg; /* vertical field of view */
@@ -67,6 +76,7 @@ typedef struct gi_scene {
 
     /* Emissive triangles, sampled in proportion to emitted power. */
     uint32_t light_count;
+    struct gi_light_tri *light_geom; /* per light: what sampling it needs */
     uint32_t *light_tris;
     double *light_cdf;   /* light_count + 1 entries, cdf[0] = 0, cdf[n] = 1 */
     double *light_power; /* per light: pi * area * luminance(emission) * sides */

@@ -47,6 +47,36 @@ typedef struct gi_pt_tracer {
 /* Radiance arriving at org from direction -dir (dir unit). */
 gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng);
 
+/* The estimator one vertex at a time, so many paths can advance together
+ * (gi_pt_trace_paths) with the very same arithmetic as gi_pt_radiance. */
+typedef struct gi_pt_path {
+    gi_vec3 org, dir; /* the ray to trace next */
+    gi_vec3 beta;     /* throughput */
+    gi_vec3 L;        /* radiance gathered so far */
+    float prev_pdf;   /* BSDF density of the current ray (for MIS) */
+    int bounce;
+    gi_rng rng;
+} gi_pt_path;
+
+/* A next-event estimation shadow ray: contrib is added to the path's L if
+ * nothing blocks org + t dir for t in [0, tfar]. */
+typedef struct gi_pt_shadow {
+    gi_vec3 org, dir, contrib;
+    float tfar;
+} gi_pt_shadow;
+
+#define GI_PT_SHADOW 1   /* *sh holds a shadow ray to test */
+#define GI_PT_CONTINUE 2 /* the path has a next ray */
+
+void gi_pt_path_start(gi_pt_path *P, gi_vec3 org, gi_vec3 dir, const gi_rng *rng);
+/* Handles the vertex where the path's ray hit (h): emission, next-event
+ * estimation, the next ray. Returns GI_PT_SHADOW | GI_PT_CONTINUE flags. */
+int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_shadow *sh);
+/* Advances n paths to their ends breadth first: all rays of a bounce, then
+ * all shading, then all shadow rays. Same result bits as gi_pt_radiance per
+ * path; independent paths give the CPU room to overlap their latencies. */
+void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n);
+
 void gi_pt_params_default(gi_pt_params *p);
 
 extern const gi_method gi_method_pt;

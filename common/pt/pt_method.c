@@ -113,6 +113,9 @@ static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_erro
     return 0;
 }
 
+/* Paths advanced together in pt_run (bounds the scratch memory). */
+#define PT_WAVEFRONT 16384
+
 static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_job *job = &ctx->job;
@@ -123,32 +126,38 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
     gi_pt_tracer tr = {&ctx->rt, &job->scene, p, NULL};
-    size_t npix = (size_t)(tl.tile.x1 - tl.tile.x0) * (tl.tile.y1 - tl.tile.y0);
+    uint32_t tw = tl.tile.x1 - tl.tile.x0, ns = tl.s1 - tl.s0;
+    size_t npix = (size_t)tw * (tl.tile.y1 - tl.tile.y0), total = npix * ns;
     double *acc = gi_xcalloc(npix * PT_VALUES_PER_PIXEL, sizeof *acc);
-    size_t k = 0;
-    for (uint32_t y = tl.tile.y0; y < tl.tile.y1; y++)
-        for (uint32_t x = tl.tile.x0; x < tl.tile.x1; x++, k++) {
-            uint64_t pixel = (uint64_t)y * (uint64_t)job->width + x;
-            double r = 0, g = 0, b = 0, y2 = 0;
-            for (uint32_t s = tl.s0; s < tl.s1; s++) {
-                gi_rng rng;
-                gi_rng_init(&rng, job->seed, pixel, s);
-                float jx = gi_rng_float(&rng), jy = gi_rng_float(&rng);
-                gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
-                gi_vec3 L = gi_pt_radiance(&tr, cam.origin, dir, &rng);
-                r += L.x;
-                g += L.y;
-                b += L.z;
-                double lum = gi_luminance(L);
-                y2 += lum * lum;
-            }
-            acc[4 * k + 0] = r;
-            acc[4 * k + 1] = g;
-            acc[4 * k + 2] = b;
-            acc[4 * k + 3] = y2;
+    gi_pt_path *paths = gi_xmalloc((total < PT_WAVEFRONT ? total : PT_WAVEFRONT) * sizeof *paths);
+    /* Path j is sample s0 + j % ns of pixel j / ns: each pixel's samples are
+     * added in sample order whatever the chunking. */
+    for (size_t first = 0; first < total; first += PT_WAVEFRONT) {
+        size_t n = total - first < PT_WAVEFRONT ? total - first : PT_WAVEFRONT;
+        for (size_t j = 0; j < n; j++) {
+            size_t k = (first + j) / ns;
+            uint32_t s = tl.s0 + (uint32_t)((first + j) % ns);
+            uint32_t x = tl.tile.x0 + (uint32_t)(k % tw), y = tl.tile.y0 + (uint32_t)(k / tw);
+            gi_rng rng;
+            gi_rng_init(&rng, job->seed, (uint64_t)y * (uint64_t)job->width + x, s);
+            float jx = gi_rng_float(&rng), jy = gi_rng_float(&rng);
+            gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
+            gi_pt_path_start(&paths[j], cam.origin, dir, &rng);
         }
-    ctx->stats.samples = npix * (tl.s1 - tl.s0);
+        gi_pt_trace_paths(&tr, paths, n);
+        for (size_t j = 0; j < n; j++) {
+            double *a = &acc[PT_VALUES_PER_PIXEL * ((first + j) / ns)];
+            gi_vec3 L = paths[j].L;
+            a[0] += L.x;
+            a[1] += L.y;
+            a[2] += L.z;
+            double lum = gi_luminance(L);
+            a[3] += lum * lum;
+        }
+    }
+    ctx->stats.samples = total;
     gi_buf_put_f64s(result, acc, npix * PT_VALUES_PER_PIXEL);
+    free(paths);
     free(acc);
     return 0;
 }

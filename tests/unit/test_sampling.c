@@ -79,3 +79,15 @@ GI_TEST(test_triangle_and_cdf_sampling)
     GI_CHECK_NEAR(counts[3] / (double)n, 0.4, 0.005);
     GI_CHECK(gi_sample_cdf(cdf, 4, 0.0) == 0 && gi_sample_cdf(cdf, 4, 0.9999999) == 3);
 }
+
+GI_TEST(test_sincos_turn_accuracy)
+{
+    double worst = 0;
+    for (int i = 0; i < 100000; i++) {
+        float u = (float)i / 100000.0f, s, c;
+        gi_sincos_turn(u, &s, &c);
+        double a = 2 * GI_PI * (double)u;
+        worst = fmax(worst, fmax(fabs(s - sin(a)), fabs(c - cos(a))));
+    }
+    GI_CHECK_MSG(worst < 5e-7, "worst error %g", worst);
+}
