@@ -8,3 +8,5 @@ SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC"
 echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
 "$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9
+echo "== pt_vs_embree on a heavier scene (Cornell box + 163,840 sphere triangles)"
+"$BIN/bench/pt_vs_embree" bench/scenes/cornell-spheres.json 256 8 9
