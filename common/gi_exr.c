@@ -273,10 +273,7 @@ int gi_exr_write(const char *path, const gi_image *img, gi_error *err)
     int rc = exr_write_fd(path, tmp, img, &io, err);
     if (close(io.fd) != 0 && rc == 0)
         rc = gi_fail(err, GI_EIO, "%s: close: %s", path, strerror(errno));
-    if (rc == 0)
-        rc = gi_commit_file(tmp, path, err); /* removes tmp on failure */
-    else
-        unlink(tmp);
+    rc = gi_temp_finish(tmp, path, rc, err);
     free(tmp);
     return rc;
 }

@@ -80,6 +80,14 @@ int gi_commit_file(const char *tmp, const char *path, gi_error *err)
     return 0;
 }
 
+int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err)
+{
+    if (rc == 0)
+        return gi_commit_file(tmp, path, err); /* removes tmp on failure */
+    unlink(tmp);
+    return rc;
+}
+
 int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err)
 {
     char *tmp = gi_temp_path(path);

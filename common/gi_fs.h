@@ -17,6 +17,9 @@ int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err)
 char *gi_temp_path(const char *path);
 /* fsyncs `tmp` and renames it to `path`; removes tmp on failure. */
 int gi_commit_file(const char *tmp, const char *path, gi_error *err);
+/* Ends a write to a temporary file: commits it to path if rc == 0, else
+ * removes it. Returns rc, or -1 if the commit failed. */
+int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err);
 /* Writes bytes to path atomically (temp + fsync + rename). */
 int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err);
 

@@ -95,6 +95,33 @@ static const char *type_name(const cJSON *item)
     return "an invalid value";
 }
 
+static const cJSON *member(const cJSON *obj, const char *key)
+{
+    return cJSON_GetObjectItemCaseSensitive(obj, key);
+}
+
+/* Finds key in obj, with its path in p: 1 if present (*item set), 0 if
+ * absent and optional, -1 (and the error) if absent and required. */
+static int lookup(gi_jv *v, const cJSON *obj, const char *path, const char *key, int required,
+                  char p[512], const cJSON **item)
+{
+    gi_json_path(p, 512, path, key);
+    *item = member(obj, key);
+    if (*item)
+        return 1;
+    return required ? gi_jv_fail(v, p, "missing (required)") : 0;
+}
+
+/* "a, b, c" into buf. */
+static const char *join_names(const char *const *names, char *buf, size_t n)
+{
+    size_t len = 0;
+    buf[0] = '\0';
+    for (int i = 0; names[i] && len + 64 < n; i++)
+        len += (size_t)snprintf(buf + len, n - len, "%s%s", i ? ", " : "", names[i]);
+    return buf;
+}
+
 int gi_jv_object(gi_jv *v, const cJSON *obj, const char *path)
 {
     if (!cJSON_IsObject(obj))
@@ -113,13 +140,10 @@ int gi_jv_keys(gi_jv *v, const cJSON *obj, const char *path, const char *const *
                 known = 1;
         char p[512];
         if (!known) {
-            char list[512] = "";
-            size_t len = 0;
-            for (const char *const *a = allowed; *a && len < sizeof list - 64; a++)
-                len += (size_t)snprintf(list + len, sizeof list - len, "%s%s",
-                                        a == allowed ? "" : ", ", *a);
+            char list[512];
             return gi_jv_fail(v, gi_json_path(p, sizeof p, path, it->string ? it->string : "?"),
-                              "unknown key (expected one of: %s)", list);
+                              "unknown key (expected one of: %s)",
+                              join_names(allowed, list, sizeof list));
         }
         for (const cJSON *o = obj->child; o != it; o = o->next)
             if (strcmp(o->string, it->string) == 0)
@@ -129,19 +153,6 @@ int gi_jv_keys(gi_jv *v, const cJSON *obj, const char *path, const char *const *
     return 0;
 }
 
-static const cJSON *member(const cJSON *obj, const char *key)
-{
-    return cJSON_GetObjectItemCaseSensitive(obj, key);
-}
-
-static int absent(gi_jv *v, const char *p, int required, const cJSON *item)
-{
-    if (item)
-        return 0;
-    if (required)
-        return gi_jv_fail(v, p, "missing (required)");
-    return 1;
-}
 
 int gi_jv_value_number(gi_jv *v, const cJSON *item, const char *path, double lo,
                        double hi, double *out)
@@ -161,11 +172,10 @@ int gi_jv_number(gi_jv *v, const cJSON *obj, const char *path, const char *key,
                  int required, double lo, double hi, double *out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    const cJSON *item;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     return gi_jv_value_number(v, item, p, lo, hi, out);
 }
 
@@ -173,11 +183,10 @@ int gi_jv_int(gi_jv *v, const cJSON *obj, const char *path, const char *key, int
               int64_t lo, int64_t hi, int64_t *out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    const cJSON *item;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsNumber(item))
         return gi_jv_fail(v, p, "expected an integer, got %s", type_name(item));
     double d = item->valuedouble;
@@ -194,11 +203,10 @@ int gi_jv_bool(gi_jv *v, const cJSON *obj, const char *path, const char *key, in
                int *out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    const cJSON *item;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsBool(item))
         return gi_jv_fail(v, p, "expected true or false, got %s", type_name(item));
     *out = cJSON_IsTrue(item);
@@ -209,11 +217,10 @@ int gi_jv_string(gi_jv *v, const cJSON *obj, const char *path, const char *key,
                  int required, const char **out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    const cJSON *item;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsString(item) || !item->valuestring)
         return gi_jv_fail(v, p, "expected a string, got %s", type_name(item));
     *out = item->valuestring;
@@ -233,25 +240,19 @@ int gi_jv_enum(gi_jv *v, const cJSON *obj, const char *path, const char *key, in
             *out = i;
             return 0;
         }
-    char list[512] = "";
-    size_t len = 0;
-    for (int i = 0; choices[i] && len < sizeof list - 64; i++)
-        len += (size_t)snprintf(list + len, sizeof list - len, "%s%s", i ? ", " : "",
-                                choices[i]);
-    char p[512];
-    return gi_jv_fail(v, gi_json_path(p, sizeof p, path, key),
-                      "\"%s\" is not one of: %s", s, list);
+    char list[512], p[512];
+    return gi_jv_fail(v, gi_json_path(p, sizeof p, path, key), "\"%s\" is not one of: %s", s,
+                      join_names(choices, list, sizeof list));
 }
 
 int gi_jv_vec3d(gi_jv *v, const cJSON *obj, const char *path, const char *key,
                 int required, double lo, double hi, double out[3])
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    const cJSON *item;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
         return gi_jv_fail(v, p, "expected an array of 3 numbers, got %s",
                           cJSON_IsArray(item) ? "an array of another length" : type_name(item));
@@ -280,12 +281,11 @@ int gi_jv_member_object(gi_jv *v, const cJSON *obj, const char *path, const char
                         int required, const cJSON **out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
+    const cJSON *item;
     *out = NULL;
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsObject(item))
         return gi_jv_fail(v, p, "expected an object, got %s", type_name(item));
     *out = item;
@@ -296,12 +296,11 @@ int gi_jv_member_array(gi_jv *v, const cJSON *obj, const char *path, const char 
                        int required, const cJSON **out)
 {
     char p[512];
-    gi_json_path(p, sizeof p, path, key);
-    const cJSON *item = member(obj, key);
+    const cJSON *item;
     *out = NULL;
-    int a = absent(v, p, required, item);
-    if (a)
-        return a < 0 ? -1 : 0;
+    int got = lookup(v, obj, path, key, required, p, &item);
+    if (got <= 0)
+        return got;
     if (!cJSON_IsArray(item))
         return gi_jv_fail(v, p, "expected an array, got %s", type_name(item));
     *out = item;

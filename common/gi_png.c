@@ -144,10 +144,7 @@ int gi_png_write(const char *path, const gi_image *img, double exposure_stops, g
     } else if (fclose(fp) != 0) {
         rc = gi_fail(err, GI_EIO, "%s: PNG close: %s", path, strerror(errno));
     }
-    if (rc == 0)
-        rc = gi_commit_file(tmp, path, err); /* removes tmp on failure */
-    else
-        unlink(tmp);
+    rc = gi_temp_finish(tmp, path, rc, err);
     free(tmp);
     return rc;
 }
