@@ -5,23 +5,6 @@
 #include "gi_light.h"
 #include "pt.h"
 
-static inline gi_vec3 shading_normal(const gi_scene *s, uint32_t tri, float u, float v,
-                                     gi_vec3 ng_facing)
-{
-    if (!s->tri_smooth[tri])
-        return ng_facing;
-    const uint32_t *ix = &s->indices[3 * tri];
-    gi_vec3 n = gi_add(gi_add(gi_scale(s->normals[ix[0]], 1.0f - u - v),
-                              gi_scale(s->normals[ix[1]], u)),
-                       gi_scale(s->normals[ix[2]], v));
-    n = gi_normalize(n);
-    /* Interpolated normals may point to the other side near silhouettes;
-     * the geometric side decides which side we are on. */
-    if (!(gi_dot(n, ng_facing) > 0.0f))
-        n = gi_dot(n, ng_facing) < 0.0f ? gi_neg(n) : ng_facing;
-    return n;
-}
-
 static inline float offset_scale(gi_vec3 p)
 {
     return 2e-5f * gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
@@ -72,13 +55,18 @@ static gi_vec3 sample_light(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 ng_f,
     return gi_scale(fl, cos_s * pdf_light / (pdf_light * pdf_light + pdf_bsdf * pdf_bsdf));
 }
 
-gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng)
+/* Radiance arriving at org from -dir along a path whose first vertex is
+ * number `bounce`. prev_pdf is the solid-angle density with which dir was
+ * sampled by a diffuse scattering at org (emission found at the first hit
+ * is then MIS-weighted against light sampling), or 0 for a camera ray
+ * (emission counts in full). */
+static gi_vec3 radiance_from(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, int bounce,
+                             float prev_pdf, gi_rng *rng)
 {
     const gi_scene *s = tr->scene;
     const gi_pt_params *prm = tr->params;
     gi_vec3 L = gi_v3(0, 0, 0), beta = gi_v3(1, 1, 1);
-    float prev_pdf = 0.0f;
-    for (int bounce = 0;; bounce++) {
+    for (;; bounce++) {
         gi_hit h;
         if (tr->log)
             tr->log->ray(tr->log->user, org, dir, 0.0f, FLT_MAX, 0);
@@ -96,7 +84,7 @@ gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng 
         if (!gi_is_black(m->emission)) {
             gi_vec3 le = gi_light_emitted(m, ng, wo);
             if (!gi_is_black(le)) {
-                if (bounce == 0 || prm->strategy == GI_PT_BSDF) {
+                if (prev_pdf == 0.0f || prm->strategy == GI_PT_BSDF) {
                     L = gi_add(L, gi_mul(beta, le));
                 } else if (prm->strategy == GI_PT_MIS && cos_o != 0.0f) {
                     /* Power heuristic against light sampling, whose density
@@ -111,7 +99,7 @@ gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng 
             break;
         if (gi_is_black(m->diffuse))
             break;
-        gi_bsdf bsdf = gi_bsdf_at(m, shading_normal(s, h.tri, h.u, h.v, ng_f));
+        gi_bsdf bsdf = gi_bsdf_at(m, gi_scene_shading_normal(s, h.tri, h.u, h.v, ng_f));
 
         if (prm->strategy != GI_PT_BSDF)
             L = gi_add(L, gi_mul(beta, sample_light(tr, p, ng_f, &bsdf, rng)));
@@ -134,4 +122,27 @@ gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng 
         dir = wi;
     }
     return L;
+}
+
+gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng)
+{
+    return radiance_from(tr, org, dir, 0, 0.0f, rng);
+}
+
+gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *rng)
+{
+    /* E = pi L_o of a white (rho = 1) Lambertian surface at p: the same
+     * light sampling and BSDF sampling (MIS) as at any path vertex. */
+    gi_bsdf white = {gi_v3(1, 1, 1), n};
+    gi_vec3 L = gi_v3(0, 0, 0);
+    if (tr->params->max_bounces == 0)
+        return L;
+    if (tr->params->strategy != GI_PT_BSDF)
+        L = sample_light(tr, p, n, &white, rng);
+    float u1 = gi_rng_float(rng), u2 = gi_rng_float(rng), pdf;
+    gi_vec3 wi;
+    gi_bsdf_sample(&white, u1, u2, &wi, &pdf);
+    if (pdf > 0.0f)
+        L = gi_add(L, radiance_from(tr, gi_rt_offset(p, n, wi), wi, 1, pdf, rng));
+    return gi_scale(L, (float)GI_PI);
 }
