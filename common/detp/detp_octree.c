@@ -139,8 +139,10 @@ static int build(gi_detp_octree *o, uint32_t node, const double lo[3], double si
     o->nodes[node].child = LEAF;
     o->nodes[node].start = (uint32_t)o->ref_count;
     o->nodes[node].count = n;
-    memcpy(o->refs + o->ref_count, ids, (size_t)n * sizeof *ids);
-    o->ref_count += n;
+    if (n) {
+        memcpy(o->refs + o->ref_count, ids, (size_t)n * sizeof *ids);
+        o->ref_count += n;
+    }
     return 0;
 }
 
