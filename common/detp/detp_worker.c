@@ -64,6 +64,14 @@ static int need_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
     return 0;
 }
 
+static void need_inward(gi_worker_ctx *ctx, detp_worker *w)
+{
+    if (w->inward)
+        return;
+    w->inward = gi_xmalloc(((size_t)ctx->job.scene.vertex_count + 1) * sizeof *w->inward);
+    gi_detp_inward_dirs(&ctx->job.scene, w->inward);
+}
+
 /* The per-job structures of the estimator. */
 static int need_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
 {
@@ -192,10 +200,7 @@ static int run_visibility(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, 
     if (v0 >= v1 || v1 > w->discs.count)
         return gi_fail(err, GI_EPROTO, "detp visibility task %llu: bad vertex range",
                        (unsigned long long)t->id);
-    if (!w->inward) {
-        w->inward = gi_xmalloc(((size_t)ctx->job.scene.vertex_count + 1) * sizeof *w->inward);
-        gi_detp_inward_dirs(&ctx->job.scene, w->inward);
-    }
+    need_inward(ctx, w);
     double t0 = detp_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf body;
@@ -232,6 +237,12 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
      * irradiance point as its first bounce. */
     pp.max_bounces = p->max_bounces < 0 ? -1 : p->max_bounces + 1;
     gi_pt_tracer tr = {&ctx->rt, s, &pp, NULL};
+    detp_worker *w = worker_state(ctx);
+    need_inward(ctx, w);
+    /* A vertex on an edge where another surface meets its own (a wall's
+     * top edge on the ceiling) is evaluated a hair inside its own
+     * triangles: the limit of the irradiance from its own side. */
+    float nudge = (float)(1e-4 * p->scene_size);
     double t0 = detp_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf body;
@@ -243,7 +254,8 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
         for (uint32_t k = 0; k < p->reference_spp; k++) {
             gi_rng rng;
             gi_rng_init(&rng, job->seed, DETP_STREAM_REFERENCE + v, k);
-            gi_vec3 E = gi_pt_irradiance(&tr, s->positions[v], n, &rng);
+            gi_vec3 E = gi_pt_irradiance(&tr, gi_madd(s->positions[v], w->inward[v], nudge), n,
+                                         &rng);
             sum[0] += E.x;
             sum[1] += E.y;
             sum[2] += E.z;
