@@ -39,6 +39,7 @@ struct gi_detp_octree {
     uint32_t *refs;
     uint64_t ref_count, ref_cap;
     uint32_t *mail; /* per disc: the last segment that tested it */
+    double *boxes;  /* per disc during the build: lo[3], hi[3] (grown by margin) */
     uint32_t stamp;
     int depth; /* deepest leaf */
     int max_depth;
@@ -94,8 +95,7 @@ static int build(gi_detp_octree *o, uint32_t node, const double lo[3], double si
                 return -1;
             }
             for (uint32_t i = 0; i < n; i++) {
-                double blo[3], bhi[3];
-                disc_box(&o->discs->d[ids[i]], o->discs->radius, o->margin, blo, bhi);
+                const double *blo = &o->boxes[6 * (size_t)ids[i]], *bhi = blo + 3;
                 if (blo[0] <= clo[0] + half && bhi[0] >= clo[0] && blo[1] <= clo[1] + half &&
                     bhi[1] >= clo[1] && blo[2] <= clo[2] + half && bhi[2] >= clo[2])
                     kid_ids[k][kid_n[k]++] = ids[i];
@@ -181,14 +181,20 @@ int gi_detp_octree_build(const gi_detp_discs *d, const gi_detp_octree_params *p,
     o->max_depth = depth < MAX_DEPTH ? depth : MAX_DEPTH;
     o->mail = gi_try_calloc((size_t)d->count + 1, sizeof *o->mail, err, "octree mailboxes");
     uint32_t *all = gi_try_malloc(((size_t)d->count + 1) * sizeof *all, err, "octree root");
-    int rc = (o->mail && all) ? 0 : -1;
+    o->boxes = gi_try_malloc(((size_t)d->count + 1) * 6 * sizeof *o->boxes, err, "octree boxes");
+    int rc = (o->mail && all && o->boxes) ? 0 : -1;
     if (rc == 0) {
-        for (uint32_t i = 0; i < d->count; i++)
+        for (uint32_t i = 0; i < d->count; i++) {
             all[i] = i;
+            disc_box(&d->d[i], d->radius, o->margin, &o->boxes[6 * (size_t)i],
+                     &o->boxes[6 * (size_t)i + 3]);
+        }
         add_nodes(o, 1);
         rc = build(o, 0, o->lo, o->size, 0, all, d->count, err);
     }
     free(all);
+    free(o->boxes);
+    o->boxes = NULL;
     if (rc) {
         gi_detp_octree_free(o);
         return -1;
