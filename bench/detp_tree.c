@@ -3,7 +3,7 @@
  * 100 ... 409,600 photons - for our Sphere Cache (Hilbert order), octree
  * Disc Indexing and Embree Disc Indexing, with the time of every phase.
  *
- *   detp_tree SCENE.json [MAX_PHOTONS] [ROUNDS]
+ *   detp_tree SCENE.json [MAX_PHOTONS] [ROUNDS] [MIN_PHOTONS] [RADII]
  *
  * SCENE is the tree scene from `gi_scenegen tree DIR`. For each photon
  * count (100, 200, 400, ... up to MAX_PHOTONS, default 409600) the photons
@@ -11,7 +11,8 @@
  * and the same segments go to every estimator, as one batch on one core.
  * Each round runs the three estimators in a rotating order (this machine's
  * speed drifts: alternating keeps the comparison fair) and the median of
- * ROUNDS (default 3) is printed. Build = Hilbert sort for the Sphere Cache,
+ * ROUNDS (default 3) is printed. MIN_PHOTONS (default 100) starts the
+ * doubling elsewhere; RADII (default "1,2,4") lists radii in percent. Build = Hilbert sort for the Sphere Cache,
  * tree / BVH construction for Disc Indexing; estimate = the density
  * estimation proper (the thesis's tables give this phase). The three must
  * agree on every disc's energy; the run stops if they do not. */
@@ -49,13 +50,24 @@ static const char *const names[NEST] = {"sphere cache", "octree DI", "Embree DI"
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        fprintf(stderr, "usage: detp_tree SCENE.json [MAX_PHOTONS] [ROUNDS]\n");
+        fprintf(stderr, "usage: detp_tree SCENE.json [MAX_PHOTONS] [ROUNDS] [MIN_PHOTONS] [RADII]\n");
         return 2;
     }
     uint64_t max_photons = argc > 2 ? strtoull(argv[2], NULL, 10) : 409600;
     int rounds = argc > 3 ? atoi(argv[3]) : 3;
     if (rounds < 1 || rounds > 99)
         rounds = 3;
+    uint64_t min_photons = argc > 4 ? strtoull(argv[4], NULL, 10) : 100;
+    if (min_photons < 1)
+        min_photons = 1;
+    double radii[8];
+    int nradii = 0;
+    const char *rl = argc > 5 ? argv[5] : "1,2,4";
+    for (char *e; *rl && nradii < 8; rl = *e ? e + 1 : e) {
+        radii[nradii++] = 0.01 * strtod(rl, &e);
+        if (e == rl)
+            break;
+    }
     gi_error err;
     gi_dir_source ds;
     gi_dir_source_init(&ds, ".");
@@ -77,12 +89,11 @@ int main(int argc, char **argv)
     printf("%-8s %-8s %-7s %-4s | %-8s %-8s | %-8s %-8s | %-8s %-8s | %s\n", "photons", "segments",
            "trace", "r%", "SC sort", "SC est", "oct bld", "oct est", "emb bld", "emb est",
            "SC/Embree est");
-    const double radii[3] = {0.01, 0.02, 0.04};
     gi_detp_sc_params scp = {2.0 / 3.0, 100, 60, GI_DETP_ORDER_HILBERT, 1, 0};
     gi_detp_octree_params op = {0, 20};
     gi_detp_segments segs;
     gi_detp_segments_init(&segs);
-    for (uint64_t n = 100; n <= max_photons; n *= 2) {
+    for (uint64_t n = min_photons; n <= max_photons; n *= 2) {
         gi_detp_tracer tr;
         gi_detp_tracer_init(&tr, &rt, &scene, 1, n, -1, 1);
         segs.count = 0;
@@ -91,7 +102,7 @@ int main(int argc, char **argv)
             gi_detp_trace_photon(&tr, p, &segs);
         double trace = now() - t0;
         gi_detp_set_extent(&segs, GI_DETP_AC_SECOND_HIT, (float)(1e-5 * size));
-        for (int ri = 0; ri < 3; ri++) {
+        for (int ri = 0; ri < nradii; ri++) {
             gi_detp_discs d;
             if (gi_detp_discs_from_scene(&scene, (float)(radii[ri] * size), &d, &err))
                 return 1;

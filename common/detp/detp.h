@@ -264,7 +264,8 @@ void gi_detp_octree_shape(const gi_detp_octree *o, int *depth, uint64_t *nodes,
                           uint64_t *leaves, uint64_t *refs);
 
 /* Disc Indexing with Embree (detp_embree_index.c): the discs as
- * RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT; an intersection filter applies
+ * RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT; a filter function (on occlusion
+ * queries) applies
  * gi_detp_crosses to every disc a segment meets and rejects the hit, so
  * traversal goes on to the next. */
 typedef struct gi_detp_embree_index gi_detp_embree_index;
