@@ -265,9 +265,8 @@ void gi_detp_octree_shape(const gi_detp_octree *o, int *depth, uint64_t *nodes,
 
 /* Disc Indexing with Embree (detp_embree_index.c): the discs as
  * RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT; a filter function (on occlusion
- * queries) applies
- * gi_detp_crosses to every disc a segment meets and rejects the hit, so
- * traversal goes on to the next. */
+ * queries) applies gi_detp_crosses to every disc a segment meets and
+ * rejects the hit, so traversal goes on to the next. */
 typedef struct gi_detp_embree_index gi_detp_embree_index;
 int gi_detp_embree_build(RTCDevice device, const gi_detp_discs *d, gi_detp_embree_index **out,
                          gi_error *err);
