@@ -199,3 +199,30 @@ GI_TEST(test_detp_batch_results_dense_and_sparse)
         gi_detp_accum_free(&acc);
     }
 }
+
+GI_TEST(test_detp_automatic_radius_and_photon_count)
+{
+    /* Thesis 1.13: the radius is the mean sample spacing, the photon count
+     * the one eq. 3.46 needs for the requested relative error. */
+    gi_error err;
+    char text[1024], p2[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"detp\","
+             " \"detp\": {\"photons\": \"auto\", \"relative_error\": 0.05,"
+             " \"radius\": \"auto\", \"subdivide\": 100}}",
+             gi_test_srcdir());
+    snprintf(p2, sizeof p2, "%s/auto.json", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_write_file_atomic(p2, text, strlen(text), &err));
+    gi_job job;
+    GI_REQUIRE_OK(gi_job_load(p2, &job, &err));
+    const gi_detp_params *p = job.params;
+    double spacing = gi_detp_mean_edge(&job.scene);
+    GI_CHECK_NEAR(p->disc_radius, spacing, 1e-4 * spacing);
+    double ad = GI_PI * (double)p->disc_radius * p->disc_radius;
+    GI_CHECK(p->photon_count == gi_detp_rays_for_error(p->hull_area, ad, 0.05));
+    GI_CHECK_NEAR(gi_detp_predicted_error(p->hull_area, ad, (double)p->photon_count), 0.05, 1e-4);
+    /* The Cornell box's bounding box: 556 x 548.8 x 559.2 (A_0 = 1.85e6 mm^2). */
+    GI_CHECK_REL(p->hull_area, 2.0 * (556.0 * 548.8 + 548.8 * 559.2 + 559.2 * 556.0), 1e-4);
+    GI_CHECK((uint64_t)p->batch <= p->photon_count);
+    gi_job_free(&job);
+}
