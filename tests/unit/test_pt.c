@@ -21,20 +21,21 @@ static double polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 
     return 0.5 * L * fabs(sum);
 }
 
+/* A unit square emitter (radiance 2) facing down at height 1, over a large
+ * diffuse floor (rho 0.5). */
+static const char *const lambert_scene =
+    "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+    "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
+    " \"objects\": ["
+    "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
+    "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
+    "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
+
 GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
 {
     gi_error err;
     gi_scene s;
-    /* A unit square emitter (radiance 2) facing down at height 1, over a
-     * large diffuse floor (rho 0.5). */
-    const char *text =
-        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
-        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
-        " \"objects\": ["
-        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
-        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
-        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", text, &s, &err));
+    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", lambert_scene, &s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
     gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
@@ -106,14 +107,7 @@ GI_TEST(test_irradiance_matches_lambert_polygon_formula)
      * strategy, against Lambert's formula; with all bounces it is larger. */
     gi_error err;
     gi_scene s;
-    const char *text =
-        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
-        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
-        " \"objects\": ["
-        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
-        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
-        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert_e.json", text, &s, &err));
+    GI_REQUIRE_OK(gi_test_load_scene_text("lambert_e.json", lambert_scene, &s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
     gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
