@@ -124,8 +124,8 @@ static void read_timing(gi_reader *r, double *seconds, uint64_t *rays)
     *rays += gi_get_u64(r);
 }
 
-static int merge_range(gi_reader *r, const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim,
-                       gi_error *err)
+/* The [a, b) range of a visibility or reference task's payload. */
+static int merge_range(const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim, gi_error *err)
 {
     gi_reader pr;
     gi_reader_init(&pr, t->payload.data, t->payload.len, "detp task");
@@ -159,7 +159,7 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
         return 0;
     }
     case DETP_TASK_VISIBILITY:
-        if (!st->visible || merge_range(&r, t, &a, &b, st->nv, err))
+        if (!st->visible || merge_range(t, &a, &b, st->nv, err))
             return st->visible ? -1 : gi_fail(err, GI_EPROTO, "unexpected visibility result");
         read_timing(&r, &st->sec_visibility, &st->rays_visibility);
         for (uint32_t i = a; i < b; i++) {
@@ -170,7 +170,7 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
         }
         return gi_reader_finish(&r, err);
     case DETP_TASK_REFERENCE:
-        if (merge_range(&r, t, &a, &b, st->nref, err))
+        if (merge_range(t, &a, &b, st->nref, err))
             return -1;
         read_timing(&r, &st->sec_reference, &st->rays_reference);
         for (uint32_t j = a; j < b; j++)

@@ -57,9 +57,12 @@ static int need_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
     if (w->discs_ready)
         return 0;
     const gi_detp_params *p = ctx->job.params;
-    if (gi_detp_discs_from_scene(&ctx->job.scene, p->disc_radius, &w->discs, err) ||
-        gi_detp_accum_init(&w->acc, w->discs.count, err))
+    if (gi_detp_discs_from_scene(&ctx->job.scene, p->disc_radius, &w->discs, err))
         return -1;
+    if (gi_detp_accum_init(&w->acc, w->discs.count, err)) {
+        gi_detp_discs_free(&w->discs);
+        return -1;
+    }
     w->discs_ready = 1;
     return 0;
 }
