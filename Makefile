@@ -97,8 +97,11 @@ TOOL_SRC := $(wildcard tests/tools/*.c)
 TOOL_BIN := $(TOOL_SRC:tests/tools/%.c=$(O)/tools/%)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(O)/bench/%)
+# Scene generators (scenes/tools/*.c -> build/<cfg>/scenes/NAME).
+SCENE_TOOL_SRC := $(wildcard scenes/tools/*.c)
+SCENE_TOOL_BIN := $(SCENE_TOOL_SRC:scenes/tools/%.c=$(O)/scenes/%)
 
-binaries: $(PROG_BIN) $(O)/gi-tests $(TOOL_BIN) $(BENCH_BIN)
+binaries: $(PROG_BIN) $(O)/gi-tests $(TOOL_BIN) $(BENCH_BIN) $(SCENE_TOOL_BIN)
 
 Q = $(if $(V),,@)
 
@@ -124,6 +127,11 @@ $(O)/gi-tests: $(TEST_OBJ) $(LIB)
 	$(Q)$(CC) $(LDFLAGS_ALL) -o $@ $^ $(PKG_LIBS)
 
 $(O)/tools/%: $(O)/obj/tests/tools/%.o $(LIB)
+	@mkdir -p $(dir $@)
+	@$(if $(V),,echo "  LD [$(CFG)] $@")
+	$(Q)$(CC) $(LDFLAGS_ALL) -o $@ $^ $(PKG_LIBS)
+
+$(O)/scenes/%: $(O)/obj/scenes/tools/%.o $(LIB)
 	@mkdir -p $(dir $@)
 	@$(if $(V),,echo "  LD [$(CFG)] $@")
 	$(Q)$(CC) $(LDFLAGS_ALL) -o $@ $^ $(PKG_LIBS)

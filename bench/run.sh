@@ -10,3 +10,10 @@ echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
 "$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9
 echo "== pt_vs_embree on a heavier scene (Cornell box + 163,840 sphere triangles)"
 "$BIN/bench/pt_vs_embree" bench/scenes/cornell-spheres.json 256 8 9
+echo "== detp_tree: thesis Tables A.2-A.4 on a generated tree scene (one core; minutes)"
+TREE=$(mktemp -d "${TMPDIR:-/tmp}/detp-tree.XXXXXX")
+"$BIN/scenes/gi_scenegen" tree "$TREE"
+"$BIN/bench/detp_tree" "$TREE/scene.json" 409600 3
+rm -rf "$TREE"
+echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minutes)"
+sh bench/detp_memory.sh "$BIN" 5000000 50000000

@@ -29,7 +29,10 @@ typedef struct gi_method {
     /* Validates the method's parameter block (params may be NULL when the
      * job has none) and stores the parsed parameters in job->params. */
     int (*parse)(gi_job *job, const cJSON *params, gi_jv *v);
-    /* Checks that need the loaded scene (coordinator side, after parse). */
+    /* Checks that need the loaded scene, after parse. It runs wherever the
+     * scene is loaded - on the coordinator and in every worker, before the
+     * worker builds its ray tracing scene - so it may also prepare the
+     * scene deterministically for the method (detp refines the mesh). */
     int (*check_scene)(gi_job *job, gi_error *err);
     int (*plan)(gi_job *job, gi_task_queue *tasks, gi_error *err);
     int (*run)(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);

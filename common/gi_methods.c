@@ -2,10 +2,12 @@
 #include <string.h>
 
 #include "gi_method.h"
+#include "detp/detp.h"
 #include "pt/pt.h"
 
 static const gi_method *const all_methods[] = {
     &gi_method_pt,
+    &gi_method_detp,
     NULL,
 };
 

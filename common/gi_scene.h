@@ -109,6 +109,26 @@ static inline const gi_material *gi_scene_tri_material(const gi_scene *s, uint32
     return &s->materials[s->tri_material[t]];
 }
 
+/* Shading normal at barycentrics (u, v) of triangle tri, on the side of
+ * ng_facing (the geometric normal turned towards the side being shaded).
+ * Flat triangles use ng_facing itself. */
+static inline gi_vec3 gi_scene_shading_normal(const gi_scene *s, uint32_t tri, float u, float v,
+                                              gi_vec3 ng_facing)
+{
+    if (!s->tri_smooth[tri])
+        return ng_facing;
+    const uint32_t *ix = &s->indices[3 * tri];
+    gi_vec3 n = gi_add(gi_add(gi_scale(s->normals[ix[0]], 1.0f - u - v),
+                              gi_scale(s->normals[ix[1]], u)),
+                       gi_scale(s->normals[ix[2]], v));
+    n = gi_normalize(n);
+    /* Interpolated normals may point to the other side near silhouettes;
+     * the geometric side decides which side we are on. */
+    if (!(gi_dot(n, ng_facing) > 0.0f))
+        n = gi_dot(n, ng_facing) < 0.0f ? gi_neg(n) : ng_facing;
+    return n;
+}
+
 /* Recomputes bbox and the light distribution (after loading or moving). */
 int gi_scene_update_derived(gi_scene *s, gi_error *err);
 

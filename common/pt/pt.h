@@ -46,6 +46,11 @@ typedef struct gi_pt_tracer {
 
 /* Radiance arriving at org from direction -dir (dir unit). */
 gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng);
+/* Irradiance at surface point p over the hemisphere of unit normal n
+ * (direct and indirect; emission of the surface at p itself excluded):
+ * what a per-vertex method's irradiance is checked against. p is counted
+ * as the first scattering vertex for max_bounces and rr_depth. */
+gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *rng);
 
 /* The estimator one vertex at a time, so many paths can advance together
  * (gi_pt_trace_paths) with the very same arithmetic as gi_pt_radiance. */

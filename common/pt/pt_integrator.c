@@ -6,23 +6,6 @@
 #include "gi_light.h"
 #include "pt.h"
 
-static inline gi_vec3 shading_normal(const gi_scene *s, uint32_t tri, float u, float v,
-                                     gi_vec3 ng_facing)
-{
-    if (!s->tri_smooth[tri])
-        return ng_facing;
-    const uint32_t *ix = &s->indices[3 * tri];
-    gi_vec3 n = gi_add(gi_add(gi_scale(s->normals[ix[0]], 1.0f - u - v),
-                              gi_scale(s->normals[ix[1]], u)),
-                       gi_scale(s->normals[ix[2]], v));
-    n = gi_normalize(n);
-    /* Interpolated normals may point to the other side near silhouettes;
-     * the geometric side decides which side we are on. */
-    if (!(gi_dot(n, ng_facing) > 0.0f))
-        n = gi_dot(n, ng_facing) < 0.0f ? gi_neg(n) : ng_facing;
-    return n;
-}
-
 static inline float offset_scale(gi_vec3 p)
 {
     return 2e-5f * gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
@@ -116,7 +99,7 @@ int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_s
     }
     if ((prm->max_bounces >= 0 && P->bounce >= prm->max_bounces) || gi_is_black(m->diffuse))
         return 0;
-    gi_bsdf bsdf = gi_bsdf_at(m, shading_normal(s, h->tri, h->u, h->v, ng_f));
+    gi_bsdf bsdf = gi_bsdf_at(m, gi_scene_shading_normal(s, h->tri, h->u, h->v, ng_f));
 
     if (prm->strategy != GI_PT_BSDF && sample_light(tr, p, ng_f, &bsdf, &P->rng, sh)) {
         sh->contrib = gi_mul(P->beta, sh->contrib);
@@ -157,21 +140,55 @@ static inline int blocked(const gi_pt_tracer *tr, const gi_pt_shadow *sh)
     return gi_rt_occluded(tr->rt, sh->org, sh->dir, 0.0f, sh->tfar);
 }
 
+/* Follows one path to its end, shadow rays tested as they come. */
+static void run_path(const gi_pt_tracer *tr, gi_pt_path *P)
+{
+    gi_hit h;
+    while (trace(tr, P, &h)) {
+        gi_pt_shadow sh;
+        int flags = gi_pt_vertex(tr, P, &h, &sh);
+        if ((flags & GI_PT_SHADOW) && !blocked(tr, &sh))
+            P->L = gi_add(P->L, sh.contrib);
+        if (!(flags & GI_PT_CONTINUE))
+            break;
+    }
+}
+
 gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng *rng)
 {
     gi_pt_path P;
     gi_pt_path_start(&P, org, dir, rng);
-    gi_hit h;
-    while (trace(tr, &P, &h)) {
-        gi_pt_shadow sh;
-        int flags = gi_pt_vertex(tr, &P, &h, &sh);
-        if ((flags & GI_PT_SHADOW) && !blocked(tr, &sh))
-            P.L = gi_add(P.L, sh.contrib);
-        if (!(flags & GI_PT_CONTINUE))
-            break;
-    }
+    run_path(tr, &P);
     *rng = P.rng;
     return P.L;
+}
+
+gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *rng)
+{
+    /* E = pi L_o of a white (rho = 1) Lambertian surface at p: the same
+     * light sampling and BSDF sampling (MIS) as at any path vertex, p being
+     * the path's first scattering vertex. */
+    gi_bsdf white = {gi_v3(1, 1, 1), n};
+    gi_vec3 L = gi_v3(0, 0, 0);
+    if (tr->params->max_bounces == 0)
+        return L;
+    gi_pt_shadow sh;
+    if (tr->params->strategy != GI_PT_BSDF && sample_light(tr, p, n, &white, rng, &sh) &&
+        !blocked(tr, &sh))
+        L = sh.contrib;
+    float u1 = gi_rng_float(rng), u2 = gi_rng_float(rng), pdf;
+    gi_vec3 wi;
+    gi_bsdf_sample(&white, u1, u2, &wi, &pdf);
+    if (pdf > 0.0f) {
+        gi_pt_path P;
+        gi_pt_path_start(&P, gi_rt_offset(p, n, wi), wi, rng);
+        P.bounce = 1;
+        P.prev_pdf = pdf;
+        run_path(tr, &P);
+        *rng = P.rng;
+        L = gi_add(L, P.L);
+    }
+    return gi_scale(L, (float)GI_PI);
 }
 
 void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n)

@@ -31,21 +31,6 @@ grep -q "task 5 failed 4 times" "$TMP/dead.log" || { cat "$TMP/dead.log"; fail "
 sed 's/"spp": 16/"spp": 256/' "$TMP/job.json" >"$TMP/long.json"
 "$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long-ref" --progress none >/dev/null 2>&1 ||
     fail "long reference"
-"$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long-kill" --progress none \
-    >"$TMP/kill.log" 2>&1 &
-parent=$!
-killed=0
-for i in $(seq 1 100); do
-    kid=$(pgrep -P $parent | head -n 1 || true)
-    if [ -n "$kid" ]; then
-        sleep 0.3
-        kill -9 "$kid" 2>/dev/null && killed=1
-        break
-    fi
-    sleep 0.05
-done
-wait $parent || { cat "$TMP/kill.log"; fail "render after kill -9 of a child"; }
-[ $killed -eq 1 ] || fail "never found a child to kill"
-grep -q "worker crash" "$TMP/kill.log" || { cat "$TMP/kill.log"; fail "the kill was not noticed"; }
+render_killing_a_child "$TMP/long.json" "$TMP/long-kill" 0.3
 cmp "$TMP/long-ref/img.exr" "$TMP/long-kill/img.exr" || fail "image differs after kill -9"
 echo ok

@@ -21,20 +21,21 @@ static double polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 
     return 0.5 * L * fabs(sum);
 }
 
+/* A unit square emitter (radiance 2) facing down at height 1, over a large
+ * diffuse floor (rho 0.5). */
+static const char *const lambert_scene =
+    "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+    "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
+    " \"objects\": ["
+    "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
+    "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
+    "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
+
 GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
 {
     gi_error err;
     gi_scene s;
-    /* A unit square emitter (radiance 2) facing down at height 1, over a
-     * large diffuse floor (rho 0.5). */
-    const char *text =
-        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
-        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
-        " \"objects\": ["
-        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
-        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
-        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", text, &s, &err));
+    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", lambert_scene, &s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
     gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
@@ -132,8 +133,54 @@ GI_TEST(test_paths_traced_together_match_one_at_a_time_bit_for_bit)
         }
         GI_CHECK_MSG(differ == 0, "strategy %d: %d of %d paths differ", si, differ, N);
         /* BSDF sampling alone rarely finds the small light. */
-        GI_CHECK_MSG(nonzero > (si == 2 ? N / 200 : N / 2), "strategy %d: only %d of %d paths carry light", si, nonzero, N);
+        GI_CHECK_MSG(nonzero > (si == 2 ? N / 200 : N / 2),
+                     "strategy %d: only %d of %d paths carry light", si, nonzero, N);
     }
+    gi_rt_free(&rt);
+    gi_scene_free(&s);
+}
+
+GI_TEST(test_irradiance_matches_lambert_polygon_formula)
+{
+    /* gi_pt_irradiance (what per-vertex methods are checked against): the
+     * direct irradiance from a square emitter at floor points, every
+     * strategy, against Lambert's formula; with all bounces it is larger. */
+    gi_error err;
+    gi_scene s;
+    GI_REQUIRE_OK(gi_test_load_scene_text("lambert_e.json", lambert_scene, &s, &err));
+    gi_rt rt;
+    GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
+    gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
+    gi_vec3 points[] = {{0, 0, 0}, {0.4f, 0, -0.3f}, {1.2f, 0, 0.5f}};
+    gi_pt_strategy strategies[] = {GI_PT_MIS, GI_PT_LIGHT, GI_PT_BSDF};
+    for (int si = 0; si < 3; si++)
+        for (size_t i = 0; i < 3; i++) {
+            gi_pt_params p;
+            gi_pt_params_default(&p);
+            p.max_bounces = 1;
+            p.strategy = strategies[si];
+            gi_pt_tracer tr = {&rt, &s, &p, NULL};
+            double E = polygon_irradiance(poly, 4, points[i], gi_v3(0, 1, 0), 2.0);
+            int n = si == 2 ? 300000 : 60000;
+            double sum = 0;
+            for (int k = 0; k < n; k++) {
+                gi_rng rng;
+                gi_rng_init(&rng, 12, i, (uint32_t)k);
+                sum += gi_pt_irradiance(&tr, points[i], gi_v3(0, 1, 0), &rng).y;
+            }
+            GI_CHECK_MSG(fabs(sum / n - E) <= 0.01 * E, "strategy %d point %zu: %.5f vs %.5f",
+                         si, i, sum / n, E);
+            if (si == 0) { /* light reflected by the floor cannot reach the floor */
+                p.max_bounces = -1;
+                double all = 0;
+                for (int k = 0; k < n; k++) {
+                    gi_rng rng;
+                    gi_rng_init(&rng, 12, i, (uint32_t)k);
+                    all += gi_pt_irradiance(&tr, points[i], gi_v3(0, 1, 0), &rng).y;
+                }
+                GI_CHECK(fabs(all - sum) <= 1e-9 * sum);
+            }
+        }
     gi_rt_free(&rt);
     gi_scene_free(&s);
 }

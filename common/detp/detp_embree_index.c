@@ -1,0 +1,148 @@
+/* detp_embree_index: Disc Indexing with Embree's BVH (thesis 1.9 with the
+ * index the thesis recommends: the same kind of structure that indexes the
+ * scene, here Embree itself).
+ *
+ * The discs are one RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT geometry (vertex
+ * buffer FLOAT4 x, y, z, radius; normal buffer FLOAT3). A segment is traced
+ * as a ray over [0, t_end] (an occlusion query); the filter function sees
+ * every disc the traversal reports, applies gi_detp_crosses (so the decision is exactly
+ * basic DETP's), adds the energy, and rejects the hit (valid = 0), so
+ * traversal continues to the next disc. Embree's discs are made slightly
+ * larger than the real ones and the ray slightly longer, so that rounding
+ * in Embree's own test can only report more candidates, never fewer. The
+ * BVH is built with medium quality: no spatial splits, so a disc is in one
+ * leaf and reported at most once per ray. */
+#include <math.h>
+#include <stdlib.h>
+
+#include "detp.h"
+
+struct gi_detp_embree_index {
+    RTCDevice device;
+    RTCScene scene;
+    const gi_detp_discs *discs;
+};
+
+/* The context a query passes to the filter (Embree hands the filter the
+ * RTCIntersectContext pointer we gave rtcIntersect1: ours starts with it). */
+typedef struct query_ctx {
+    struct RTCIntersectContext rtc;
+    const gi_detp_discs *discs;
+    const gi_detp_segment *seg;
+    gi_detp_accum *acc;
+    gi_detp_stats *st;
+} query_ctx;
+
+static void disc_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    query_ctx *q = (query_ctx *)args->context;
+    unsigned N = args->N;
+    /* SOA hit layout (rtcore_ray.h): primID of lane i at [5 N + i]. */
+    const unsigned *prim = (const unsigned *)args->hit + 5 * N;
+    for (unsigned i = 0; i < N; i++) {
+        if (args->valid[i] != -1)
+            continue;
+        args->valid[i] = 0; /* reject: keep traversing */
+        uint32_t disc = prim[i];
+        q->st->candidates++;
+        q->st->disc_tests++;
+        if (gi_detp_crosses(&q->discs->d[disc], q->discs->r2, q->seg)) {
+            gi_detp_accum_add(q->acc, disc, q->seg);
+            q->st->crossings++;
+        }
+    }
+}
+
+int gi_detp_embree_build(RTCDevice device, const gi_detp_discs *d, gi_detp_embree_index **out,
+                         gi_error *err)
+{
+    *out = NULL;
+    gi_detp_embree_index *x = gi_xcalloc(1, sizeof *x);
+    x->device = device;
+    x->discs = d;
+    rtcRetainDevice(device);
+    x->scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(x->scene, RTC_BUILD_QUALITY_MEDIUM);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
+    size_t n = d->count ? d->count : 1;
+    float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                       4 * sizeof(float), n);
+    float *nb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3,
+                                        3 * sizeof(float), n);
+    if (!v || !nb) {
+        rtcReleaseGeometry(g);
+        gi_detp_embree_free(x);
+        return gi_fail(err, GI_ENOMEM, "Embree disc index: cannot allocate %zu discs", n);
+    }
+    float grown = d->radius * 1.0001f + 1e-6f * d->radius;
+    for (uint32_t i = 0; i < d->count; i++) {
+        v[4 * i] = d->d[i].c.x;
+        v[4 * i + 1] = d->d[i].c.y;
+        v[4 * i + 2] = d->d[i].c.z;
+        v[4 * i + 3] = grown;
+        nb[3 * i] = d->d[i].n.x;
+        nb[3 * i + 1] = d->d[i].n.y;
+        nb[3 * i + 2] = d->d[i].n.z;
+    }
+    if (d->count == 0) { /* one disc nobody can reach keeps Embree happy */
+        v[0] = v[1] = v[2] = 0.0f;
+        v[3] = 0.0f;
+        nb[0] = nb[2] = 0.0f;
+        nb[1] = 1.0f;
+    }
+    rtcSetGeometryOccludedFilterFunction(g, disc_filter);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(x->scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(x->scene);
+    enum RTCError e = rtcGetDeviceError(device);
+    if (e != RTC_ERROR_NONE) {
+        gi_detp_embree_free(x);
+        return gi_fail(err, GI_EINTERNAL, "Embree disc index: build failed (error %d)", (int)e);
+    }
+    *out = x;
+    return 0;
+}
+
+void gi_detp_embree_free(gi_detp_embree_index *x)
+{
+    if (!x)
+        return;
+    if (x->scene)
+        rtcReleaseScene(x->scene);
+    rtcReleaseDevice(x->device);
+    free(x);
+}
+
+void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
+                             gi_detp_accum *acc, gi_detp_stats *st)
+{
+    query_ctx q;
+    rtcInitIntersectContext(&q.rtc);
+    q.discs = x->discs;
+    q.acc = acc;
+    q.st = st;
+    if (x->discs->count == 0)
+        return;
+    for (size_t j = 0; j < s->count; j++) {
+        const gi_detp_segment *g = &s->v[j];
+        q.seg = g;
+        struct RTCRay ray;
+        ray.org_x = g->org.x;
+        ray.org_y = g->org.y;
+        ray.org_z = g->org.z;
+        ray.tnear = 0.0f;
+        ray.dir_x = g->dir.x;
+        ray.dir_y = g->dir.y;
+        ray.dir_z = g->dir.z;
+        ray.time = 0.0f;
+        ray.tfar = isfinite(g->t_end) ? g->t_end * 1.0001f + 1e-6f : INFINITY;
+        ray.mask = 0xFFFFFFFFu;
+        ray.id = 0;
+        ray.flags = 0;
+        /* An occlusion query: the filter rejects every disc, so it visits
+         * them all, and Embree skips the hit record (~15% faster than
+         * rtcIntersect1 at 1% radius in bench/detp_tree). */
+        rtcOccluded1(x->scene, &q.rtc, &ray);
+    }
+}

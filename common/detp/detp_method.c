@@ -1,0 +1,418 @@
+/* detp_method: photon paths + DETP as a farm method (coordinator side).
+ *
+ * plan: photon batches (a batch is a range of photon indices: the same
+ * range always gives the same paths), plus, if asked, tasks that measure
+ * the discs' visible area (artifact control rule 2) and tasks that
+ * path-trace the irradiance at some vertices for comparison. run
+ * (detp_worker.c) traces a batch and density-estimates it against the
+ * discs, returning the irradiance contribution per vertex. merge adds, in
+ * task order. finish turns irradiance into radiance (L = rho E / pi,
+ * eq. 4.2), publishes it and plans image tiles; when those are merged it
+ * writes the image, the PLY, the binary float file and the report. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "detp_method.h"
+#include "gi_log.h"
+#include "gi_outputs.h"
+#include "gi_tiles.h"
+#include "gi_worker_ctx.h"
+#include "pt/pt.h"
+
+static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
+{
+    gi_detp_params *p = gi_xcalloc(1, sizeof *p);
+    job->params = p;
+    return gi_detp_parse_params(p, params, v);
+}
+
+/* Runs on the coordinator and in every worker, so both see the same
+ * refined mesh and derived parameters. */
+static int detp_check_scene(gi_job *job, gi_error *err)
+{
+    gi_detp_params *p = job->params;
+    if (gi_detp_resolve_params(p, &job->scene, job->file, err))
+        return -1;
+    return 0;
+}
+
+static int wants_image(const gi_job *job)
+{
+    return gi_job_output(job, "exr") || gi_job_output(job, "png");
+}
+
+static uint32_t reference_count(const gi_job *job)
+{
+    const gi_detp_params *p = job->params;
+    if (!p->reference_spp)
+        return 0;
+    return p->reference_vertices < job->scene.vertex_count ? p->reference_vertices
+                                                           : job->scene.vertex_count;
+}
+
+static void state_free(detp_state *st)
+{
+    if (!st)
+        return;
+    free(st->irr);
+    free(st->hits);
+    free(st->visible);
+    free(st->ref);
+    gi_image_free(&st->img);
+    free(st);
+}
+
+static int state_new(gi_job *job, detp_state **out, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    detp_state *st = gi_xcalloc(1, sizeof *st);
+    st->nv = job->scene.vertex_count;
+    st->nref = reference_count(job);
+    st->irr = gi_try_calloc((size_t)st->nv * 3 + 1, sizeof *st->irr, err, "detp irradiance");
+    st->hits = gi_try_calloc((size_t)st->nv + 1, sizeof *st->hits, err, "detp hits");
+    if (p->artifact == GI_DETP_AC_VISIBLE_AREA)
+        st->visible = gi_try_calloc((size_t)st->nv + 1, sizeof *st->visible, err,
+                                    "detp visible areas");
+    st->ref = gi_try_calloc((size_t)st->nref * 4 + 1, sizeof *st->ref, err, "detp reference");
+    if (!st->irr || !st->hits || !st->ref ||
+        (p->artifact == GI_DETP_AC_VISIBLE_AREA && !st->visible)) {
+        state_free(st);
+        return -1;
+    }
+    st->wall_start = detp_now();
+    *out = st;
+    return 0;
+}
+
+static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    detp_state *st;
+    if (state_new(job, &st, err))
+        return -1;
+    job->state = st;
+    for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch) {
+        uint64_t p1 = p0 + (uint64_t)p->batch;
+        if (p1 > p->photon_count)
+            p1 = p->photon_count;
+        gi_task *t = gi_task_queue_add(q, DETP_TASK_BATCH, (double)(p1 - p0));
+        gi_buf_put_u64(&t->payload, p0);
+        gi_buf_put_u64(&t->payload, p1);
+    }
+    if (st->visible)
+        for (uint32_t v0 = 0; v0 < st->nv; v0 += DETP_VIS_PER_TASK) {
+            uint32_t v1 = st->nv - v0 < DETP_VIS_PER_TASK ? st->nv : v0 + DETP_VIS_PER_TASK;
+            gi_task *t = gi_task_queue_add(q, DETP_TASK_VISIBILITY, (double)(v1 - v0));
+            gi_buf_put_u32(&t->payload, v0);
+            gi_buf_put_u32(&t->payload, v1);
+        }
+    for (uint32_t j0 = 0; j0 < st->nref; j0 += DETP_REF_PER_TASK) {
+        uint32_t j1 = st->nref - j0 < DETP_REF_PER_TASK ? st->nref : j0 + DETP_REF_PER_TASK;
+        gi_task *t = gi_task_queue_add(q, DETP_TASK_REFERENCE,
+                                       (double)(j1 - j0) * p->reference_spp);
+        gi_buf_put_u32(&t->payload, j0);
+        gi_buf_put_u32(&t->payload, j1);
+    }
+    return 0;
+}
+
+/* The fixed part of the visibility / reference / tile results. */
+static void read_timing(gi_reader *r, double *seconds, uint64_t *rays)
+{
+    *seconds += gi_get_f64(r);
+    *rays += gi_get_u64(r);
+}
+
+/* The [a, b) range of a visibility or reference task's payload. */
+static int merge_range(const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim, gi_error *err)
+{
+    gi_reader pr;
+    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp task");
+    *a = gi_get_u32(&pr);
+    *b = gi_get_u32(&pr);
+    if (gi_reader_finish(&pr, err) || *a >= *b || *b > lim)
+        return gi_fail(err, GI_EPROTO, "detp task %llu: bad range", (unsigned long long)t->id);
+    return 0;
+}
+
+static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
+                      gi_error *err)
+{
+    detp_state *st = job->state;
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp result");
+    uint32_t a, b;
+    switch (t->kind) {
+    case DETP_TASK_BATCH: {
+        detp_batch_result h;
+        if (detp_decode_batch(&r, st->nv, &h, st->irr, st->hits, err))
+            return -1;
+        st->batches++;
+        st->photons += h.photons;
+        st->segments += h.segments;
+        st->rays_trace += h.rays;
+        st->sec_trace += h.trace_seconds;
+        st->sec_build += h.build_seconds;
+        st->sec_estimate += h.estimate_seconds;
+        gi_detp_stats_add(&st->stats, &h.stats);
+        return 0;
+    }
+    case DETP_TASK_VISIBILITY:
+        if (!st->visible || merge_range(t, &a, &b, st->nv, err))
+            return st->visible ? -1 : gi_fail(err, GI_EPROTO, "unexpected visibility result");
+        read_timing(&r, &st->sec_visibility, &st->rays_visibility);
+        for (uint32_t i = a; i < b; i++) {
+            float f = gi_get_f32(&r);
+            if (!(f >= 0.0f && f <= 1.0f))
+                return gi_fail(err, GI_EPROTO, "detp: visible fraction out of range");
+            st->visible[i] = f;
+        }
+        return gi_reader_finish(&r, err);
+    case DETP_TASK_REFERENCE:
+        if (merge_range(t, &a, &b, st->nref, err))
+            return -1;
+        read_timing(&r, &st->sec_reference, &st->rays_reference);
+        for (uint32_t j = a; j < b; j++)
+            for (int c = 0; c < 4; c++)
+                st->ref[4 * (size_t)j + c] += gi_get_f64(&r);
+        return gi_reader_finish(&r, err);
+    case DETP_TASK_TILE: {
+        gi_reader pr;
+        gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
+        gi_tile tile;
+        if (gi_tile_read(&pr, job->width, job->height, &tile, err))
+            return -1;
+        read_timing(&r, &st->sec_image, &st->rays_image);
+        if (r.failed)
+            return gi_fail(err, GI_EPROTO, "detp tile %llu: truncated result",
+                           (unsigned long long)t->id);
+        gi_buf px = {(uint8_t *)r.p, r.left, r.left};
+        return gi_tile_merge(&st->img, &tile, &px, err);
+    }
+    }
+    return gi_fail(err, GI_EPROTO, "detp: unknown task kind %u", t->kind);
+}
+
+int detp_vertex_data_compute(const gi_job *job, const detp_state *st, detp_vertex_data *v,
+                             gi_error *err)
+{
+    size_t n = (size_t)st->nv * 3 + 1;
+    memset(v, 0, sizeof *v);
+    v->irradiance = gi_try_malloc(n * sizeof(float), err, "detp vertex data");
+    v->reflected = gi_try_malloc(n * sizeof(float), err, "detp vertex data");
+    v->radiance = gi_try_malloc(n * sizeof(float), err, "detp vertex data");
+    float *rho = gi_try_malloc(n * sizeof(float), err, "detp vertex data");
+    float *le = gi_try_malloc(n * sizeof(float), err, "detp vertex data");
+    if (!v->irradiance || !v->reflected || !v->radiance || !rho || !le) {
+        free(rho);
+        free(le);
+        detp_vertex_data_free(v);
+        return -1;
+    }
+    gi_detp_vertex_materials(&job->scene, rho, le);
+    for (uint32_t i = 0; i < st->nv; i++) {
+        /* Rule 2: the energy was spread over the visible part only. */
+        double f = st->visible ? st->visible[i] : 1.0;
+        for (int c = 0; c < 3; c++) {
+            size_t k = 3 * (size_t)i + c;
+            double E = f > 0.0 ? st->irr[k] / f : 0.0;
+            v->irradiance[k] = (float)E;
+            v->reflected[k] = (float)(rho[k] * E * GI_INV_PI); /* eq. 4.2 */
+            v->radiance[k] = v->reflected[k] + le[k];
+        }
+    }
+    free(rho);
+    free(le);
+    return 0;
+}
+
+void detp_vertex_data_free(detp_vertex_data *v)
+{
+    free(v->irradiance);
+    free(v->reflected);
+    free(v->radiance);
+    memset(v, 0, sizeof *v);
+}
+
+/* The reflected radiance per vertex, as the tiles read it. */
+static void publish_radiance(gi_job *job, detp_state *st, const detp_vertex_data *v)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_f32s(&b, v->reflected, (size_t)st->nv * 3);
+    gi_job_publish(job, b.data, b.len, st->hash);
+    gi_buf_free(&b);
+}
+
+static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)
+{
+    const gi_detp_params *p = job->params;
+    gi_buf extra;
+    gi_buf_init(&extra);
+    gi_buf_put_str(&extra, st->hash);
+    gi_tiles_plan(fq, DETP_TASK_TILE, job->width, job->height, p->tile, p->image_spp, &extra);
+    gi_buf_free(&extra);
+}
+
+static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    detp_state *st = job->state;
+    if (st->phase == DETP_PHASE_DONE)
+        return 0;
+    detp_vertex_data v;
+    if (detp_vertex_data_compute(job, st, &v, err))
+        return -1;
+    int rc = 0;
+    if (st->phase == DETP_PHASE_BAKE) {
+        st->wall_bake = detp_now() - st->wall_start;
+        if (wants_image(job)) {
+            static const char *const names[] = {"R", "G", "B"};
+            rc = gi_image_init(&st->img, job->width, job->height, 3, names, err);
+            if (rc == 0) {
+                publish_radiance(job, st, &v);
+                plan_tiles(job, st, fq);
+                st->phase = DETP_PHASE_IMAGE;
+                st->wall_start = detp_now();
+            }
+            detp_vertex_data_free(&v);
+            return rc;
+        }
+    } else {
+        st->wall_image = detp_now() - st->wall_start;
+        rc = gi_write_image_outputs(job, &st->img, err);
+    }
+    if (rc == 0)
+        rc = detp_write_outputs(job, st, &v, err);
+    if (rc == 0)
+        st->phase = DETP_PHASE_DONE;
+    detp_vertex_data_free(&v);
+    return rc;
+}
+
+#define STATE_MAGIC 0x53505444u /* "DTPS" */
+#define STATE_VERSION 1u
+
+static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
+{
+    const detp_state *st = job->state;
+    gi_buf_put_u32(out, STATE_MAGIC);
+    gi_buf_put_u32(out, STATE_VERSION);
+    gi_buf_put_u32(out, (uint32_t)st->phase);
+    gi_buf_put_u32(out, st->nv);
+    gi_buf_put_u32(out, st->nref);
+    gi_buf_put_u8(out, st->visible != NULL);
+    gi_buf_put_u64(out, st->batches);
+    gi_buf_put_u64(out, st->photons);
+    gi_buf_put_u64(out, st->segments);
+    gi_buf_put_u64(out, st->rays_trace);
+    gi_buf_put_u64(out, st->rays_visibility);
+    gi_buf_put_u64(out, st->rays_reference);
+    gi_buf_put_u64(out, st->rays_image);
+    gi_buf_put_f64(out, st->sec_trace);
+    gi_buf_put_f64(out, st->sec_build);
+    gi_buf_put_f64(out, st->sec_estimate);
+    gi_buf_put_f64(out, st->sec_visibility);
+    gi_buf_put_f64(out, st->sec_reference);
+    gi_buf_put_f64(out, st->sec_image);
+    gi_detp_stats_encode(&st->stats, out);
+    gi_buf_put_f64s(out, st->irr, (size_t)st->nv * 3);
+    for (uint32_t i = 0; i < st->nv; i++)
+        gi_buf_put_u64(out, st->hits[i]);
+    if (st->visible)
+        gi_buf_put_f32s(out, st->visible, st->nv);
+    gi_buf_put_f64s(out, st->ref, (size_t)st->nref * 4);
+    if (st->phase == DETP_PHASE_IMAGE) {
+        gi_buf_put_str(out, st->hash);
+        gi_buf_put_f32s(out, st->img.pixels, (size_t)job->width * job->height * 3);
+    }
+    return 0;
+}
+
+static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    detp_state *st;
+    if (state_new(job, &st, err))
+        return -1;
+    job->state = st;
+    uint32_t magic = gi_get_u32(in), version = gi_get_u32(in), phase = gi_get_u32(in);
+    uint32_t nv = gi_get_u32(in), nref = gi_get_u32(in);
+    uint8_t has_vis = gi_get_u8(in);
+    if (in->failed || magic != STATE_MAGIC || version != STATE_VERSION ||
+        phase > DETP_PHASE_DONE || nv != st->nv || nref != st->nref ||
+        has_vis != (p->artifact == GI_DETP_AC_VISIBLE_AREA))
+        return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp job", job->file);
+    st->phase = (int)phase;
+    st->batches = gi_get_u64(in);
+    st->photons = gi_get_u64(in);
+    st->segments = gi_get_u64(in);
+    st->rays_trace = gi_get_u64(in);
+    st->rays_visibility = gi_get_u64(in);
+    st->rays_reference = gi_get_u64(in);
+    st->rays_image = gi_get_u64(in);
+    st->sec_trace = gi_get_f64(in);
+    st->sec_build = gi_get_f64(in);
+    st->sec_estimate = gi_get_f64(in);
+    st->sec_visibility = gi_get_f64(in);
+    st->sec_reference = gi_get_f64(in);
+    st->sec_image = gi_get_f64(in);
+    gi_detp_stats_decode(in, &st->stats);
+    gi_get_f64s(in, st->irr, (size_t)nv * 3);
+    for (uint32_t i = 0; i < nv; i++)
+        st->hits[i] = gi_get_u64(in);
+    if (st->visible)
+        gi_get_f32s(in, st->visible, nv);
+    gi_get_f64s(in, st->ref, (size_t)nref * 4);
+    if (in->failed)
+        return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    if (st->phase == DETP_PHASE_IMAGE) {
+        char *hash = gi_get_str(in, GI_HASH_HEX - 1);
+        static const char *const names[] = {"R", "G", "B"};
+        int rc = !hash ? gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file)
+                       : gi_image_init(&st->img, job->width, job->height, 3, names, err);
+        if (rc == 0 && gi_get_f32s(in, st->img.pixels, (size_t)job->width * job->height * 3))
+            rc = gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+        /* The tiles still to run fetch the radiance by hash: publish it
+         * again (the same bits, so the same hash). */
+        detp_vertex_data v;
+        if (rc == 0)
+            rc = detp_vertex_data_compute(job, st, &v, err);
+        if (rc == 0) {
+            publish_radiance(job, st, &v);
+            detp_vertex_data_free(&v);
+            if (strcmp(st->hash, hash) != 0)
+                rc = gi_fail(err, GI_EPROTO, "%s: detp checkpoint does not match its radiance",
+                             job->file);
+        }
+        free(hash);
+        return rc;
+    }
+    return 0;
+}
+
+static void detp_release(gi_job *job)
+{
+    state_free(job->state);
+    free(job->params);
+    job->state = job->params = NULL;
+}
+
+static const char *const detp_outputs[] = {"exr", "png", "ply", "bin", "json", NULL};
+
+const gi_method gi_method_detp = {
+    .name = "detp",
+    .summary = "photon paths + density estimation on the tangent plane: per-vertex radiance",
+    .unit = "photons",
+    .output_kinds = detp_outputs,
+    .default_outputs = detp_outputs,
+    .parse = detp_parse,
+    .check_scene = detp_check_scene,
+    .plan = detp_plan,
+    .run = detp_run,
+    .merge = detp_merge,
+    .finish = detp_finish,
+    .save = detp_save,
+    .load = detp_load,
+    .release = detp_release,
+};

@@ -1,0 +1,146 @@
+/* detp_result: the encoding of a photon batch's result (see detp_method.h).
+ * Small batches on large meshes leave most vertices untouched: the sparse
+ * form then sends only the vertices that got something. */
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include "detp_method.h"
+
+#define BATCH_MAGIC 0x42505444u /* "DTPB" */
+enum { FORM_DENSE = 0, FORM_SPARSE = 1 };
+
+double detp_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void put_varint(gi_buf *b, uint64_t v)
+{
+    while (v >= 0x80) {
+        gi_buf_put_u8(b, (uint8_t)(v | 0x80));
+        v >>= 7;
+    }
+    gi_buf_put_u8(b, (uint8_t)v);
+}
+
+static uint64_t get_varint(gi_reader *r)
+{
+    uint64_t v = 0;
+    for (int shift = 0; shift < 64; shift += 7) {
+        uint8_t b = gi_get_u8(r);
+        v |= (uint64_t)(b & 0x7F) << shift;
+        if (!(b & 0x80))
+            return v;
+    }
+    r->failed = 1; /* more than 10 bytes: not a varint we wrote */
+    return 0;
+}
+
+static size_t varint_len(uint64_t v)
+{
+    size_t n = 1;
+    while (v >= 0x80) {
+        v >>= 7;
+        n++;
+    }
+    return n;
+}
+
+void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, double scale,
+                       gi_buf *out)
+{
+    gi_buf_put_u32(out, BATCH_MAGIC);
+    gi_buf_put_u64(out, h->photons);
+    gi_buf_put_u64(out, h->segments);
+    gi_buf_put_u64(out, h->rays);
+    gi_buf_put_f64(out, h->trace_seconds);
+    gi_buf_put_f64(out, h->build_seconds);
+    gi_buf_put_f64(out, h->estimate_seconds);
+    gi_detp_stats_encode(&h->stats, out);
+    gi_buf_put_u32(out, acc->count);
+    /* Sizes of the two forms, to pick the smaller. */
+    size_t dense = (size_t)acc->count * 16, sparse = 4;
+    uint32_t nnz = 0, last = 0;
+    for (uint32_t i = 0; i < acc->count; i++) {
+        const double *e = &acc->energy[3 * (size_t)i];
+        if (acc->hits[i] == 0 && e[0] == 0.0 && e[1] == 0.0 && e[2] == 0.0)
+            continue;
+        sparse += varint_len(i - last) + 12 + varint_len(acc->hits[i]);
+        last = i;
+        nnz++;
+    }
+    if (sparse < dense) {
+        gi_buf_put_u8(out, FORM_SPARSE);
+        gi_buf_put_u32(out, nnz);
+        last = 0;
+        for (uint32_t i = 0; i < acc->count; i++) {
+            const double *e = &acc->energy[3 * (size_t)i];
+            if (acc->hits[i] == 0 && e[0] == 0.0 && e[1] == 0.0 && e[2] == 0.0)
+                continue;
+            put_varint(out, i - last);
+            last = i;
+            for (int c = 0; c < 3; c++)
+                gi_buf_put_f32(out, (float)(e[c] * scale));
+            put_varint(out, acc->hits[i]);
+        }
+    } else {
+        gi_buf_put_u8(out, FORM_DENSE);
+        for (uint32_t i = 0; i < acc->count; i++) {
+            for (int c = 0; c < 3; c++)
+                gi_buf_put_f32(out, (float)(acc->energy[3 * (size_t)i + c] * scale));
+            gi_buf_put_u32(out, acc->hits[i]);
+        }
+    }
+}
+
+/* Adds one vertex's values (three floats, then its hit count). */
+static int add_vertex(gi_reader *r, uint64_t i, int sparse, double *irr, uint64_t *hits)
+{
+    float e[3] = {gi_get_f32(r), gi_get_f32(r), gi_get_f32(r)};
+    uint64_t h = sparse ? get_varint(r) : gi_get_u32(r);
+    if (r->failed || !isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2]))
+        return -1;
+    for (int c = 0; c < 3; c++)
+        irr[3 * i + c] += e[c];
+    hits[i] += h;
+    return 0;
+}
+
+int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *irr,
+                      uint64_t *hits, gi_error *err)
+{
+    memset(h, 0, sizeof *h);
+    if (gi_get_u32(r) != BATCH_MAGIC)
+        return gi_fail(err, GI_EPROTO, "%s: not a detp batch result", r->what);
+    h->photons = gi_get_u64(r);
+    h->segments = gi_get_u64(r);
+    h->rays = gi_get_u64(r);
+    h->trace_seconds = gi_get_f64(r);
+    h->build_seconds = gi_get_f64(r);
+    h->estimate_seconds = gi_get_f64(r);
+    gi_detp_stats_decode(r, &h->stats);
+    uint32_t count = gi_get_u32(r);
+    uint8_t form = gi_get_u8(r);
+    if (r->failed || count != nv || form > FORM_SPARSE)
+        return gi_fail(err, GI_EPROTO, "%s: %u vertices (expected %u), form %u", r->what, count,
+                       nv, form);
+    if (form == FORM_DENSE) {
+        for (uint32_t i = 0; i < nv; i++)
+            if (add_vertex(r, i, 0, irr, hits))
+                return gi_fail(err, GI_EPROTO, "%s: bad entry for vertex %u", r->what, i);
+    } else {
+        uint32_t nnz = gi_get_u32(r);
+        uint64_t i = 0;
+        if (nnz > nv)
+            return gi_fail(err, GI_EPROTO, "%s: %u entries for %u vertices", r->what, nnz, nv);
+        for (uint32_t k = 0; k < nnz; k++) {
+            i += get_varint(r);
+            if (i >= nv || add_vertex(r, i, 1, irr, hits))
+                return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
+        }
+    }
+    return gi_reader_finish(r, err);
+}

@@ -1,0 +1,37 @@
+/* fuzz_detp_result: libFuzzer target for what detp decodes from workers and
+ * batch caches: photon batch results (dense and sparse forms) and the
+ * binary segment records. The first byte picks the decoder. Any input must
+ * decode or fail with GI_EPROTO; never crash, leak or hang. */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "detp/detp_method.h"
+
+#define VERTICES 64
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (size < 1)
+        return 0;
+    gi_error err;
+    gi_error_clear(&err);
+    gi_reader r;
+    gi_reader_init(&r, data + 1, size - 1, "fuzz");
+    int rc;
+    if (data[0] & 1) {
+        gi_detp_segments s;
+        gi_detp_segments_init(&s);
+        size_t count = (size - 1) / GI_DETP_SEGMENT_BYTES + (data[0] >> 1 & 1);
+        rc = gi_detp_segments_decode(&r, count, &s, &err);
+        gi_detp_segments_free(&s);
+    } else {
+        double irr[3 * VERTICES] = {0};
+        uint64_t hits[VERTICES] = {0};
+        detp_batch_result h;
+        rc = detp_decode_batch(&r, VERTICES, &h, irr, hits, &err);
+    }
+    if (rc != 0 && (err.code != GI_EPROTO || strchr(err.msg, '\n') || !err.msg[0]))
+        abort();
+    return 0;
+}

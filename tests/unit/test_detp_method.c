@@ -1,0 +1,228 @@
+/* Unit tests: the detp method end to end in one process (plan, tasks run
+ * by an in-process worker, ordered merge, finish, outputs): every DETP
+ * estimator gives the same bytes, a checkpoint taken anywhere resumes to
+ * the same bytes, and batch results survive their encoding. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "detp/detp_method.h"
+#include "gi_fs.h"
+#include "gi_jobrun.h"
+#include "gi_test.h"
+#include "gi_worker_ctx.h"
+
+static char *write_job(const char *name, const char *estimator, const char *extra)
+{
+    char text[2048], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"detp\","
+             " \"seed\": 5, \"image\": {\"width\": 24, \"height\": 20},"
+             " \"detp\": {\"photons\": 12000, \"batch\": 2500, \"subdivide\": \"14%%\","
+             "  \"radius\": \"9%%\", \"estimator\": \"%s\"%s, \"tile\": 8, \"image_spp\": 2},"
+             " \"outputs\": {\"exr\": \"img.exr\", \"ply\": \"v.ply\", \"bin\": \"v.bin\","
+             "  \"json\": \"report.json\"}}",
+             gi_test_srcdir(), estimator, extra);
+    snprintf(path, sizeof path, "%s/%s", gi_test_tmpdir(), name);
+    gi_error err;
+    if (gi_write_file_atomic(path, text, strlen(text), &err))
+        return NULL;
+    return gi_xstrdup(path);
+}
+
+static int load(const char *path, const char *out, gi_job *job, gi_worker_ctx *ctx,
+                gi_error *err)
+{
+    if (gi_job_load(path, job, err))
+        return -1;
+    job->out_dir = gi_path_join(gi_test_tmpdir(), out);
+    if (gi_mkdirs(job->out_dir, err))
+        return -1;
+    return gi_worker_ctx_load(ctx, 1, job->file, job->text, &job->manifest, NULL, NULL,
+                              job->assets, err);
+}
+
+/* Runs the job; after `stop_after` merged tasks (0: never) the run is
+ * checkpointed, everything is thrown away, and a fresh coordinator and
+ * worker resume from the checkpoint. */
+static int run(const char *path, const char *out, uint64_t stop_after, gi_error *err)
+{
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    if (load(path, out, &job, &ctx, err) || gi_jobrun_start(&jr, &job, err))
+        return -1;
+    uint64_t done = 0;
+    int rc = 0;
+    while (rc == 0 && !gi_jobrun_done(&jr)) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        if (!t)
+            return gi_fail(err, GI_EINTERNAL, "nothing to lease");
+        gi_buf res;
+        gi_buf_init(&res);
+        rc = gi_worker_run_task(&ctx, t, &res, err);
+        if (rc == 0 && gi_jobrun_complete(&jr, t->id, t->attempt, &res, &ctx.stats)) {
+            *err = jr.error;
+            rc = -1;
+        }
+        gi_buf_free(&res);
+        if (rc == 0 && ++done == stop_after) {
+            gi_buf ck;
+            gi_buf_init(&ck);
+            rc = gi_jobrun_checkpoint(&jr, &ck, err);
+            gi_jobrun_free(&jr);
+            gi_worker_ctx_free(&ctx);
+            gi_job_free(&job);
+            if (rc == 0)
+                rc = load(path, out, &job, &ctx, err);
+            if (rc == 0)
+                rc = gi_jobrun_restore(&jr, &job, &ck, err);
+            gi_buf_free(&ck);
+        }
+    }
+    if (rc == 0 && jr.failed) {
+        *err = jr.error;
+        rc = -1;
+    }
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+    return rc;
+}
+
+static int same_file(const char *dir_a, const char *dir_b, const char *name)
+{
+    char pa[700], pb[700];
+    snprintf(pa, sizeof pa, "%s/%s/%s", gi_test_tmpdir(), dir_a, name);
+    snprintf(pb, sizeof pb, "%s/%s/%s", gi_test_tmpdir(), dir_b, name);
+    gi_buf a, b;
+    gi_buf_init(&a);
+    gi_buf_init(&b);
+    gi_error err;
+    int same = gi_read_file(pa, 1 << 26, &a, &err) == 0 && gi_read_file(pb, 1 << 26, &b, &err) == 0 &&
+               a.len == b.len && a.len > 0 && memcmp(a.data, b.data, a.len) == 0;
+    gi_buf_free(&a);
+    gi_buf_free(&b);
+    return same;
+}
+
+GI_TEST(test_detp_job_same_bytes_for_every_detp_estimator_and_after_restore)
+{
+    gi_error err;
+    const char *est[] = {"embree", "basic", "octree", "sphere_cache", "multilist"};
+    char *paths[5];
+    for (int i = 0; i < 5; i++) {
+        char name[64], out[64];
+        snprintf(name, sizeof name, "job-%s.json", est[i]);
+        snprintf(out, sizeof out, "out-%s", est[i]);
+        paths[i] = write_job(name, est[i], "");
+        GI_REQUIRE(paths[i]);
+        GI_REQUIRE_OK(run(paths[i], out, 0, &err));
+        if (i > 0) {
+            GI_CHECK_MSG(same_file("out-embree", out, "v.bin"), "%s: other vertex values", est[i]);
+            GI_CHECK_MSG(same_file("out-embree", out, "img.exr"), "%s: other image", est[i]);
+        }
+    }
+    /* Checkpoints: in the middle of the bake (5 batches), and among the
+     * image tiles (after 5 + 4 tasks). */
+    uint64_t stops[2] = {3, 8};
+    for (int k = 0; k < 2; k++) {
+        char out[64];
+        snprintf(out, sizeof out, "out-restored-%d", k);
+        GI_REQUIRE_OK(run(paths[0], out, stops[k], &err));
+        GI_CHECK_MSG(same_file("out-embree", out, "v.bin") && same_file("out-embree", out, "v.ply") &&
+                         same_file("out-embree", out, "img.exr"),
+                     "restored after task %llu: outputs differ", (unsigned long long)stops[k]);
+    }
+    /* The report says what happened. */
+    char rp[700];
+    snprintf(rp, sizeof rp, "%s/out-sphere_cache/report.json", gi_test_tmpdir());
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_REQUIRE_OK(gi_read_file(rp, 1 << 24, &b, &err));
+    cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
+    GI_REQUIRE(doc);
+    GI_CHECK(cJSON_GetObjectItem(doc, "photons")->valuedouble == 12000);
+    GI_CHECK(cJSON_GetObjectItem(doc, "batches")->valuedouble == 5);
+    const cJSON *st = cJSON_GetObjectItem(doc, "estimator_stats");
+    GI_CHECK(cJSON_GetObjectItem(st, "cache_faults")->valuedouble > 0);
+    GI_CHECK(cJSON_GetArraySize(cJSON_GetObjectItem(st, "levels")) > 0);
+    const cJSON *pred = cJSON_GetObjectItem(doc, "predicted_relative_error");
+    GI_CHECK(cJSON_GetObjectItem(pred, "n_R_photons")->valuedouble > 0.01);
+    cJSON_Delete(doc);
+    gi_buf_free(&b);
+    for (int i = 0; i < 5; i++)
+        free(paths[i]);
+}
+
+GI_TEST(test_detp_batch_results_dense_and_sparse)
+{
+    gi_error err;
+    for (int sparse = 0; sparse < 2; sparse++) {
+        const uint32_t n = 1000;
+        gi_detp_accum acc;
+        GI_REQUIRE_OK(gi_detp_accum_init(&acc, n, &err));
+        for (uint32_t i = 0; i < n; i++)
+            if (!sparse || i % 97 == 3) {
+                acc.energy[3 * i] = 0.5 * i;
+                acc.energy[3 * i + 2] = 1.0 / (i + 1);
+                acc.hits[i] = sparse ? i % 7 : 100000 + i; /* varints as long as u32s */
+            }
+        detp_batch_result h;
+        memset(&h, 0, sizeof h);
+        h.photons = 123;
+        h.stats.faults = 9;
+        gi_buf b;
+        gi_buf_init(&b);
+        detp_encode_batch(&h, &acc, 2.0, &b);
+        GI_CHECK(sparse ? b.len < 2000 : b.len > (size_t)n * 16);
+        double *irr = gi_xcalloc(3 * n, sizeof *irr);
+        uint64_t *hits = gi_xcalloc(n, sizeof *hits);
+        gi_reader r;
+        gi_reader_init(&r, b.data, b.len, "batch result");
+        detp_batch_result back;
+        GI_REQUIRE_OK(detp_decode_batch(&r, n, &back, irr, hits, &err));
+        GI_CHECK(back.photons == 123 && back.stats.faults == 9);
+        int bad = 0;
+        for (uint32_t i = 0; i < n; i++)
+            bad += irr[3 * i] != (float)(acc.energy[3 * i] * 2.0) ||
+                   irr[3 * i + 2] != (float)(acc.energy[3 * i + 2] * 2.0) || hits[i] != acc.hits[i];
+        GI_CHECK(bad == 0);
+        /* Wrong vertex count and truncation are refused. */
+        gi_reader_init(&r, b.data, b.len, "batch result");
+        GI_CHECK(detp_decode_batch(&r, n + 1, &back, irr, hits, &err) == -1);
+        gi_reader_init(&r, b.data, b.len - 1, "batch result");
+        GI_CHECK(detp_decode_batch(&r, n, &back, irr, hits, &err) == -1);
+        free(irr);
+        free(hits);
+        gi_buf_free(&b);
+        gi_detp_accum_free(&acc);
+    }
+}
+
+GI_TEST(test_detp_automatic_radius_and_photon_count)
+{
+    /* Thesis 1.13: the radius is the mean sample spacing, the photon count
+     * the one eq. 3.46 needs for the requested relative error. */
+    gi_error err;
+    char text[1024], p2[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"detp\","
+             " \"detp\": {\"photons\": \"auto\", \"relative_error\": 0.05,"
+             " \"radius\": \"auto\", \"subdivide\": 100}}",
+             gi_test_srcdir());
+    snprintf(p2, sizeof p2, "%s/auto.json", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_write_file_atomic(p2, text, strlen(text), &err));
+    gi_job job;
+    GI_REQUIRE_OK(gi_job_load(p2, &job, &err));
+    const gi_detp_params *p = job.params;
+    double spacing = gi_detp_mean_edge(&job.scene);
+    GI_CHECK_NEAR(p->disc_radius, spacing, 1e-4 * spacing);
+    double ad = GI_PI * (double)p->disc_radius * p->disc_radius;
+    GI_CHECK(p->photon_count == gi_detp_rays_for_error(p->hull_area, ad, 0.05));
+    GI_CHECK_NEAR(gi_detp_predicted_error(p->hull_area, ad, (double)p->photon_count), 0.05, 1e-4);
+    /* The Cornell box's bounding box: 556 x 548.8 x 559.2 (A_0 = 1.85e6 mm^2). */
+    GI_CHECK_REL(p->hull_area, 2.0 * (556.0 * 548.8 + 548.8 * 559.2 + 559.2 * 556.0), 1e-4);
+    GI_CHECK((uint64_t)p->batch <= p->photon_count);
+    gi_job_free(&job);
+}
