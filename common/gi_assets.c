@@ -153,6 +153,14 @@ const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void
 
 size_t gi_asset_store_bytes(const gi_asset_store *s) { return s->bytes; }
 
+size_t gi_asset_store_count(const gi_asset_store *s) { return s->count; }
+
+const gi_buf *gi_asset_store_at(const gi_asset_store *s, size_t i, char hash[GI_HASH_HEX])
+{
+    memcpy(hash, s->entries[i].hash, GI_HASH_HEX);
+    return &s->entries[i].bytes;
+}
+
 void gi_dir_source_init(gi_dir_source *d, const char *root)
 {
     d->root = gi_xstrdup(root);

@@ -297,6 +297,11 @@ void gi_frame_decoder_free(gi_frame_decoder *d)
     memset(d, 0, sizeof *d);
 }
 
+void gi_frame_decoder_set_limits(gi_frame_decoder *d, const gi_frame_limits *lim)
+{
+    d->lim = *lim;
+}
+
 void gi_frame_decoder_feed(gi_frame_decoder *d, const void *data, size_t len)
 {
     if (d->state == ST_BROKEN || len == 0)

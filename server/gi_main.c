@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_args.h"
 #include "gi_fs.h"
 #include "gi_job.h"
 #include "gi_local.h"
@@ -43,20 +44,12 @@ static void on_signal(int sig)
 
 static int arg_value(int argc, char **argv, int *i, const char *name, const char **out)
 {
-    size_t n = strlen(name);
-    if (strncmp(argv[*i], name, n) == 0 && argv[*i][n] == '=') {
-        *out = argv[*i] + n + 1;
-        return 1;
+    int rc = gi_args_take(argc, argv, i, name, out);
+    if (rc < 0) {
+        fprintf(stderr, "gi: %s needs a value\n", name);
+        exit(2);
     }
-    if (strcmp(argv[*i], name) == 0) {
-        if (*i + 1 >= argc) {
-            fprintf(stderr, "gi: %s needs a value\n", name);
-            exit(2);
-        }
-        *out = argv[++*i];
-        return 1;
-    }
-    return 0;
+    return rc;
 }
 
 static void print_summary(const gi_job *job, const gi_local_summary *s)
