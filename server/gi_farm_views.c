@@ -80,6 +80,15 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
             held += jr->tasks[i].state == GI_TASK_DONE;
         }
     }
+    /* Work in the method's unit (samples, photons...), for progress bars. */
+    const gi_method *m = j->method ? gi_method_find(j->method) : NULL;
+    cJSON_AddStringToObject(o, "unit", m ? m->unit : "");
+    cJSON *work = cJSON_AddObjectToObject(o, "work");
+    double wtotal = j->loaded ? j->jr.cost_total : 1.0;
+    double wdone = j->loaded ? j->jr.cost_done : j->state == GI_FJ_DONE ? 1.0 : 0.0;
+    cJSON_AddNumberToObject(work, "done", wdone);
+    cJSON_AddNumberToObject(work, "total", wtotal);
+
     cJSON *t = cJSON_AddObjectToObject(o, "tasks");
     cJSON_AddNumberToObject(t, "total", (double)total);
     cJSON_AddNumberToObject(t, "merged", (double)merged);
