@@ -90,7 +90,9 @@ const char *gi_msg_type_name(uint16_t type);
 int gi_msg_type_known(uint16_t type);
 
 typedef struct gi_frame_limits {
-    uint64_t max_payload[GI_MSG_TYPE_COUNT]; /* by type, bytes on the wire and decompressed */
+    /* By type, bytes on the wire and decompressed. 0 refuses frames of that
+     * type with a payload (a connection that must never carry them). */
+    uint64_t max_payload[GI_MSG_TYPE_COUNT];
     uint64_t max_decompressed;               /* cap on any zstd content size */
 } gi_frame_limits;
 
