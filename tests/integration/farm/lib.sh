@@ -73,9 +73,11 @@ api() {
         "$GI_FARM$path"
 }
 
-# A number from the job's JSON: jnum ID KEY (e.g. "merged", "results_this_run").
+# A task count of a job: jnum ID KEY (total, merged, retries, results_this_run,
+# resumed_merged, late_results, lease_expiries, ...).
 jnum() {
-    api "/api/v1/jobs/$1" | grep -o "\"$2\":[0-9.e+-]*" | head -n 1 | cut -d: -f2
+    api "/api/v1/jobs/$1" | sed -n 's/.*"tasks":{\([^}]*\)}.*/\1/p' | tr ',' '\n' |
+        awk -F: -v k="\"$2\"" '$1 == k {print $2}'
 }
 
 jstate() {

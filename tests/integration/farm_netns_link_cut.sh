@@ -1,0 +1,70 @@
+# A worker host's link is cut (its bridge port down) for longer than the
+# lease: the coordinator lets its leases expire and gives the tasks to the
+# other hosts. When the link returns, the results the host computed in the
+# dark arrive late and are discarded: every task is merged exactly once, and
+# the image is byte-identical.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+need_netns
+make_secrets
+P=gil$$
+netns_up "$P" 3
+C=$(sh "$NETNS" addr "$P" c)
+FARM_EXEC="ip netns exec $P-c"
+write_job "$TMP/job.json" <<JOB
+{
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "pt",
+  "seed": 3,
+  "image": {"width": 96, "height": 96},
+  "pt": {"spp": 512, "tile": 16, "pass_spp": 8},
+  "outputs": {"exr": "img.exr"}
+}
+JOB
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none >/dev/null 2>&1 ||
+    fail "reference render"
+LEASE=1.0
+start_farmd "$TMP/state" "$TMP/farmd.log" ip netns exec "$P-c" -- \
+    --listen-workers "$C:7071" --listen-api "$C:7070" --heartbeat 0.2 --lease $LEASE --dead 60
+for i in 1 2 3; do
+    start_worker "$TMP/w$i.log" ip netns exec "$P-w$i" -- --connect "$C:7071" --procs 1 \
+        --cache "$TMP/cache$i" --name "host$i"
+done
+id=$($FARM_EXEC "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
+n=0
+while :; do
+    merged=$(jnum "$id" merged)
+    total=$(jnum "$id" total)
+    [ "${total:-0}" -gt 0 ] && [ "$merged" -ge $((total / 30)) ] && break
+    n=$((n + 1))
+    [ $n -lt 600 ] || fail "the job did not progress"
+    sleep 0.05
+done
+sh "$NETNS" cut "$P" w1
+echo "cut host1 at $merged of $total tasks merged"
+sleep 2.5 # > 2 leases
+[ "$(jstate "$id")" = running ] || fail "the job ended during the cut; make it longer"
+sh "$NETNS" plug "$P" w1
+wait_state "$id" done 120
+# The late results come with TCP's retransmissions after the link is back.
+n=0
+while [ "$(metric gi_farm_late_results_total)" = 0 ]; do
+    n=$((n + 1))
+    [ $n -lt 300 ] || { grep -i "lease\|late" "$TMP/farmd.log"; fail "no late result arrived"; }
+    sleep 0.1
+done
+late=$(metric gi_farm_late_results_total)
+expired=$(metric gi_farm_lease_expiries_total)
+[ "$expired" -ge 1 ] || fail "no lease expired"
+grep -q "lease expired on worker host1" "$TMP/farmd.log" || fail "no expiry logged for host1"
+grep -q "discarding a late result for job $id .* from worker host1" "$TMP/farmd.log" ||
+    fail "no late result from host1 logged"
+# Exactly one accepted (merged) result per task: none counted twice.
+[ "$(jnum "$id" results_this_run)" -eq "$(jnum "$id" total)" ] || fail "results accepted != tasks"
+[ "$(jnum "$id" merged)" -eq "$(jnum "$id" total)" ] || fail "merged != tasks"
+$FARM_EXEC "$GI" fetch "$id" --out "$TMP/farm" >/dev/null || fail "fetch"
+cmp "$TMP/ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the link cut"
+# host1 is back at work (it was never dropped: the cut was shorter than --dead).
+grep -q "dropped worker host1" "$TMP/farmd.log" && fail "host1 was dropped"
+stop_farmd "$TMP/farmd.log"
+echo "identical; $expired leases expired, $late late results discarded"
