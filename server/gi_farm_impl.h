@@ -226,7 +226,10 @@ double gi_farm_job_eta(const gi_farm_job *j);
  * or fails it. */
 void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why);
 
-/* gi_farm_check.c */
+/* gi_farm_check.c. Test hook: with GI_FAULT_CHECK_CRASH set in gi-farmd's
+ * environment, every checker crashes (SIGSEGV) as a hostile mesh might make
+ * it. */
+#define GI_FAULT_CHECK_CRASH_ENV "GI_FAULT_CHECK_CRASH"
 int gi_farm_check_start(gi_farm *f, gi_farm_job *j, gi_error *err);
 /* Reads what the checker wrote; at its end, calls gi_farm_job_checked. */
 void gi_farm_check_readable(gi_farm *f, gi_farm_job *j);

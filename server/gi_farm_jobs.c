@@ -323,7 +323,7 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
             unfinished++;
     }
     if (f->job_count)
-        gi_warn("journal: %zu jobs, %zu unfinished", f->job_count, unfinished);
+        gi_info("journal: %zu jobs, %zu unfinished", f->job_count, unfinished);
     /* Start from a compact journal (and without a damaged tail). */
     if (compact(f, err))
         return -1;
@@ -456,7 +456,6 @@ void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
         return;
     j->error = *why;
     gi_farm_job_log(j, "failed: %s", why->msg);
-    gi_warn("job %llu failed: %s", (unsigned long long)j->id, why->msg);
     f->m.jobs_failed++;
     end_job(f, j, GI_FJ_FAILED);
 }

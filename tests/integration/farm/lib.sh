@@ -121,3 +121,9 @@ netns_up() {
     sh "$NETNS" down "$1" >/dev/null 2>&1 || true
     sh "$NETNS" up "$1" "$2" || fail "cannot build the namespace farm"
 }
+
+# The job's last checkpoint: jckpt ID KEY (seq, merged).
+jckpt() {
+    api "/api/v1/jobs/$1" | sed -n 's/.*"checkpoint":{\([^}]*\)}.*/\1/p' | tr ',' '\n' |
+        awk -F: -v k="\"$2\"" '$1 == k {print $2}'
+}
