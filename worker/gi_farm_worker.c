@@ -436,11 +436,13 @@ static void on_cancel(worker *w, const gi_frame *fr)
         return;
     }
     int all = m.task_id == GI_MSG_ALL_TASKS;
+    unsigned queued = 0, running = 0;
     for (size_t i = 0; i < w->q_count;) {
         if (w->q[i].job_id == m.job_id && (all || w->q[i].task.id == m.task_id)) {
             gi_task_free(&w->q[i].task);
             memmove(&w->q[i], &w->q[i + 1], (w->q_count - i - 1) * sizeof *w->q);
             w->q_count--;
+            queued++;
         } else {
             i++;
         }
@@ -448,13 +450,14 @@ static void on_cancel(worker *w, const gi_frame *fr)
     for (int i = 0; i < w->pool.count; i++) {
         const gi_pool_child *k = &w->pool.kids[i];
         if (k->pid && k->busy && k->job_id == m.job_id && (all || k->task_id == m.task_id)) {
-            gi_info("cancelling task %llu of job %llu", (unsigned long long)k->task_id,
-                    (unsigned long long)k->job_id);
-            replace_child(w, i);
+            replace_child(w, i); /* the task is abandoned with its process */
+            running++;
         }
     }
     if (all)
         def_drop(w, m.job_id);
+    gi_info("job %llu %s: %u queued and %u running tasks dropped", (unsigned long long)m.job_id,
+            all ? "is over" : "task cancelled", queued, running);
 }
 
 static void on_coord_frame(worker *w, const gi_frame *fr)
