@@ -93,6 +93,10 @@ int gi_manifest_decode(gi_reader *r, gi_manifest *m, gi_error *err)
             free(name);
             return gi_fail(err, GI_EPROTO, "%s: manifest entry %u is malformed", r->what, i);
         }
+        if (!r->failed && gi_manifest_find(m, name)) {
+            free(name);
+            return gi_fail(err, GI_EPROTO, "%s: manifest entry %u repeats a name", r->what, i);
+        }
         if (name && !r->failed)
             gi_manifest_put(m, name, hash, size);
         free(name);

@@ -41,6 +41,49 @@ static int parse_assets(gi_jv *v, const cJSON *assets, gi_manifest *m)
     return 0;
 }
 
+/* Prints a JSON value so that parsing it again gives the very same values.
+ * (cJSON's printer keeps 15 significant digits when they compare equal
+ * within its tolerance: 2^53 would come back as 9007199254740990, and the
+ * farm would render another job than `gi render` does.) Numbers get %.17g,
+ * which round-trips every double; strings and literals are cJSON's. */
+static int print_exact(const cJSON *v, gi_buf *out)
+{
+    if (cJSON_IsNumber(v)) {
+        char n[64];
+        int k = snprintf(n, sizeof n, "%.17g", v->valuedouble);
+        gi_buf_put(out, n, (size_t)k);
+        return 0;
+    }
+    if (cJSON_IsObject(v) || cJSON_IsArray(v)) {
+        int obj = cJSON_IsObject(v);
+        gi_buf_put_u8(out, obj ? '{' : '[');
+        for (const cJSON *c = v->child; c; c = c->next) {
+            if (c != v->child)
+                gi_buf_put_u8(out, ',');
+            if (obj) {
+                cJSON *key = cJSON_CreateString(c->string);
+                char *k = cJSON_PrintUnformatted(key);
+                cJSON_Delete(key);
+                if (!k)
+                    return -1;
+                gi_buf_put(out, k, strlen(k));
+                gi_buf_put_u8(out, ':');
+                cJSON_free(k);
+            }
+            if (print_exact(c, out))
+                return -1;
+        }
+        gi_buf_put_u8(out, obj ? '}' : ']');
+        return 0;
+    }
+    char *t = cJSON_PrintUnformatted(v); /* strings, true, false, null */
+    if (!t)
+        return -1;
+    gi_buf_put(out, t, strlen(t));
+    cJSON_free(t);
+    return 0;
+}
+
 int gi_farm_submission_parse(const char *body, size_t len, gi_farm_submission *out,
                              gi_error *err)
 {
@@ -88,13 +131,15 @@ int gi_farm_submission_parse(const char *body, size_t len, gi_farm_submission *o
         }
         out->text = gi_xstrdup(job_text);
     } else {
-        char *t = cJSON_PrintUnformatted(job);
-        if (!t) {
+        gi_buf t;
+        gi_buf_init(&t);
+        if (print_exact(job, &t)) {
+            gi_buf_free(&t);
             gi_fail(err, GI_ENOMEM, "%s: cannot print the job", SUBMIT_WHAT);
             goto out;
         }
-        out->text = gi_xstrdup(t);
-        cJSON_free(t);
+        gi_buf_put_u8(&t, 0);
+        out->text = (char *)t.data;
     }
     out->file = gi_xstrdup(file ? file : "job.json");
     out->priority = (uint32_t)priority;

@@ -122,6 +122,8 @@ int gi_http_parse_head(const char *data, size_t len, gi_http_head *out, size_t *
 
 int gi_http_dechunk(gi_buf *in, gi_error *err)
 {
+    if (in->len == 0)
+        return gi_fail(err, GI_EPROTO, "empty chunked body");
     const char *p = (const char *)in->data, *end = p + in->len;
     size_t w = 0;
     for (;;) {

@@ -359,12 +359,12 @@ static void replace_child(worker *w, int i)
         gi_warn("respawning pool child %d: %s", i, err.msg);
 }
 
-/* Crashed children come back, but at most procs per 10 s on average (a
- * burst of 2 x procs): a host whose children die at once slows down
- * instead of forking in a loop. */
+/* Crashed children come back, but at most one per process every 2 s on
+ * average (after a burst of 2 x procs + 4): a host whose children keep
+ * dying slows down instead of forking in a loop. */
 static void respawn(worker *w, double now)
 {
-    double rate = w->pool.count / 10.0, burst = 2.0 * w->pool.count;
+    double rate = w->pool.count / 2.0, burst = 2.0 * w->pool.count + 4;
     w->tokens += (now - w->tokens_at) * rate;
     if (w->tokens > burst)
         w->tokens = burst;
@@ -889,7 +889,7 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
         gi_asset_cache_close(&w.cache);
         return -1;
     }
-    w.tokens = 2.0 * o->procs;
+    w.tokens = 2.0 * o->procs + 4;
     w.tokens_at = now_s();
     double backoff = 0.25;
     int rc = -1;

@@ -127,3 +127,13 @@ jckpt() {
     api "/api/v1/jobs/$1" | sed -n 's/.*"checkpoint":{\([^}]*\)}.*/\1/p' | tr ',' '\n' |
         awk -F: -v k="\"$2\"" '$1 == k {print $2}'
 }
+
+# wait_log FILE PATTERN: until the log has a line matching PATTERN (10 s).
+wait_log() {
+    n=0
+    until grep -q -- "$2" "$1"; do
+        n=$((n + 1))
+        [ $n -lt 200 ] || { tail -n 30 "$1"; fail "not logged: $2"; }
+        sleep 0.05
+    done
+}
