@@ -8,3 +8,5 @@ SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC"
 echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
 "$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9
+echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
+sh bench/farm_overhead.sh "$BIN" 5

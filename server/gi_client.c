@@ -21,7 +21,7 @@
 #include "gi_progress.h"
 
 #define MAX_JSON_BODY ((uint64_t)64 << 20)
-#define POLL_S 0.25
+#define POLL_S 0.1
 
 const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"

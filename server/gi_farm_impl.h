@@ -77,8 +77,9 @@ typedef struct gi_farm_job {
     double cost_done_t0;    /* cost already done at run_t0 */
     uint64_t resumed_merged; /* tasks merged before a restart (from a checkpoint) */
     uint64_t results_accepted, results_late, leases, lease_expiries;
-    double merge_s;          /* coordinator time in merge (and finish) */
-    uint64_t result_bytes;   /* result data merged */
+    double merge_s, finish_s; /* coordinator time in method merge / finish */
+    uint64_t result_bytes;    /* result data accepted */
+    uint64_t merged_bytes;    /* result data merged (in task order) */
     /* Task counts and statistics as they stood when the run ended. */
     uint64_t final_tasks, final_merged, final_retries;
     gi_task_stats final_stats;
@@ -153,8 +154,8 @@ typedef struct gi_farm_metrics {
     uint64_t jobs_submitted, jobs_done, jobs_failed, jobs_cancelled;
     uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
     uint64_t requeued;
-    uint64_t result_bytes;
-    double merge_s;
+    uint64_t result_bytes, merged_bytes;
+    double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes;
     uint64_t workers_accepted, workers_refused, frames_refused;
     uint64_t api_requests, api_refused_auth, api_refused_input;

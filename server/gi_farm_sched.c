@@ -280,14 +280,20 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
     if (j->est_task_s < 1e-3)
         j->est_task_s = 1e-3;
     size_t bytes = r.data.len;
-    double t0 = gi_farm_now();
+    double m0 = j->jr.merge_seconds, f0 = j->jr.finish_seconds;
+    uint64_t b0 = j->jr.merged_bytes;
     gi_jobrun_complete(&j->jr, l.task_id, l.attempt, &r.data, &r.stats);
-    double dt = gi_farm_now() - t0;
     gi_buf_free(&r.data);
-    j->merge_s += dt;
+    double dm = j->jr.merge_seconds - m0, df = j->jr.finish_seconds - f0;
+    uint64_t db = j->jr.merged_bytes - b0;
+    j->merge_s += dm;
+    j->finish_s += df;
+    j->merged_bytes += db;
     j->result_bytes += bytes;
     j->results_accepted++;
-    f->m.merge_s += dt;
+    f->m.merge_s += dm;
+    f->m.finish_s += df;
+    f->m.merged_bytes += db;
     f->m.result_bytes += bytes;
     f->m.task_results++;
     gi_farm_job_settle(f, j);

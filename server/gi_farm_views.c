@@ -105,8 +105,10 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON_AddNumberToObject(s, "rays", (double)st.rays);
     cJSON_AddNumberToObject(s, "samples", (double)st.samples);
     cJSON_AddNumberToObject(s, "worker_seconds", st.seconds);
-    cJSON_AddNumberToObject(s, "merge_seconds", j->merge_s);
     cJSON_AddNumberToObject(s, "result_bytes", (double)j->result_bytes);
+    cJSON_AddNumberToObject(s, "merged_bytes", (double)j->merged_bytes);
+    cJSON_AddNumberToObject(s, "merge_seconds", j->merge_s);
+    cJSON_AddNumberToObject(s, "finish_seconds", j->finish_s);
 
     cJSON *ck = cJSON_AddObjectToObject(o, "checkpoint");
     cJSON_AddNumberToObject(ck, "seq", (double)j->ckpt_seq);
@@ -282,8 +284,11 @@ char *gi_farm_view_metrics(gi_farm *f)
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);
     counter(&b, "gi_farm_tasks_requeued_total", "Tasks handed back unrun.", (double)m->requeued);
-    counter(&b, "gi_farm_result_bytes_total", "Bytes of result data merged.", (double)m->result_bytes);
-    counter(&b, "gi_farm_merge_seconds_total", "Coordinator time spent merging results.", m->merge_s);
+    counter(&b, "gi_farm_result_bytes_total", "Bytes of result data accepted.", (double)m->result_bytes);
+    counter(&b, "gi_farm_merged_bytes_total", "Bytes of result data merged.", (double)m->merged_bytes);
+    counter(&b, "gi_farm_merge_seconds_total", "Coordinator time in the methods' merge.", m->merge_s);
+    counter(&b, "gi_farm_finish_seconds_total", "Coordinator time in the methods' finish (outputs).",
+            m->finish_s);
     counter(&b, "gi_farm_checkpoints_total", "Checkpoints written.", (double)m->checkpoints);
     counter(&b, "gi_farm_checkpoint_bytes_total", "Bytes of checkpoints written.",
             (double)m->checkpoint_bytes);

@@ -3,6 +3,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "gi_log.h"
 
@@ -105,6 +106,13 @@ const gi_task *gi_jobrun_lease(gi_jobrun *jr)
     return NULL;
 }
 
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 /* Merges every result whose turn has come; calls finish when all is merged. */
 static int advance(gi_jobrun *jr)
 {
@@ -117,7 +125,10 @@ static int advance(gi_jobrun *jr)
             gi_jobrun_task *jt = &jr->tasks[jr->merge_next];
             gi_task_queue q;
             gi_task_queue_init(&q, jr->task_count);
+            double t0 = now_s();
             int rc = job->method->merge(job, &jt->task, &jt->result, &q, &err);
+            jr->merge_seconds += now_s() - t0;
+            jr->merged_bytes += jt->result.len;
             if (rc == 0)
                 rc = absorb(jr, &q, &err);
             gi_task_queue_free(&q);
@@ -134,7 +145,9 @@ static int advance(gi_jobrun *jr)
             return 0;
         gi_task_queue q;
         gi_task_queue_init(&q, jr->task_count);
+        double t0 = now_s();
         int rc = job->method->finish(job, &q, &err);
+        jr->finish_seconds += now_s() - t0;
         if (rc == 0)
             rc = absorb(jr, &q, &err);
         gi_task_queue_free(&q);
