@@ -154,6 +154,23 @@ out:
     return rc;
 }
 
+ssize_t gi_frame_decoder_recv(gi_frame_decoder *d, int fd, size_t max)
+{
+    size_t room;
+    uint8_t *p = gi_frame_decoder_space(d, &room);
+    if (!p) {
+        errno = EAGAIN;
+        return -1;
+    }
+    ssize_t n;
+    do
+        n = recv(fd, p, room < max ? room : max, MSG_DONTWAIT);
+    while (n < 0 && errno == EINTR);
+    if (n > 0)
+        gi_frame_decoder_commit(d, (size_t)n);
+    return n;
+}
+
 int gi_set_nonblocking(int fd, gi_error *err)
 {
     int fl = fcntl(fd, F_GETFL);

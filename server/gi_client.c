@@ -104,22 +104,37 @@ static int request(client *c, const char *method, const char *path, const void *
     return gi_http_do(&c->url, &rq, resp, MAX_JSON_BODY, to_file, err);
 }
 
+/* A request that must answer `want` (or also `want2` when non-zero): 0, or
+ * the exit status with the message printed. The body is left in *resp. */
+static int call(client *c, const char *method, const char *path, const void *body, size_t len,
+                const char *type, int want, int want2, gi_buf *resp, const char *to_file)
+{
+    gi_error err;
+    int st = request(c, method, path, body, len, type, resp, to_file, &err);
+    if (st < 0)
+        return fail_msg(1, "%s", err.msg);
+    if (st != want && (!want2 || st != want2))
+        return http_failure(path, st, resp);
+    return 0;
+}
+
 /* GET path as JSON: 0 with *doc, else the exit status (message printed). */
 static int get_json(client *c, const char *path, cJSON **doc)
 {
     gi_buf b;
     gi_buf_init(&b);
-    gi_error err;
-    int st = request(c, "GET", path, NULL, 0, NULL, &b, NULL, &err);
-    int rc = 0;
-    if (st < 0)
-        rc = fail_msg(1, "%s", err.msg);
-    else if (st != 200)
-        rc = http_failure(path, st, &b);
-    else if (!(*doc = cJSON_ParseWithLength((const char *)b.data, b.len)))
+    int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, NULL);
+    if (rc == 0 && !(*doc = cJSON_ParseWithLength((const char *)b.data, b.len)))
         rc = fail_msg(1, "%s: the farm's answer is not JSON", path);
     gi_buf_free(&b);
     return rc;
+}
+
+static int get_job(client *c, uint64_t id, cJSON **doc)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
+    return get_json(c, path, doc);
 }
 
 static double num(const cJSON *o, const char *k, double dflt)
@@ -171,13 +186,8 @@ static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
         snprintf(path, sizeof path, "/api/v1/jobs/%llu/outputs/%s", (unsigned long long)id, name);
         gi_buf b;
         gi_buf_init(&b);
-        int st = request(c, "GET", path, NULL, 0, NULL, &b, dest, &err);
-        int rc = 0;
-        if (st < 0)
-            rc = fail_msg(1, "%s", err.msg);
-        else if (st != 200)
-            rc = http_failure(path, st, &b);
-        else
+        int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, dest);
+        if (rc == 0)
             printf("  %-4s %s\n", strrchr(name, '.') ? strrchr(name, '.') + 1 : "", dest);
         gi_buf_free(&b);
         free(dest);
@@ -228,8 +238,6 @@ static int wait_job(client *c, uint64_t id, int fetch)
     gi_progress_mode mode;
     if (gi_progress_mode_parse(c->progress, &mode))
         return fail_msg(2, "--progress must be auto, bar, lines, json or none");
-    char path[64];
-    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     gi_progress prog;
     int started = 0;
     struct sigaction sa, old;
@@ -239,7 +247,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     int rc;
     for (;;) {
         cJSON *job = NULL;
-        if ((rc = get_json(c, path, &job)) != 0)
+        if ((rc = get_job(c, id, &job)) != 0)
             break;
         const char *state = str(job, "state");
         const cJSON *work = cJSON_GetObjectItemCaseSensitive(job, "work");
@@ -295,22 +303,15 @@ static int upload_assets(client *c, const gi_job *job)
         gi_buf_init(&b);
         gi_error err;
         int st = request(c, "HEAD", path, NULL, 0, NULL, &b, NULL, &err);
-        if (st == 404) {
+        int rc = st < 0 ? fail_msg(1, "%s", err.msg) : st == 200 || st == 404 ? 0 : http_failure(path, st, &b);
+        if (rc == 0 && st == 404) {
             const gi_buf *bytes = job->assets ? gi_asset_store_get(job->assets, e->hash) : NULL;
-            if (!bytes) {
-                gi_buf_free(&b);
-                return fail_msg(1, "%s: the bytes of %s are not loaded", job->file, e->name);
-            }
-            st = request(c, "PUT", path, bytes->data, bytes->len, "application/octet-stream", &b,
-                         NULL, &err);
-            if (st == 201 || st == 200)
+            if (!bytes)
+                rc = fail_msg(1, "%s: the bytes of %s are not loaded", job->file, e->name);
+            else if ((rc = call(c, "PUT", path, bytes->data, bytes->len, "application/octet-stream",
+                                201, 200, &b, NULL)) == 0)
                 fprintf(stderr, "gi: uploaded %s (%zu bytes)\n", e->name, bytes->len);
         }
-        int rc = 0;
-        if (st < 0)
-            rc = fail_msg(1, "%s", err.msg);
-        else if (st != 200 && st != 201)
-            rc = http_failure(e->name, st, &b);
         gi_buf_free(&b);
         if (rc)
             return rc;
@@ -336,13 +337,9 @@ static int cmd_submit(client *c)
         gi_buf_init(&resp);
         gi_farm_submission_build(&body, base ? base + 1 : c->arg, job.text, &job.manifest,
                                  (uint32_t)c->priority);
-        int st = request(c, "POST", "/api/v1/jobs", body.data, body.len, "application/json", &resp,
-                         NULL, &err);
-        if (st < 0) {
-            rc = fail_msg(1, "%s", err.msg);
-        } else if (st != 201) {
-            rc = http_failure(c->arg, st, &resp);
-        } else {
+        rc = call(c, "POST", "/api/v1/jobs", body.data, body.len, "application/json", 201, 0, &resp,
+                  NULL);
+        if (rc == 0) {
             cJSON *doc = cJSON_ParseWithLength((const char *)resp.data, resp.len);
             id = (uint64_t)num(doc, "id", 0);
             cJSON_Delete(doc);
@@ -360,11 +357,9 @@ static int cmd_submit(client *c)
         return wait_job(c, id, 1);
     /* Wait for the farm's own scene check, so a scene it refuses is an
      * error here rather than a surprise later. */
-    char path[64];
-    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     for (;;) {
         cJSON *doc = NULL;
-        if ((rc = get_json(c, path, &doc)) != 0)
+        if ((rc = get_job(c, id, &doc)) != 0)
             return rc;
         const char *state = str(doc, "state");
         if (strcmp(state, "checking") != 0) {
@@ -385,10 +380,8 @@ static int cmd_submit(client *c)
 
 static int cmd_status(client *c, uint64_t id)
 {
-    char path[64];
-    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     cJSON *job = NULL;
-    int rc = get_json(c, path, &job);
+    int rc = get_job(c, id, &job);
     if (rc)
         return rc;
     if (c->json) {
@@ -482,16 +475,10 @@ static int cmd_cancel(client *c, uint64_t id)
     snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     gi_buf b;
     gi_buf_init(&b);
-    gi_error err;
-    int st = request(c, "DELETE", path, NULL, 0, NULL, &b, NULL, &err);
-    int rc = 0;
-    if (st < 0)
-        rc = fail_msg(1, "%s", err.msg);
-    else if (st != 200)
-        rc = http_failure(path, st, &b);
-    else if (b.len && memmem(b.data, b.len, "\"purged\":true", 13))
+    int rc = call(c, "DELETE", path, NULL, 0, NULL, 200, 0, &b, NULL);
+    if (rc == 0 && b.len && memmem(b.data, b.len, "\"purged\":true", 13))
         printf("job %llu removed (it had ended; its outputs are deleted)\n", (unsigned long long)id);
-    else
+    else if (rc == 0)
         printf("job %llu cancelled\n", (unsigned long long)id);
     gi_buf_free(&b);
     return rc;
@@ -499,10 +486,8 @@ static int cmd_cancel(client *c, uint64_t id)
 
 static int cmd_fetch(client *c, uint64_t id)
 {
-    char path[64];
-    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     cJSON *job = NULL;
-    int rc = get_json(c, path, &job);
+    int rc = get_job(c, id, &job);
     if (rc)
         return rc;
     if (strcmp(str(job, "state"), "done") != 0)

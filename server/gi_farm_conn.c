@@ -22,6 +22,7 @@
 #include "gi_log.h"
 #include "gi_msg.h"
 #include "gi_net.h"
+#include "gi_netio.h"
 #include "gi_version.h"
 
 /* Asset answers wait while this much output is queued (memory bound). */
@@ -365,26 +366,15 @@ static void on_frame(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
 void gi_farm_conn_readable(gi_farm *f, gi_farm_conn *c)
 {
     size_t budget = READ_BUDGET;
-    while (c->fd >= 0 && c->state != GI_FC_CLOSING && budget > 0) {
-        size_t room;
-        uint8_t *p = gi_frame_decoder_space(&c->dec, &room);
-        if (p) {
-            if (room > budget)
-                room = budget;
-            ssize_t n = recv(c->fd, p, room, MSG_DONTWAIT);
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-                return;
-            if (n <= 0) {
-                gi_farm_conn_close(f, c, c->state == GI_FC_CLOSING ? GI_OK : GI_EIO,
-                                   n == 0 ? "connection closed by the worker%s"
-                                          : "connection error%s",
-                                   gi_frame_decoder_mid_frame(&c->dec) ? " in the middle of a frame"
-                                                                       : "");
-                return;
-            }
-            gi_frame_decoder_commit(&c->dec, (size_t)n);
+    while (c->fd >= 0 && c->state != GI_FC_CLOSING) {
+        ssize_t n = gi_frame_decoder_recv(&c->dec, c->fd, budget);
+        if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK)) {
+            gi_farm_conn_close(f, c, GI_EIO, n == 0 ? "connection closed by the worker%s"
+                                                    : "connection error%s",
+                               gi_frame_decoder_mid_frame(&c->dec) ? " in the middle of a frame" : "");
+            return;
+        }
+        if (n > 0) {
             budget -= (size_t)n;
             c->last_heard = gi_farm_now();
         }
@@ -406,6 +396,8 @@ void gi_farm_conn_readable(gi_farm *f, gi_farm_conn *c)
             if (c->fd < 0 || c->state == GI_FC_CLOSING)
                 return;
         }
+        if (n < 0 || budget == 0)
+            return; /* drained, or this connection's share of the round is used */
     }
 }
 

@@ -246,6 +246,22 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
     gi_farm_job_settle(f, j);
 }
 
+/* The lease a RESULT or FAIL answers, taken from the connection, and its
+ * running job (NULL if the job has ended). Returns 0, or -1 when the
+ * connection does not hold that lease: the answer is late (counted). */
+static int answered(gi_farm *f, gi_farm_conn *c, const char *what, uint64_t job, uint64_t task,
+                    uint32_t attempt, gi_farm_lease *l, gi_farm_job **j)
+{
+    long i = lease_find(c, job, task, attempt);
+    if (i < 0) {
+        late(f, c, what, job, task, attempt);
+        return -1;
+    }
+    *l = lease_take(c, (size_t)i);
+    *j = running_job(f, l->job_id);
+    return 0;
+}
+
 void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
 {
     gi_msg_result r;
@@ -254,15 +270,9 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         gi_farm_conn_close(f, c, GI_EPROTO, "%s", err.msg);
         return;
     }
-    long i = lease_find(c, r.job_id, r.task_id, r.attempt);
-    if (i < 0) {
-        late(f, c, "result", r.job_id, r.task_id, r.attempt);
-        gi_buf_free(&r.data);
-        return;
-    }
-    gi_farm_lease l = lease_take(c, (size_t)i);
-    gi_farm_job *j = running_job(f, l.job_id);
-    if (!j) {
+    gi_farm_lease l;
+    gi_farm_job *j;
+    if (answered(f, c, "result", r.job_id, r.task_id, r.attempt, &l, &j) || !j) {
         gi_buf_free(&r.data);
         return;
     }
@@ -307,14 +317,9 @@ void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         gi_farm_conn_close(f, c, GI_EPROTO, "%s", err.msg);
         return;
     }
-    long i = lease_find(c, m.job_id, m.task_id, m.attempt);
-    if (i < 0) {
-        late(f, c, "failure", m.job_id, m.task_id, m.attempt);
-        return;
-    }
-    gi_farm_lease l = lease_take(c, (size_t)i);
-    gi_farm_job *j = running_job(f, l.job_id);
-    if (!j)
+    gi_farm_lease l;
+    gi_farm_job *j;
+    if (answered(f, c, "failure", m.job_id, m.task_id, m.attempt, &l, &j) || !j)
         return;
     charge(j, -l.est_s);
     host_failure(f, c, &m.error);

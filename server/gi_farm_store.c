@@ -173,6 +173,11 @@ int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err)
     return rc;
 }
 
+static void count_bytes(void *ctx, const char *path, const char *name, const struct stat *st)
+{
+    *(uint64_t *)ctx += (uint64_t)st->st_size;
+}
+
 int gi_farm_store_scan(gi_farm *f, gi_error *err)
 {
     char tmp[4200];
@@ -192,29 +197,7 @@ int gi_farm_store_scan(gi_farm *f, gi_error *err)
         closedir(d);
     }
     f->store_bytes = 0;
-    d = opendir(f->assets_dir);
-    if (!d)
-        return gi_fail(err, GI_EIO, "%s: %s", f->assets_dir, strerror(errno));
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (strlen(e->d_name) != 2)
-            continue;
-        char sub[4300];
-        snprintf(sub, sizeof sub, "%s/%s", f->assets_dir, e->d_name);
-        DIR *s = opendir(sub);
-        if (!s)
-            continue;
-        struct dirent *a;
-        while ((a = readdir(s))) {
-            struct stat st;
-            char p[4600];
-            snprintf(p, sizeof p, "%s/%s", sub, a->d_name);
-            if (a->d_name[0] != '.' && stat(p, &st) == 0 && S_ISREG(st.st_mode))
-                f->store_bytes += (uint64_t)st.st_size;
-        }
-        closedir(s);
-    }
-    closedir(d);
+    gi_fs_walk_fanout(f->assets_dir, count_bytes, &f->store_bytes);
     return 0;
 }
 

@@ -24,45 +24,28 @@ typedef struct file_list {
     size_t n, cap;
 } file_list;
 
+static void list_one(void *ctx, const char *path, const char *name, const struct stat *st)
+{
+    file_list *out = ctx;
+    if (strstr(name, ".tmp-")) { /* a write cut short */
+        unlink(path);
+        return;
+    }
+    cached_file cf;
+    snprintf(cf.path, sizeof cf.path, "%s", path);
+    cf.size = (uint64_t)st->st_size;
+    cf.mtime = (double)st->st_mtim.tv_sec + 1e-9 * (double)st->st_mtim.tv_nsec;
+    if (out->n == out->cap) {
+        out->cap = out->cap ? 2 * out->cap : 64;
+        out->v = gi_xrealloc(out->v, out->cap * sizeof *out->v);
+    }
+    out->v[out->n++] = cf;
+}
+
 /* Lists the cache's files (for sizing and eviction). */
 static void scan(const gi_asset_cache *c, file_list *out)
 {
-    DIR *d = opendir(c->dir);
-    if (!d)
-        return;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (strlen(e->d_name) != 2)
-            continue;
-        char sub[4300];
-        snprintf(sub, sizeof sub, "%s/%s", c->dir, e->d_name);
-        DIR *s = opendir(sub);
-        if (!s)
-            continue;
-        struct dirent *a;
-        while ((a = readdir(s))) {
-            if (a->d_name[0] == '.')
-                continue;
-            cached_file cf;
-            snprintf(cf.path, sizeof cf.path, "%s/%s", sub, a->d_name);
-            struct stat st;
-            if (stat(cf.path, &st) != 0 || !S_ISREG(st.st_mode))
-                continue;
-            if (strstr(a->d_name, ".tmp-")) { /* a write cut short */
-                unlink(cf.path);
-                continue;
-            }
-            cf.size = (uint64_t)st.st_size;
-            cf.mtime = (double)st.st_mtim.tv_sec + 1e-9 * (double)st.st_mtim.tv_nsec;
-            if (out->n == out->cap) {
-                out->cap = out->cap ? 2 * out->cap : 64;
-                out->v = gi_xrealloc(out->v, out->cap * sizeof *out->v);
-            }
-            out->v[out->n++] = cf;
-        }
-        closedir(s);
-    }
-    closedir(d);
+    gi_fs_walk_fanout(c->dir, list_one, out);
 }
 
 int gi_asset_cache_open(gi_asset_cache *c, const char *dir, uint64_t max_bytes, gi_error *err)

@@ -536,27 +536,20 @@ static void drain_frames(worker *w)
 static void coord_readable(worker *w)
 {
     size_t budget = READ_BUDGET;
-    while (!w->lost && budget) {
-        size_t room;
-        uint8_t *p = gi_frame_decoder_space(&w->dec, &room);
-        if (p) {
-            if (room > budget)
-                room = budget;
-            ssize_t n = recv(w->fd, p, room, MSG_DONTWAIT);
-            if (n < 0 && errno == EINTR)
-                continue;
-            if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-                return;
-            if (n <= 0) {
-                lose(w, n == 0 ? "the coordinator closed the connection" : "connection error: %s",
-                     strerror(errno));
-                return;
-            }
-            gi_frame_decoder_commit(&w->dec, (size_t)n);
+    while (!w->lost) {
+        ssize_t n = gi_frame_decoder_recv(&w->dec, w->fd, budget);
+        if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK)) {
+            lose(w, n == 0 ? "the coordinator closed the connection" : "connection error: %s",
+                 strerror(errno));
+            return;
+        }
+        if (n > 0) {
             budget -= (size_t)n;
             w->last_heard = now_s();
         }
         drain_frames(w);
+        if (n < 0 || budget == 0)
+            return;
     }
 }
 
@@ -621,13 +614,24 @@ static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
     }
 }
 
-/* Decodes an ERROR frame into err (the coordinator's refusal). */
-static int refused(const gi_frame *fr, gi_error *err)
+/* Reads the next handshake frame, which must be of `type`; an ERROR is the
+ * coordinator's refusal and becomes err. The caller frees fr's payload. */
+static int expect(worker *w, double deadline, uint16_t type, gi_frame *fr, gi_error *err)
 {
+    if (recv_frame(w, deadline, fr, err))
+        return -1;
+    if (fr->type == type)
+        return 0;
     gi_error e, derr;
-    if (gi_msg_error_decode(&fr->payload, &e, &derr))
-        return gi_fail(err, GI_EPROTO, "%s", derr.msg);
-    return gi_fail(err, e.code == GI_OK ? GI_EPROTO : e.code, "the coordinator refused: %s", e.msg);
+    if (fr->type != GI_MSG_ERROR)
+        gi_fail(err, GI_EPROTO, "expected %s, got %s", gi_msg_type_name(type),
+                gi_msg_type_name(fr->type));
+    else if (gi_msg_error_decode(&fr->payload, &e, &derr))
+        gi_fail(err, GI_EPROTO, "%s", derr.msg);
+    else
+        gi_fail(err, e.code == GI_OK ? GI_EPROTO : e.code, "the coordinator refused: %s", e.msg);
+    gi_frame_free(fr);
+    return -1;
 }
 
 static int handshake(worker *w, gi_error *err)
@@ -650,17 +654,11 @@ static int handshake(worker *w, gi_error *err)
     gi_msg_hello_encode(&hello, &h);
     int rc = gi_frame_send(w->fd, GI_MSG_HELLO, hello.data, hello.len, 0, err);
     gi_frame fr;
-    memset(&fr, 0, sizeof fr);
-    if (rc == 0)
-        rc = recv_frame(w, deadline, &fr, err);
-    if (rc == 0 && fr.type == GI_MSG_ERROR)
-        rc = refused(&fr, err);
     gi_msg_challenge ch;
-    if (rc == 0 && fr.type != GI_MSG_CHALLENGE)
-        rc = gi_fail(err, GI_EPROTO, "expected CHALLENGE, got %s", gi_msg_type_name(fr.type));
-    if (rc == 0)
+    if (rc == 0 && (rc = expect(w, deadline, GI_MSG_CHALLENGE, &fr, err)) == 0) {
         rc = gi_msg_challenge_decode(&fr.payload, &ch, err);
-    gi_frame_free(&fr);
+        gi_frame_free(&fr);
+    }
     if (rc == 0 && ch.proto != GI_PROTO_VERSION)
         rc = gi_fail(err, GI_EPROTO, "the coordinator chose protocol version %u", ch.proto);
     if (rc == 0) {
@@ -672,16 +670,11 @@ static int handshake(worker *w, gi_error *err)
         rc = gi_frame_send(w->fd, GI_MSG_AUTH, b.data, b.len, 0, err);
         gi_buf_free(&b);
     }
-    if (rc == 0)
-        rc = recv_frame(w, deadline, &fr, err);
-    if (rc == 0 && fr.type == GI_MSG_ERROR)
-        rc = refused(&fr, err);
     gi_msg_welcome wm;
-    if (rc == 0 && fr.type != GI_MSG_WELCOME)
-        rc = gi_fail(err, GI_EPROTO, "expected WELCOME, got %s", gi_msg_type_name(fr.type));
-    if (rc == 0)
+    if (rc == 0 && (rc = expect(w, deadline, GI_MSG_WELCOME, &fr, err)) == 0) {
         rc = gi_msg_welcome_decode(&fr.payload, &wm, err);
-    gi_frame_free(&fr);
+        gi_frame_free(&fr);
+    }
     if (rc == 0) {
         uint8_t want[GI_MSG_MAC_BYTES];
         gi_auth_coord_mac(w->key, h.nonce, ch.nonce, wm.worker_id, want);

@@ -6,11 +6,6 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 need_netns
-make_secrets
-P=gic$$
-netns_up "$P" 3
-C=$(sh "$NETNS" addr "$P" c)
-FARM_EXEC="ip netns exec $P-c"
 write_job "$TMP/job.json" <<JOB
 {
   "name": "cornell-netns",
@@ -24,13 +19,7 @@ write_job "$TMP/job.json" <<JOB
 JOB
 "$GI_RELEASE" render "$TMP/job.json" --workers 1 --out "$TMP/ref" --progress none >"$TMP/ref.log" 2>&1 ||
     { cat "$TMP/ref.log"; fail "reference render"; }
-
-start_farmd "$TMP/state" "$TMP/farmd.log" ip netns exec "$P-c" -- \
-    --listen-workers "$C:7071" --listen-api "$C:7070" --heartbeat 0.5 --lease 5 --dead 20
-for i in 1 2 3; do
-    start_worker "$TMP/w$i.log" ip netns exec "$P-w$i" -- --connect "$C:7071" --procs 1 \
-        --cache "$TMP/cache$i" --name "host$i"
-done
+netns_farm "gic$$" --heartbeat 0.5 --lease 5 --dead 20
 $FARM_EXEC "$GI" submit "$TMP/job.json" --wait --out "$TMP/farm" --progress none >"$TMP/submit.log" 2>&1 ||
     { cat "$TMP/submit.log" "$TMP/farmd.log"; fail "gi submit --wait"; }
 cmp "$TMP/ref/cornell.exr" "$TMP/farm/cornell.exr" || fail "the farm's EXR differs from gi render's"

@@ -1,5 +1,5 @@
 # gi-farmd refuses, each with a logged reason, and keeps serving:
-# a worker with the wrong secret, API calls without (or with a wrong) token,
+# a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
 # an oversized frame, a frame with a bad CRC, an unknown message type, frames
 # a connection may not carry, an oversized upload, jobs that name files
 # outside their uploaded assets, and a scene whose parser crashes (in the
@@ -30,6 +30,7 @@ peer oversized "HELLO frame payload of 1073741824 bytes exceeds the limit of 655
 peer badcrc "HELLO frame CRC32C mismatch"
 peer unknown-type "frame type 99 is unknown"
 peer garbage 'bad magic "GET "'
+peer version "worker speaks protocol versions 2-3; this coordinator speaks 1"
 peer result-first "RESULT frames are not accepted on this connection"
 peer auth-oversized-result "RESULT frame payload of 67108864 bytes exceeds the limit of 16777216 bytes"
 peer auth-badcrc "HELLO frames are not accepted on this connection"

@@ -6,18 +6,7 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
-write_job "$TMP/job.json" <<JOB
-{
-  "scene": "$SRC/scenes/cornell-box/scene.json",
-  "method": "pt",
-  "seed": 21,
-  "image": {"width": 128, "height": 96},
-  "pt": {"spp": 256, "tile": 16, "pass_spp": 8},
-  "outputs": {"exr": "img.exr"}
-}
-JOB
-"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none >/dev/null 2>&1 ||
-    fail "reference render"
+cornell_job "$TMP/job.json" 21 128 96 256
 OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
@@ -25,7 +14,7 @@ PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 
-# wait_checkpoint FRACTION: until the last checkpoint holds total/FRACTION merged tasks.
+# wait_checkpoint DIVISOR: until the last checkpoint holds total/DIVISOR merged tasks.
 wait_checkpoint() {
     n=0
     while :; do
@@ -67,7 +56,7 @@ total=$(jnum "$id" total)
     fail "accepted $results results after resuming at $resumed2 of $total"
 api "/api/v1/jobs/$id" | grep -q "resumed from checkpoint" || fail "no resume in the job's log"
 "$GI" fetch "$id" --out "$TMP/farm" >/dev/null || fail "fetch"
-cmp "$TMP/ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the restarts"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the restarts"
 # The journal's replay survives a torn tail (a crash in the middle of an append).
 stop_farmd "$TMP/farmd.log"
 printf '\003\000\000\000\377\377' >>"$TMP/state/journal"

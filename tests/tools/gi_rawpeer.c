@@ -5,8 +5,8 @@
  *
  *   gi_rawpeer ADDR MODE
  *   MODE: oversized | badcrc | unknown-type | garbage | result-first |
- *         oversized-result | unexpected, each also as auth-MODE (after
- *         authenticating)
+ *         oversized-result | unexpected | version, each also as auth-MODE
+ *         (after authenticating)
  *
  * Exit status 0 if the coordinator refused (an ERROR frame, then the
  * connection closed), printing "refused: <its message>"; 1 otherwise. */
@@ -59,6 +59,20 @@ static void send_bad(int fd, const char *mode)
     } else if (strcmp(mode, "garbage") == 0) {
         const char g[] = "GET / HTTP/1.1\r\nHost: x\r\n\r\n";
         gi_write_all(fd, g, sizeof g - 1, NULL);
+    } else if (strcmp(mode, "version") == 0) {
+        /* A worker from the future: speaks only versions 2-3. */
+        gi_msg_hello h;
+        memset(&h, 0, sizeof h);
+        h.proto_min = 2;
+        h.proto_max = 3;
+        h.name = "future";
+        h.version = "9.0";
+        h.procs = h.slots = h.cores = 1;
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_msg_hello_encode(&b, &h);
+        gi_frame_send(fd, GI_MSG_HELLO, b.data, b.len, 0, NULL);
+        gi_buf_free(&b);
     } else if (strcmp(mode, "unexpected") == 0) {
         gi_buf b;
         gi_buf_init(&b);

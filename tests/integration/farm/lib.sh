@@ -137,3 +137,54 @@ wait_log() {
         sleep 0.05
     done
 }
+
+# netns_farm PREFIX [gi-farmd options...]: a coordinator host and three
+# worker hosts (one process each) in network namespaces. Sets C (the
+# coordinator's address) and FARM_EXEC (runs API clients on its host).
+netns_farm() {
+    P=$1
+    shift
+    need_netns
+    make_secrets
+    netns_up "$P" 3
+    C=$(sh "$NETNS" addr "$P" c)
+    FARM_EXEC="ip netns exec $P-c"
+    start_farmd "$TMP/state" "$TMP/farmd.log" ip netns exec "$P-c" -- \
+        --listen-workers "$C:7071" --listen-api "$C:7070" "$@"
+    for i in 1 2 3; do
+        start_worker "$TMP/w$i.log" ip netns exec "$P-w$i" -- --connect "$C:7071" --procs 1 \
+            --cache "$TMP/cache$i" --name "host$i"
+    done
+}
+
+# cornell_job FILE SEED WIDTH HEIGHT SPP [PASS_SPP]: a Cornell box pt job
+# writing img.exr, and its reference rendering by `gi render` into FILE.ref/.
+cornell_job() {
+    write_job "$1" <<JOB
+{
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "pt",
+  "seed": $2,
+  "image": {"width": $3, "height": $4},
+  "pt": {"spp": $5, "tile": 16, "pass_spp": ${6:-8}},
+  "outputs": {"exr": "img.exr"}
+}
+JOB
+    "$GI_RELEASE" render "$1" --workers 2 --out "$1.ref" --progress none >/dev/null 2>&1 ||
+        fail "reference render of $1"
+}
+
+# wait_merged ID DIVISOR: until at least total/DIVISOR tasks are merged, and
+# the job is still running (a test that must act mid-job).
+wait_merged() {
+    n=0
+    while :; do
+        merged=$(jnum "$1" merged)
+        total=$(jnum "$1" total)
+        [ "${total:-0}" -gt 0 ] && [ "$merged" -ge $((total / $2)) ] && break
+        n=$((n + 1))
+        [ $n -lt 600 ] || fail "job $1 did not progress"
+        sleep 0.05
+    done
+    [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
+}
