@@ -38,6 +38,8 @@ const char *gi_fj_state_name(gi_fj_state s)
     return "unknown";
 }
 
+static void start_checkers(gi_farm *f);
+
 static int terminal(const gi_farm_job *j)
 {
     return j->state == GI_FJ_DONE || j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED;
@@ -332,14 +334,34 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
         if (terminal(j))
             continue;
         gi_farm_job_log(j, "coordinator restarted: resuming%s", j->ckpt_seq ? " from its checkpoint" : "");
-        gi_error cerr;
-        if (gi_farm_check_start(f, j, &cerr))
-            gi_farm_job_fail(f, j, &cerr);
     }
+    start_checkers(f);
     return 0;
 }
 
 /* ---- submit / check / run ---------------------------------------------- */
+
+/* Scene checkers run at most this many at once (a restart with many
+ * unfinished jobs must not fork them all together); the others wait in
+ * CHECKING, in submission order. */
+#define MAX_CHECKERS 4
+
+static void start_checkers(gi_farm *f)
+{
+    int running = 0;
+    for (size_t i = 0; i < f->job_count; i++)
+        running += f->jobs[i]->check_pid > 0;
+    for (size_t i = 0; i < f->job_count && running < MAX_CHECKERS; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (j->state != GI_FJ_CHECKING || j->check_pid > 0)
+            continue;
+        gi_error err;
+        if (gi_farm_check_start(f, j, &err))
+            gi_farm_job_fail(f, j, &err);
+        else
+            running++;
+    }
+}
 
 static size_t unfinished_jobs(const gi_farm *f)
 {
@@ -413,9 +435,8 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     f->m.jobs_submitted++;
     gi_farm_job_log(j, "submitted: %s, method %s, priority %u, %zu assets", j->file, j->method,
                     j->priority, j->manifest.count);
+    start_checkers(f);
     gi_error cerr;
-    if (gi_farm_check_start(f, j, &cerr))
-        gi_farm_job_fail(f, j, &cerr);
     if (f->journal.records > COMPACT_AFTER_RECORDS && compact(f, &cerr))
         gi_warn("journal compaction: %s", cerr.msg);
     return j;
@@ -673,6 +694,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 
 void gi_farm_jobs_tick(gi_farm *f)
 {
+    start_checkers(f);
     double now = gi_farm_now();
     for (size_t i = 0; i < f->job_count; i++) {
         gi_farm_job *j = f->jobs[i];

@@ -24,7 +24,7 @@
 #include "gi_version.h"
 
 #define HANDSHAKE_S 10.0
-#define MAX_DEFS 64
+#define MAX_DEFS 1024
 #define READ_BUDGET ((size_t)8 << 20)
 
 static volatile sig_atomic_t signals_seen;
@@ -140,32 +140,15 @@ static void def_drop(worker *w, uint64_t id)
         }
 }
 
-static int job_in_use(const worker *w, uint64_t id)
-{
-    for (size_t i = 0; i < w->q_count; i++)
-        if (w->q[i].job_id == id)
-            return 1;
-    for (int i = 0; i < w->pool.count; i++)
-        if (w->pool.kids[i].busy && w->pool.kids[i].job_id == id)
-            return 1;
-    return 0;
-}
-
 static void def_add(worker *w, gi_msg_job *m)
 {
     def_drop(w, m->job_id);
+    /* The coordinator sends a job's JOB once per connection and CANCELs it
+     * when the job ends, so definitions are never evicted here (a TASK
+     * would then arrive without one); a coordinator that keeps more jobs
+     * than this on one worker is refused instead. */
     if (w->def_count == MAX_DEFS) {
-        /* Forget a job with nothing queued or running (the coordinator
-         * sends its JOB again on this connection if it ever needs to). */
-        for (size_t i = 0; i < w->def_count; i++)
-            if (!job_in_use(w, w->defs[i].id)) {
-                def_free(&w->defs[i]);
-                w->defs[i] = w->defs[--w->def_count];
-                break;
-            }
-    }
-    if (w->def_count == MAX_DEFS) {
-        lose(w, "more than %d jobs in use at once", MAX_DEFS);
+        lose(w, "the coordinator sent more than %d jobs at once", MAX_DEFS);
         gi_msg_job_free(m);
         return;
     }
