@@ -18,18 +18,12 @@
 #include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 #include "gi_fs.h"
 #include "gi_log.h"
 #include "gi_net.h"
 
 #define TICK_MS 50
-
-double gi_farm_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 double gi_farm_wallnow(void)
 {
@@ -104,7 +98,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     gi_buf_init(&cfg->token);
     f->lock_fd = f->worker_fd = f->api_fd = -1;
     f->journal.fd = -1;
-    f->started = gi_farm_now();
+    f->started = gi_now();
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;
     gi_auth_key(&f->cfg.secret, f->key);

@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 #include "gi_limits.h"
 #include "gi_log.h"
 
@@ -126,7 +127,7 @@ int gi_farm_check_start(gi_farm *f, gi_farm_job *j, gi_error *err)
     fcntl(p[0], F_SETFL, fcntl(p[0], F_GETFL) | O_NONBLOCK);
     j->check_pid = pid;
     j->check_fd = p[0];
-    j->check_deadline = gi_farm_now() + f->cfg.check_timeout_s;
+    j->check_deadline = gi_now() + f->cfg.check_timeout_s;
     gi_buf_reset(&j->check_msg);
     gi_farm_job_log(j, "checking the scene (process %ld)", (long)pid);
     return 0;

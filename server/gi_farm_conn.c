@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 #include "gi_log.h"
 #include "gi_msg.h"
 #include "gi_net.h"
@@ -113,7 +114,7 @@ int gi_farm_conn_accept(gi_farm *f)
         char name[120];
         snprintf(name, sizeof name, "worker connection %s", peer);
         gi_frame_decoder_init(&c->dec, &lim, name);
-        c->connected = c->last_heard = gi_farm_now();
+        c->connected = c->last_heard = gi_now();
         gi_buf_init(&c->out);
         gi_buf_init(&c->hello_raw);
         if (f->conn_count == f->conn_cap) {
@@ -150,7 +151,7 @@ void gi_farm_conn_close(gi_farm *f, gi_farm_conn *c, gi_errcode code, const char
         gi_buf_free(&b);
     }
     c->state = GI_FC_CLOSING;
-    c->last_heard = gi_farm_now(); /* the grace period for flushing starts now */
+    c->last_heard = gi_now(); /* the grace period for flushing starts now */
     gi_farm_sched_release(f, c, code != GI_OK, c->close_reason);
     if (!gi_farm_conn_wants_write(c)) {
         close(c->fd);
@@ -234,7 +235,7 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     gi_frame_decoder_set_limits(&c->dec, &lim);
     c->state = GI_FC_ACTIVE;
     c->host = gi_farm_host_get(f, c->hello.name);
-    c->next_heartbeat = gi_farm_now() + f->cfg.heartbeat_s;
+    c->next_heartbeat = gi_now() + f->cfg.heartbeat_s;
     f->m.workers_accepted++;
     gi_info("worker %s (%s) joined: %u processes, %u slots, %u cores, %.1f GiB, version %s%s",
             c->hello.name, c->peer, c->hello.procs, c->hello.slots, c->hello.cores,
@@ -376,7 +377,7 @@ void gi_farm_conn_readable(gi_farm *f, gi_farm_conn *c)
         }
         if (n > 0) {
             budget -= (size_t)n;
-            c->last_heard = gi_farm_now();
+            c->last_heard = gi_now();
         }
         for (;;) {
             gi_frame fr;
@@ -442,7 +443,7 @@ void gi_farm_conn_writable(gi_farm *f, gi_farm_conn *c)
 
 void gi_farm_conns_tick(gi_farm *f)
 {
-    double now = gi_farm_now();
+    double now = gi_now();
     for (size_t i = 0; i < f->conn_count; i++) {
         gi_farm_conn *c = f->conns[i];
         if (c->fd < 0)

@@ -194,8 +194,7 @@ struct gi_farm {
     gi_farm_metrics m;
 };
 
-double gi_farm_now(void);      /* monotonic seconds */
-double gi_farm_wallnow(void);  /* epoch seconds */
+double gi_farm_wallnow(void); /* epoch seconds (monotonic time is gi_now) */
 
 /* gi_farm_jobs.c */
 int gi_farm_jobs_replay(gi_farm *f, gi_error *err);

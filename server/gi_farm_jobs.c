@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 #include "gi_fs.h"
 #include "gi_log.h"
 
@@ -601,7 +602,7 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
     j->state = GI_FJ_RUNNING;
     if (!j->started)
         j->started = gi_farm_wallnow();
-    j->run_t0 = gi_farm_now();
+    j->run_t0 = gi_now();
     j->cost_done_t0 = j->jr.cost_done;
     j->ckpt_last = j->run_t0;
     j->ckpt_merged = j->jr.merge_next;
@@ -695,7 +696,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 void gi_farm_jobs_tick(gi_farm *f)
 {
     start_checkers(f);
-    double now = gi_farm_now();
+    double now = gi_now();
     for (size_t i = 0; i < f->job_count; i++) {
         gi_farm_job *j = f->jobs[i];
         if (j->state == GI_FJ_CHECKING)
@@ -711,7 +712,7 @@ void gi_farm_jobs_tick(gi_farm *f)
 
 void gi_farm_jobs_checkpoint_all(gi_farm *f)
 {
-    double now = gi_farm_now();
+    double now = gi_now();
     for (size_t i = 0; i < f->job_count; i++)
         checkpoint_if_due(f, f->jobs[i], now, 1);
 }
@@ -753,7 +754,7 @@ double gi_farm_job_eta(const gi_farm_job *j)
 {
     if (j->state != GI_FJ_RUNNING || !j->loaded)
         return -1;
-    double dt = gi_farm_now() - j->run_t0, done = j->jr.cost_done - j->cost_done_t0;
+    double dt = gi_now() - j->run_t0, done = j->jr.cost_done - j->cost_done_t0;
     if (dt < 1e-3 || done <= 0)
         return -1;
     return (j->jr.cost_total - j->jr.cost_done) * dt / done;

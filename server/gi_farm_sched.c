@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 #include "gi_log.h"
 #include "gi_msg.h"
 
@@ -161,7 +162,7 @@ void gi_farm_schedule(gi_farm *f)
 {
     if (f->job_count == 0 || f->conn_count == 0)
         return;
-    double now = gi_farm_now();
+    double now = gi_now();
     unsigned char *exhausted = gi_xcalloc(f->job_count, 1);
     size_t job_index_cap = f->job_count;
     int any = 1;
@@ -214,8 +215,8 @@ static void host_failure(gi_farm *f, gi_farm_conn *c, const gi_error *e)
     h->failures++;
     h->consecutive_failures++;
     snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
-    if (h->consecutive_failures >= f->cfg.blocklist_failures && !gi_farm_host_blocked(h, gi_farm_now())) {
-        h->blocked_until = gi_farm_now() + f->cfg.blocklist_s;
+    if (h->consecutive_failures >= f->cfg.blocklist_failures && !gi_farm_host_blocked(h, gi_now())) {
+        h->blocked_until = gi_now() + f->cfg.blocklist_s;
         gi_warn("worker %s blocklisted for %.0f s after %u consecutive task failures; last: %s",
                 h->name, f->cfg.blocklist_s, h->consecutive_failures, e->msg);
     }
@@ -328,7 +329,7 @@ void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
 
 void gi_farm_sched_heartbeat(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *hb)
 {
-    double deadline = gi_farm_now() + f->cfg.lease_s;
+    double deadline = gi_now() + f->cfg.lease_s;
     for (uint32_t k = 0; k < hb->count; k++) {
         long i = lease_find(c, hb->refs[k].job_id, hb->refs[k].task_id, hb->refs[k].attempt);
         if (i >= 0)

@@ -11,6 +11,7 @@
 #include <cjson/cJSON.h>
 
 #include "gi_farm_impl.h"
+#include "gi_progress.h"
 
 static char *print(cJSON *doc)
 {
@@ -177,7 +178,7 @@ static const char *conn_state(const gi_farm *f, const gi_farm_conn *c, double no
 
 char *gi_farm_view_workers(gi_farm *f)
 {
-    double now = gi_farm_now();
+    double now = gi_now();
     cJSON *a = cJSON_CreateArray();
     for (size_t i = 0; i < f->conn_count; i++) {
         const gi_farm_conn *c = f->conns[i];
@@ -270,7 +271,7 @@ char *gi_farm_view_metrics(gi_farm *f)
             active, draining);
     gauge(&b, "gi_farm_tasks_leased", "Tasks leased to workers now.", (double)leased);
     gauge(&b, "gi_farm_asset_store_bytes", "Bytes in the asset store.", (double)f->store_bytes);
-    gauge(&b, "gi_farm_uptime_seconds", "Seconds since gi-farmd started.", gi_farm_now() - f->started);
+    gauge(&b, "gi_farm_uptime_seconds", "Seconds since gi-farmd started.", gi_now() - f->started);
     counter(&b, "gi_farm_jobs_submitted_total", "Jobs accepted.", (double)m->jobs_submitted);
     counter(&b, "gi_farm_jobs_done_total", "Jobs finished.", (double)m->jobs_done);
     counter(&b, "gi_farm_jobs_failed_total", "Jobs failed.", (double)m->jobs_failed);

@@ -3,9 +3,9 @@
 
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_log.h"
+#include "gi_progress.h"
 
 #define DEFAULT_MAX_ATTEMPTS 4
 
@@ -106,13 +106,6 @@ const gi_task *gi_jobrun_lease(gi_jobrun *jr)
     return NULL;
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Merges every result whose turn has come; calls finish when all is merged. */
 static int advance(gi_jobrun *jr)
 {
@@ -125,9 +118,9 @@ static int advance(gi_jobrun *jr)
             gi_jobrun_task *jt = &jr->tasks[jr->merge_next];
             gi_task_queue q;
             gi_task_queue_init(&q, jr->task_count);
-            double t0 = now_s();
+            double t0 = gi_now();
             int rc = job->method->merge(job, &jt->task, &jt->result, &q, &err);
-            jr->merge_seconds += now_s() - t0;
+            jr->merge_seconds += gi_now() - t0;
             jr->merged_bytes += jt->result.len;
             if (rc == 0)
                 rc = absorb(jr, &q, &err);
@@ -145,9 +138,9 @@ static int advance(gi_jobrun *jr)
             return 0;
         gi_task_queue q;
         gi_task_queue_init(&q, jr->task_count);
-        double t0 = now_s();
+        double t0 = gi_now();
         int rc = job->method->finish(job, &q, &err);
-        jr->finish_seconds += now_s() - t0;
+        jr->finish_seconds += gi_now() - t0;
         if (rc == 0)
             rc = absorb(jr, &q, &err);
         gi_task_queue_free(&q);

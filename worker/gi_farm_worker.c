@@ -208,8 +208,8 @@ static void wait_drop_child(worker *w, int child)
             i++;
 }
 
-/* Answers every child waiting for hash (bytes NULL: with an error). */
-static void answer_waiters(worker *w, const char *hash, const gi_buf *bytes, const char *why)
+/* Answers every child waiting for hash (bytes NULL: with the error why). */
+static void answer_waiters(worker *w, const char *hash, const gi_buf *bytes, const gi_error *why)
 {
     for (size_t i = 0; i < w->wait_count;) {
         asset_wait *a = &w->waits[i];
@@ -239,7 +239,9 @@ static void on_asset_async(void *user, int child, const char *hash)
     }
     gi_buf_free(&b);
     if (w->fd < 0) {
-        gi_pool_reply_asset(&w->pool, child, hash, NULL, "not available: no coordinator");
+        gi_error e;
+        gi_fail(&e, GI_EIO, "asset %.12s: no connection to the coordinator", hash);
+        gi_pool_reply_asset(&w->pool, child, hash, NULL, &e);
         return;
     }
     if (w->wait_count == w->wait_cap) {
@@ -484,7 +486,7 @@ static void on_coord_frame(worker *w, const gi_frame *fr)
             char hash[GI_HASH_HEX];
             memcpy(hash, w->reqs[0], GI_HASH_HEX);
             req_remove(w, hash);
-            answer_waiters(w, hash, NULL, e.msg);
+            answer_waiters(w, hash, NULL, &e);
             break;
         }
         lose(w, "the coordinator says: %s", e.msg);

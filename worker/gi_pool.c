@@ -226,7 +226,7 @@ static void child_lost(gi_pool *p, int i, const char *reason, const gi_pool_even
         ev->crash(ev->user, i, job, task, attempt, why);
 }
 
-static int send_asset(int fd, const char *hash, const gi_buf *bytes, const char *why,
+static int send_asset(int fd, const char *hash, const gi_buf *bytes, const gi_error *why,
                       gi_error *err)
 {
     gi_buf b;
@@ -236,9 +236,7 @@ static int send_asset(int fd, const char *hash, const gi_buf *bytes, const char 
         gi_msg_asset_put_encode(&b, hash, bytes->data, bytes->len);
         rc = gi_frame_send(fd, GI_MSG_ASSET_PUT, b.data, b.len, 1, err);
     } else {
-        gi_error e;
-        gi_fail(&e, GI_EINVAL, "asset %.12s is %s", hash, why);
-        gi_msg_error_encode(&b, &e);
+        gi_msg_error_encode(&b, why);
         rc = gi_frame_send(fd, GI_MSG_ERROR, b.data, b.len, 0, err);
     }
     gi_buf_free(&b);
@@ -246,13 +244,13 @@ static int send_asset(int fd, const char *hash, const gi_buf *bytes, const char 
 }
 
 void gi_pool_reply_asset(gi_pool *p, int i, const char *hash, const gi_buf *bytes,
-                         const char *why)
+                         const gi_error *why)
 {
     gi_pool_child *k = &p->kids[i];
     if (k->fd < 0)
         return;
     gi_error err;
-    if (send_asset(k->fd, hash, bytes, why ? why : "not available", &err))
+    if (send_asset(k->fd, hash, bytes, why, &err))
         gi_debug("answering pool child %d's asset request: %s", i, err.msg);
 }
 
@@ -297,7 +295,10 @@ static int handle_frame(gi_pool *p, int i, gi_frame *f, const gi_pool_events *ev
             return 0;
         }
         const gi_buf *bytes = ev->asset ? ev->asset(ev->user, hash) : NULL;
-        return send_asset(k->fd, hash, bytes, "unknown to the coordinator", err);
+        gi_error unknown;
+        if (!bytes)
+            gi_fail(&unknown, GI_EINVAL, "asset %.12s is unknown to the coordinator", hash);
+        return send_asset(k->fd, hash, bytes, &unknown, err);
     }
     case GI_MSG_HEARTBEAT:
     case GI_MSG_PROGRESS:

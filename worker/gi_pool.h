@@ -71,10 +71,11 @@ int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
                    gi_error *err);
 
 /* Answers child i's ASSET_NEED for `hash`: ASSET_PUT with the bytes, or
- * ERROR (`why`) when bytes is NULL. A send failure is left for the child's
- * socket to report (the child is then reaped as lost). */
+ * ERROR `why` when bytes is NULL (its code decides what the child's task
+ * failure means: GI_EINVAL fails the job, others are retried). A send
+ * failure is left for the child's socket to report. */
 void gi_pool_reply_asset(gi_pool *p, int i, const char *hash, const gi_buf *bytes,
-                         const char *why);
+                         const gi_error *why);
 
 /* For event loops that also watch other descriptors: fills pollfds for the
  * living children (returns how many, at most p->count), then dispatches what
