@@ -44,8 +44,10 @@ metric() {
 }
 median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
 
-job "$T/bench.json" 320 240 96 32 16
-echo "job: Cornell box, pt, 320x240, 96 spp, 32-pixel tiles, 16 spp per task ($(( (320 / 32) * (240 / 32 + 1) * 6 )) tasks)"
+# The benchmark job (override with BENCH_JOB="W H SPP TILE PASS_SPP").
+set -- ${BENCH_JOB:-320 240 96 32 16}
+job "$T/bench.json" "$@"
+echo "job: Cornell box, pt, $1x$2, $3 spp, $4-pixel tiles, $5 spp per task ($(( ($1 + $4 - 1) / $4 * (($2 + $4 - 1) / $4) * (($3 + $5 - 1) / $5) )) tasks)"
 # Warm-up: page cache, the worker's asset cache and its children's first job.
 "$BIN/gi" submit "$T/bench.json" --wait --out "$T/o" --progress none >/dev/null 2>&1
 : >"$T/local"

@@ -458,13 +458,14 @@ static int cmd_workers(client *c)
         return rc;
     if (c->json)
         return print_json(doc), cJSON_Delete(doc), 0;
-    printf("%-20s %-22s %-12s %5s %6s %7s %6s\n", "NAME", "ADDRESS", "STATE", "PROCS", "LEASED",
-           "DONE", "FAILED");
+    printf("%-20s %-22s %-12s %5s %5s %7s %6s %7s %6s %s\n", "NAME", "ADDRESS", "STATE", "PROCS",
+           "CORES", "MEMORY", "LEASED", "DONE", "FAILED", "VERSION");
     const cJSON *ws = cJSON_GetObjectItemCaseSensitive(doc, "workers");
     for (const cJSON *w = ws ? ws->child : NULL; w; w = w->next)
-        printf("%-20s %-22s %-12s %5.0f %6.0f %7.0f %6.0f\n", str(w, "name"), str(w, "address"),
-               str(w, "state"), num(w, "processes", 0), num(w, "tasks_leased", 0),
-               num(w, "tasks_done", 0), num(w, "tasks_failed", 0));
+        printf("%-20s %-22s %-12s %5.0f %5.0f %5.1fG %6.0f %7.0f %6.0f %s\n", str(w, "name"),
+               str(w, "address"), str(w, "state"), num(w, "processes", 0), num(w, "cores", 0),
+               num(w, "memory_bytes", 0) / (1 << 30), num(w, "tasks_leased", 0),
+               num(w, "tasks_done", 0), num(w, "tasks_failed", 0), str(w, "version"));
     cJSON_Delete(doc);
     return 0;
 }

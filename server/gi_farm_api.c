@@ -385,11 +385,13 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
                              const char *method, const char *url)
 {
     unsigned status = route(method, url, r);
-    if (status == MHD_HTTP_NOT_FOUND)
-        return refuse(f, conn, r, method, url, status, "no such endpoint: %s %s", method, url);
+    /* Authentication first, so that without the token every path looks
+     * the same (no probing for endpoints or job ids). */
     const char *why;
     if (r->route != R_DASHBOARD && !authorized(f, conn, &why))
         return refuse(f, conn, r, method, url, MHD_HTTP_UNAUTHORIZED, "%s", why);
+    if (status == MHD_HTTP_NOT_FOUND)
+        return refuse(f, conn, r, method, url, status, "no such endpoint: %s %s", method, url);
     if (status == MHD_HTTP_METHOD_NOT_ALLOWED)
         return refuse(f, conn, r, method, url, status, "%s is not allowed on %s", method, url);
     if (r->route == R_JOBS_SUBMIT)
@@ -405,6 +407,11 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
             return refuse(f, conn, r, method, url, MHD_HTTP_CONTENT_TOO_LARGE,
                           "request body of %llu bytes is over the limit of %llu", n,
                           (unsigned long long)r->limit);
+        if (r->route == R_ASSET_PUT && f->store_bytes + n > f->cfg.max_store_bytes)
+            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
+                          "the asset store is full (%llu bytes, limit %llu)",
+                          (unsigned long long)f->store_bytes,
+                          (unsigned long long)f->cfg.max_store_bytes);
     }
     if (r->route == R_ASSET_PUT) {
         gi_error err;
