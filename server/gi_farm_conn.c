@@ -72,15 +72,14 @@ static const char *who(const gi_farm_conn *c)
 
 int gi_farm_conn_wants_write(const gi_farm_conn *c)
 {
-    return c->fd >= 0 && c->out_off < c->out.len;
+    return c->fd >= 0 && gi_outq_pending(&c->out) > 0;
 }
 
 void gi_farm_conn_send(gi_farm_conn *c, uint16_t type, const gi_buf *payload, int compress)
 {
     if (c->fd < 0 || c->state == GI_FC_CLOSING)
         return;
-    gi_frame_encode(&c->out, type, payload ? payload->data : NULL, payload ? payload->len : 0,
-                    compress);
+    gi_outq_push(&c->out, type, payload, compress);
 }
 
 int gi_farm_conn_accept(gi_farm *f)
@@ -115,7 +114,7 @@ int gi_farm_conn_accept(gi_farm *f)
         snprintf(name, sizeof name, "worker connection %s", peer);
         gi_frame_decoder_init(&c->dec, &lim, name);
         c->connected = c->last_heard = gi_now();
-        gi_buf_init(&c->out);
+        gi_outq_init(&c->out);
         gi_buf_init(&c->hello_raw);
         if (f->conn_count == f->conn_cap) {
             f->conn_cap = f->conn_cap ? 2 * f->conn_cap : 16;
@@ -247,7 +246,7 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
 
 static void serve_assets(gi_farm *f, gi_farm_conn *c)
 {
-    while (c->asset_q_count && c->out.len - c->out_off < ASSET_OUT_HIGH &&
+    while (c->asset_q_count && gi_outq_pending(&c->out) < ASSET_OUT_HIGH &&
            c->state != GI_FC_CLOSING) {
         char *hash = c->asset_q[c->asset_q_head];
         gi_buf bytes, b;
@@ -404,41 +403,24 @@ void gi_farm_conn_readable(gi_farm *f, gi_farm_conn *c)
 
 void gi_farm_conn_writable(gi_farm *f, gi_farm_conn *c)
 {
-    while (c->fd >= 0 && c->out_off < c->out.len) {
-        ssize_t n = send(c->fd, c->out.data + c->out_off, c->out.len - c->out_off,
-                         MSG_NOSIGNAL | MSG_DONTWAIT);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-            break;
-        if (n < 0) {
-            if (c->state == GI_FC_CLOSING) {
-                close(c->fd);
-                c->fd = -1;
-                return;
-            }
-            gi_farm_conn_close(f, c, GI_EIO, "send failed: %s", strerror(errno));
+    if (c->fd < 0)
+        return;
+    if (gi_outq_flush(&c->out, c->fd) != 0) {
+        if (c->state == GI_FC_CLOSING) {
+            close(c->fd);
+            c->fd = -1;
             return;
         }
-        c->out_off += (size_t)n;
+        gi_farm_conn_close(f, c, GI_EIO, "send failed: %s", strerror(errno));
+        return;
     }
-    if (c->out_off == c->out.len) {
-        c->out.len = c->out_off = 0;
-        if (c->out.cap > ((size_t)4 << 20))
-            gi_buf_free(&c->out); /* do not keep a large buffer per idle worker */
-    } else if (c->out_off > c->out.len / 2) {
-        memmove(c->out.data, c->out.data + c->out_off, c->out.len - c->out_off);
-        c->out.len -= c->out_off;
-        c->out_off = 0;
-    }
-    if (c->fd >= 0 && c->state == GI_FC_CLOSING && c->out_off == c->out.len) {
+    if (c->state == GI_FC_CLOSING && gi_outq_pending(&c->out) == 0) {
         shutdown(c->fd, SHUT_WR);
         close(c->fd);
         c->fd = -1;
         return;
     }
-    if (c->fd >= 0)
-        serve_assets(f, c);
+    serve_assets(f, c);
 }
 
 void gi_farm_conns_tick(gi_farm *f)
@@ -494,7 +476,7 @@ void gi_farm_conns_reap(gi_farm *f)
         }
         gi_farm_sched_release(f, c, 1, "connection closed");
         gi_frame_decoder_free(&c->dec);
-        gi_buf_free(&c->out);
+        gi_outq_free(&c->out);
         gi_buf_free(&c->hello_raw);
         gi_msg_hello_free(&c->hello);
         free(c->leases);

@@ -21,6 +21,7 @@
 #include "gi_jobrun.h"
 #include "gi_journal.h"
 #include "gi_msg_ctrl.h"
+#include "gi_netio.h"
 
 struct MHD_Daemon;
 
@@ -132,9 +133,7 @@ typedef struct gi_farm_conn {
     gi_buf hello_raw;
     uint8_t nonce[GI_MSG_NONCE_BYTES];
     gi_farm_host *host;
-    /* Output queue: frames not yet written, from out_off on. */
-    gi_buf out;
-    size_t out_off;
+    gi_outq out; /* frames not yet written */
     /* Leases held. */
     gi_farm_lease *leases;
     size_t lease_count, lease_cap;

@@ -124,7 +124,7 @@ static int conn_takes_work(const gi_farm *f, const gi_farm_conn *c, double now)
      * queue nothing more on it until it speaks again. */
     if (now - c->last_heard > 2.0 * f->cfg.heartbeat_s)
         return 0;
-    return c->out.len - c->out_off < SCHED_OUT_HIGH;
+    return gi_outq_pending(&c->out) < SCHED_OUT_HIGH;
 }
 
 void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j)

@@ -67,8 +67,7 @@ typedef struct worker {
     int fd;
     int established;
     gi_frame_decoder dec;
-    gi_buf out;
-    size_t out_off;
+    gi_outq out;
     double last_heard, next_hb;
     uint64_t hb_seq;
     double heartbeat_s, lease_s;
@@ -110,7 +109,7 @@ static void send_frame(worker *w, uint16_t type, const gi_buf *b, int compress)
 {
     if (w->fd < 0)
         return;
-    gi_frame_encode(&w->out, type, b ? b->data : NULL, b ? b->len : 0, compress);
+    gi_outq_push(&w->out, type, b, compress);
 }
 
 /* ---- job definitions and the task queue ----------------------------------- */
@@ -540,31 +539,15 @@ static void coord_readable(worker *w)
 
 static void coord_writable(worker *w)
 {
-    while (w->out_off < w->out.len) {
-        ssize_t n = send(w->fd, w->out.data + w->out_off, w->out.len - w->out_off,
-                         MSG_NOSIGNAL | MSG_DONTWAIT);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
-            break;
-        if (n < 0) {
-            lose(w, "send: %s", strerror(errno));
-            return;
-        }
-        w->out_off += (size_t)n;
-    }
-    if (w->out_off == w->out.len) {
-        w->out.len = w->out_off = 0;
-        if (w->out.cap > ((size_t)4 << 20))
-            gi_buf_free(&w->out);
-    }
+    if (gi_outq_flush(&w->out, w->fd) != 0)
+        lose(w, "send: %s", strerror(errno));
 }
 
 /* Blocking flush with a time limit (before hanging up). */
 static void flush(worker *w, double seconds)
 {
     double end = now_s() + seconds;
-    while (!w->lost && w->out_off < w->out.len && now_s() < end) {
+    while (!w->lost && gi_outq_pending(&w->out) && now_s() < end) {
         struct pollfd p = {.fd = w->fd, .events = POLLOUT};
         if (poll(&p, 1, 100) > 0)
             coord_writable(w);
@@ -727,8 +710,7 @@ static void end_session(worker *w)
     w->fd = -1;
     w->pool.extra_fd_count = 0;
     gi_frame_decoder_free(&w->dec);
-    gi_buf_free(&w->out);
-    w->out_off = 0;
+    gi_outq_free(&w->out);
 }
 
 /* Stops: hands back what has not run (and, at once, what is running), says
@@ -764,7 +746,7 @@ static int session(worker *w, gi_error *err)
     char peer[120];
     snprintf(peer, sizeof peer, "coordinator %s", w->o->connect);
     gi_frame_decoder_init(&w->dec, NULL, peer);
-    gi_buf_init(&w->out);
+    gi_outq_init(&w->out);
     w->lost = 0;
     w->draining = 0;
     if (handshake(w, err)) {
@@ -816,7 +798,7 @@ static int session(worker *w, gi_error *err)
             break;
         }
         fds[0] = (struct pollfd){.fd = w->fd, .events = POLLIN};
-        if (w->out_off < w->out.len)
+        if (gi_outq_pending(&w->out))
             fds[0].events |= POLLOUT;
         int n = gi_pool_pollfds(&w->pool, fds + 1, child_of + 1);
         int rc = poll(fds, (nfds_t)n + 1, 100);
@@ -831,7 +813,7 @@ static int session(worker *w, gi_error *err)
         if (fds[0].revents & (POLLIN | POLLHUP | POLLERR))
             coord_readable(w);
         gi_pool_dispatch(&w->pool, fds + 1, child_of + 1, n, &ev);
-        if (w->out_off < w->out.len)
+        if (gi_outq_pending(&w->out))
             coord_writable(w); /* send results without waiting a round */
     }
     free(fds);

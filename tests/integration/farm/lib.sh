@@ -174,14 +174,15 @@ JOB
         fail "reference render of $1"
 }
 
-# wait_merged ID DIVISOR: until at least total/DIVISOR tasks are merged, and
-# the job is still running (a test that must act mid-job).
+# wait_merged ID DIVISOR [checkpoint]: until at least total/DIVISOR tasks are
+# merged (or, with "checkpoint", are in the last checkpoint), and the job is
+# still running (for a test that must act mid-job). Sets merged and total.
 wait_merged() {
     n=0
     while :; do
-        merged=$(jnum "$1" merged)
+        if [ "${3:-}" = checkpoint ]; then merged=$(jckpt "$1" merged); else merged=$(jnum "$1" merged); fi
         total=$(jnum "$1" total)
-        [ "${total:-0}" -gt 0 ] && [ "$merged" -ge $((total / $2)) ] && break
+        [ "${total:-0}" -gt 0 ] && [ "${merged:-0}" -ge $((total / $2)) ] && break
         n=$((n + 1))
         [ $n -lt 600 ] || fail "job $1 did not progress"
         sleep 0.05
