@@ -17,3 +17,5 @@ TREE=$(mktemp -d "${TMPDIR:-/tmp}/detp-tree.XXXXXX")
 rm -rf "$TREE"
 echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minutes)"
 sh bench/detp_memory.sh "$BIN" 5000000 50000000
+echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
+sh bench/farm_overhead.sh "$BIN" 5

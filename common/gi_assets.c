@@ -93,6 +93,10 @@ int gi_manifest_decode(gi_reader *r, gi_manifest *m, gi_error *err)
             free(name);
             return gi_fail(err, GI_EPROTO, "%s: manifest entry %u is malformed", r->what, i);
         }
+        if (!r->failed && gi_manifest_find(m, name)) {
+            free(name);
+            return gi_fail(err, GI_EPROTO, "%s: manifest entry %u repeats a name", r->what, i);
+        }
         if (name && !r->failed)
             gi_manifest_put(m, name, hash, size);
         free(name);
@@ -152,6 +156,14 @@ const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void
 }
 
 size_t gi_asset_store_bytes(const gi_asset_store *s) { return s->bytes; }
+
+size_t gi_asset_store_count(const gi_asset_store *s) { return s->count; }
+
+const gi_buf *gi_asset_store_at(const gi_asset_store *s, size_t i, char hash[GI_HASH_HEX])
+{
+    memcpy(hash, s->entries[i].hash, GI_HASH_HEX);
+    return &s->entries[i].bytes;
+}
 
 void gi_dir_source_init(gi_dir_source *d, const char *root)
 {

@@ -63,6 +63,9 @@ const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void
                                  size_t len);
 const gi_buf *gi_asset_store_get(const gi_asset_store *s, const char *hash);
 size_t gi_asset_store_bytes(const gi_asset_store *s);
+/* Iteration (insertion order): the i-th entry's bytes, its hash into hash. */
+size_t gi_asset_store_count(const gi_asset_store *s);
+const gi_buf *gi_asset_store_at(const gi_asset_store *s, size_t i, char hash[GI_HASH_HEX]);
 
 /* A directory on the local disk. Names are paths relative to root (or
  * absolute). Every file read is hashed into `manifest` and its bytes kept in

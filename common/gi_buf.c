@@ -210,6 +210,12 @@ char *gi_get_str(gi_reader *r, size_t max_len)
         r->failed = 1;
         return NULL;
     }
+    /* A string field never holds a NUL: it would cut the C string short
+     * and make the decoded message say something else than its bytes. */
+    if (memchr(r->p, 0, n)) {
+        r->failed = 1;
+        return NULL;
+    }
     char *s = gi_xmalloc((size_t)n + 1);
     gi_get(r, s, n);
     s[n] = '\0';

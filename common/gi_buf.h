@@ -63,7 +63,7 @@ int64_t gi_get_i64(gi_reader *r);
 float gi_get_f32(gi_reader *r);
 double gi_get_f64(gi_reader *r);
 /* Returns a malloc'ed NUL-terminated copy, or NULL (and fails r) if the
- * length exceeds max_len or what is left. */
+ * length exceeds max_len or what is left, or the bytes hold a NUL. */
 char *gi_get_str(gi_reader *r, size_t max_len);
 /* Points into the reader's data (no copy); fails if longer than max_len. */
 const uint8_t *gi_get_blob(gi_reader *r, size_t max_len, size_t *len);

@@ -1,6 +1,7 @@
 /* gi_fs: whole-file reads and atomic writes. */
 #include "gi_fs.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdatomic.h>
@@ -121,6 +122,37 @@ int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_erro
     int rc = gi_commit_file(tmp, path, err);
     free(tmp);
     return rc;
+}
+
+void gi_fs_walk_fanout(const char *dir,
+                       void (*fn)(void *ctx, const char *path, const char *name,
+                                  const struct stat *st),
+                       void *ctx)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strlen(e->d_name) != 2 || e->d_name[0] == '.')
+            continue;
+        char *sub = gi_path_join(dir, e->d_name);
+        DIR *s = opendir(sub);
+        struct dirent *a;
+        while (s && (a = readdir(s))) {
+            if (a->d_name[0] == '.')
+                continue;
+            char *p = gi_path_join(sub, a->d_name);
+            struct stat st;
+            if (stat(p, &st) == 0 && S_ISREG(st.st_mode))
+                fn(ctx, p, a->d_name, &st);
+            free(p);
+        }
+        if (s)
+            closedir(s);
+        free(sub);
+    }
+    closedir(d);
 }
 
 int gi_mkdirs(const char *dir, gi_error *err)

@@ -23,6 +23,15 @@ int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err);
 /* Writes bytes to path atomically (temp + fsync + rename). */
 int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err);
 
+struct stat;
+/* Calls fn for every regular file one level below dir's two-character
+ * subdirectories (content-addressed stores: dir/ab/abcd...). Names starting
+ * with '.' are skipped. */
+void gi_fs_walk_fanout(const char *dir,
+                       void (*fn)(void *ctx, const char *path, const char *name,
+                                  const struct stat *st),
+                       void *ctx);
+
 /* mkdir -p. */
 int gi_mkdirs(const char *dir, gi_error *err);
 /* Directory part of a path ("." if none), malloc'ed. */

@@ -173,6 +173,11 @@ static void header_done(gi_frame_decoder *d)
     }
     uint64_t length = gi_le_get_u64(h + 12);
     uint64_t limit = d->lim.max_payload[type];
+    if (length > 0 && limit == 0) {
+        broken(d, GI_EPROTO, "%s frames are not accepted on this connection",
+               gi_msg_type_name(type));
+        return;
+    }
     if (length > limit || length > SIZE_MAX) {
         broken(d, GI_EPROTO, "%s frame payload of %llu bytes exceeds the limit of %llu bytes",
                gi_msg_type_name(type), (unsigned long long)length, (unsigned long long)limit);
@@ -295,6 +300,11 @@ void gi_frame_decoder_free(gi_frame_decoder *d)
     free(d->payload);
     gi_buf_free(&d->pending);
     memset(d, 0, sizeof *d);
+}
+
+void gi_frame_decoder_set_limits(gi_frame_decoder *d, const gi_frame_limits *lim)
+{
+    d->lim = *lim;
 }
 
 void gi_frame_decoder_feed(gi_frame_decoder *d, const void *data, size_t len)

@@ -90,7 +90,9 @@ const char *gi_msg_type_name(uint16_t type);
 int gi_msg_type_known(uint16_t type);
 
 typedef struct gi_frame_limits {
-    uint64_t max_payload[GI_MSG_TYPE_COUNT]; /* by type, bytes on the wire and decompressed */
+    /* By type, bytes on the wire and decompressed. 0 refuses frames of that
+     * type with a payload (a connection that must never carry them). */
+    uint64_t max_payload[GI_MSG_TYPE_COUNT];
     uint64_t max_decompressed;               /* cap on any zstd content size */
 } gi_frame_limits;
 
@@ -147,6 +149,9 @@ typedef struct gi_frame_decoder {
  * prefixes every message, e.g. "worker 10.0.0.7:51234" or "pool child 3". */
 void gi_frame_decoder_init(gi_frame_decoder *d, const gi_frame_limits *lim, const char *peer);
 void gi_frame_decoder_free(gi_frame_decoder *d);
+/* Replaces the limits for frames whose header is not yet complete (e.g.
+ * raised once a peer has authenticated). */
+void gi_frame_decoder_set_limits(gi_frame_decoder *d, const gi_frame_limits *lim);
 
 /* Appends received bytes. Bytes that belong to the frame in progress go
  * straight into its header or payload buffer; only bytes past a complete,

@@ -154,6 +154,66 @@ out:
     return rc;
 }
 
+ssize_t gi_frame_decoder_recv(gi_frame_decoder *d, int fd, size_t max)
+{
+    size_t room;
+    uint8_t *p = gi_frame_decoder_space(d, &room);
+    if (!p) {
+        errno = EAGAIN;
+        return -1;
+    }
+    ssize_t n;
+    do
+        n = recv(fd, p, room < max ? room : max, MSG_DONTWAIT);
+    while (n < 0 && errno == EINTR);
+    if (n > 0)
+        gi_frame_decoder_commit(d, (size_t)n);
+    return n;
+}
+
+void gi_outq_init(gi_outq *q)
+{
+    gi_buf_init(&q->buf);
+    q->off = 0;
+}
+
+void gi_outq_free(gi_outq *q)
+{
+    gi_buf_free(&q->buf);
+    q->off = 0;
+}
+
+void gi_outq_push(gi_outq *q, uint16_t type, const gi_buf *payload, int compress)
+{
+    gi_frame_encode(&q->buf, type, payload ? payload->data : NULL, payload ? payload->len : 0,
+                    compress);
+}
+
+int gi_outq_flush(gi_outq *q, int fd)
+{
+    while (q->off < q->buf.len) {
+        ssize_t n = send(fd, q->buf.data + q->off, q->buf.len - q->off, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+            break;
+        if (n < 0)
+            return -1;
+        q->off += (size_t)n;
+    }
+    if (q->off == q->buf.len) {
+        q->buf.len = q->off = 0;
+        if (q->buf.cap > ((size_t)4 << 20))
+            gi_buf_free(&q->buf); /* an idle peer keeps no large buffer */
+    } else if (q->off > q->buf.len / 2) {
+        /* Compact when the sent prefix dominates, so queueing stays linear. */
+        memmove(q->buf.data, q->buf.data + q->off, q->buf.len - q->off);
+        q->buf.len -= q->off;
+        q->off = 0;
+    }
+    return 0;
+}
+
 int gi_set_nonblocking(int fd, gi_error *err)
 {
     int fl = fcntl(fd, F_GETFL);

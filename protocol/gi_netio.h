@@ -9,6 +9,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <sys/types.h>
 
 #include "gi_error.h"
 #include "gi_frame.h"
@@ -30,6 +31,29 @@ int gi_frame_send(int fd, uint16_t type, const void *payload, size_t len, int co
  * I/O and truncation, GI_EPROTO / GI_ENOMEM as gi_frame_decoder_next). */
 int gi_frame_recv(int fd, const gi_frame_limits *lim, const char *peer, gi_frame *out,
                   gi_error *err);
+
+/* For event loops: reads what a non-blocking socket has (at most max bytes)
+ * straight into the decoder's buffer. Returns the bytes read (> 0), 0 at
+ * the end of the stream, or -1 with errno (EAGAIN: nothing now). While the
+ * decoder holds a complete frame (or is broken) it reads nothing and
+ * returns -1 with errno EAGAIN: take the frames with
+ * gi_frame_decoder_next first. */
+ssize_t gi_frame_decoder_recv(gi_frame_decoder *d, int fd, size_t max);
+
+/* Frames waiting to be written to a non-blocking socket (event loops). */
+typedef struct gi_outq {
+    gi_buf buf;
+    size_t off; /* bytes of buf already sent */
+} gi_outq;
+
+void gi_outq_init(gi_outq *q);
+void gi_outq_free(gi_outq *q);
+/* Encodes one frame at the end of the queue (see gi_frame_encode). */
+void gi_outq_push(gi_outq *q, uint16_t type, const gi_buf *payload, int compress);
+static inline size_t gi_outq_pending(const gi_outq *q) { return q->buf.len - q->off; }
+/* Sends what the socket takes now (MSG_NOSIGNAL). Returns 0, with or
+ * without bytes left, or -1 with errno when the socket failed. */
+int gi_outq_flush(gi_outq *q, int fd);
 
 int gi_set_nonblocking(int fd, gi_error *err);
 

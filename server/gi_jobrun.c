@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "gi_log.h"
+#include "gi_progress.h"
 
 #define DEFAULT_MAX_ATTEMPTS 4
 
@@ -117,7 +118,10 @@ static int advance(gi_jobrun *jr)
             gi_jobrun_task *jt = &jr->tasks[jr->merge_next];
             gi_task_queue q;
             gi_task_queue_init(&q, jr->task_count);
+            double t0 = gi_now();
             int rc = job->method->merge(job, &jt->task, &jt->result, &q, &err);
+            jr->merge_seconds += gi_now() - t0;
+            jr->merged_bytes += jt->result.len;
             if (rc == 0)
                 rc = absorb(jr, &q, &err);
             gi_task_queue_free(&q);
@@ -134,7 +138,9 @@ static int advance(gi_jobrun *jr)
             return 0;
         gi_task_queue q;
         gi_task_queue_init(&q, jr->task_count);
+        double t0 = gi_now();
         int rc = job->method->finish(job, &q, &err);
+        jr->finish_seconds += gi_now() - t0;
         if (rc == 0)
             rc = absorb(jr, &q, &err);
         gi_task_queue_free(&q);

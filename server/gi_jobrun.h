@@ -44,6 +44,10 @@ typedef struct gi_jobrun {
     gi_task_stats stats; /* summed over merged tasks */
     uint64_t retries;
     uint64_t held_results_bytes, held_results_peak;
+    /* Coordinator time in method->merge (with the bytes merged) and in
+     * method->finish, for throughput figures. */
+    double merge_seconds, finish_seconds;
+    uint64_t merged_bytes;
 } gi_jobrun;
 
 /* Plans the job (method->plan). */

@@ -81,7 +81,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
 
     gi_progress prog;
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
-    gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset};
+    gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
     int rc = 0;
     while (!gi_jobrun_done(&lr.jr)) {
         if (gi_local_interrupted) {

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_args.h"
+#include "gi_client.h"
 #include "gi_fs.h"
 #include "gi_job.h"
 #include "gi_local.h"
@@ -25,6 +27,7 @@ static void usage(FILE *out)
             "       gi validate JOB.json\n"
             "       gi methods\n"
             "       gi --version\n"
+            "%s"
             "\n"
             "render    renders a job on this machine with a pool of N worker processes\n"
             "          (default: one per core) and writes its outputs into DIR (default: out)\n"
@@ -32,7 +35,11 @@ static void usage(FILE *out)
             "validate  checks a job and its scene without rendering\n"
             "methods   lists the rendering methods\n"
             "\n"
-            "Job format: docs/job-format.md; scene format: docs/scene-format.md.\n");
+            "submit    uploads a job's files to a farm and queues it; --wait follows it and\n"
+            "          downloads the outputs (docs/farm.md)\n"
+            "\n"
+            "Job format: docs/job-format.md; scene format: docs/scene-format.md.\n",
+            gi_client_usage);
 }
 
 static void on_signal(int sig)
@@ -43,20 +50,12 @@ static void on_signal(int sig)
 
 static int arg_value(int argc, char **argv, int *i, const char *name, const char **out)
 {
-    size_t n = strlen(name);
-    if (strncmp(argv[*i], name, n) == 0 && argv[*i][n] == '=') {
-        *out = argv[*i] + n + 1;
-        return 1;
+    int rc = gi_args_take(argc, argv, i, name, out);
+    if (rc < 0) {
+        fprintf(stderr, "gi: %s needs a value\n", name);
+        exit(2);
     }
-    if (strcmp(argv[*i], name) == 0) {
-        if (*i + 1 >= argc) {
-            fprintf(stderr, "gi: %s needs a value\n", name);
-            exit(2);
-        }
-        *out = argv[++*i];
-        return 1;
-    }
-    return 0;
+    return rc;
 }
 
 static void print_summary(const gi_job *job, const gi_local_summary *s)
@@ -188,6 +187,8 @@ int main(int argc, char **argv)
         return cmd_validate(argc, argv);
     if (strcmp(cmd, "methods") == 0)
         return cmd_methods();
+    if (gi_client_is_command(cmd))
+        return gi_client_main(argc, argv);
     if (strcmp(cmd, "--version") == 0) {
         printf("gi %s\n", GI_VERSION);
         return 0;

@@ -226,6 +226,34 @@ static void child_lost(gi_pool *p, int i, const char *reason, const gi_pool_even
         ev->crash(ev->user, i, job, task, attempt, why);
 }
 
+static int send_asset(int fd, const char *hash, const gi_buf *bytes, const gi_error *why,
+                      gi_error *err)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc;
+    if (bytes) {
+        gi_msg_asset_put_encode(&b, hash, bytes->data, bytes->len);
+        rc = gi_frame_send(fd, GI_MSG_ASSET_PUT, b.data, b.len, 1, err);
+    } else {
+        gi_msg_error_encode(&b, why);
+        rc = gi_frame_send(fd, GI_MSG_ERROR, b.data, b.len, 0, err);
+    }
+    gi_buf_free(&b);
+    return rc;
+}
+
+void gi_pool_reply_asset(gi_pool *p, int i, const char *hash, const gi_buf *bytes,
+                         const gi_error *why)
+{
+    gi_pool_child *k = &p->kids[i];
+    if (k->fd < 0)
+        return;
+    gi_error err;
+    if (send_asset(k->fd, hash, bytes, why, &err))
+        gi_debug("answering pool child %d's asset request: %s", i, err.msg);
+}
+
 static int handle_frame(gi_pool *p, int i, gi_frame *f, const gi_pool_events *ev,
                         gi_error *err)
 {
@@ -262,21 +290,15 @@ static int handle_frame(gi_pool *p, int i, gi_frame *f, const gi_pool_events *ev
         char hash[GI_HASH_HEX];
         if (gi_msg_asset_need_decode(&f->payload, hash, err))
             return -1;
-        const gi_buf *bytes = ev->asset ? ev->asset(ev->user, hash) : NULL;
-        gi_buf b;
-        gi_buf_init(&b);
-        int rc;
-        if (bytes) {
-            gi_msg_asset_put_encode(&b, hash, bytes->data, bytes->len);
-            rc = gi_frame_send(k->fd, GI_MSG_ASSET_PUT, b.data, b.len, 1, err);
-        } else {
-            gi_error e;
-            gi_fail(&e, GI_EINVAL, "asset %.12s is unknown to the coordinator", hash);
-            gi_msg_error_encode(&b, &e);
-            rc = gi_frame_send(k->fd, GI_MSG_ERROR, b.data, b.len, 0, err);
+        if (ev->asset_async) {
+            ev->asset_async(ev->user, i, hash);
+            return 0;
         }
-        gi_buf_free(&b);
-        return rc;
+        const gi_buf *bytes = ev->asset ? ev->asset(ev->user, hash) : NULL;
+        gi_error unknown;
+        if (!bytes)
+            gi_fail(&unknown, GI_EINVAL, "asset %.12s is unknown to the coordinator", hash);
+        return send_asset(k->fd, hash, bytes, &unknown, err);
     }
     case GI_MSG_HEARTBEAT:
     case GI_MSG_PROGRESS:

@@ -38,6 +38,10 @@ typedef struct gi_pool_events {
                   const char *why);
     /* Bytes for an asset hash a child asks for, or NULL if unknown. */
     const gi_buf *(*asset)(void *user, const char *hash);
+    /* Instead of `asset`, for owners that fetch bytes asynchronously (a
+     * worker asking its coordinator): the owner answers later with
+     * gi_pool_reply_asset; the child waits. */
+    void (*asset_async)(void *user, int child, const char *hash);
 } gi_pool_events;
 
 typedef struct gi_pool {
@@ -65,6 +69,13 @@ int gi_pool_idle_child(const gi_pool *p);
 int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
                    const char *job_text, const gi_manifest *manifest, const gi_task *task,
                    gi_error *err);
+
+/* Answers child i's ASSET_NEED for `hash`: ASSET_PUT with the bytes, or
+ * ERROR `why` when bytes is NULL (its code decides what the child's task
+ * failure means: GI_EINVAL fails the job, others are retried). A send
+ * failure is left for the child's socket to report. */
+void gi_pool_reply_asset(gi_pool *p, int i, const char *hash, const gi_buf *bytes,
+                         const gi_error *why);
 
 /* For event loops that also watch other descriptors: fills pollfds for the
  * living children (returns how many, at most p->count), then dispatches what

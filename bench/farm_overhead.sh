@@ -1,0 +1,89 @@
+#!/bin/sh
+# The farm's overhead: the same job through gi-farmd + one gi-worker with 2
+# processes on loopback (`gi submit --wait`: upload check, scene check,
+# scheduling, TCP, merging, download) against `gi render --workers 2`.
+# Runs alternate; medians are reported. Then the coordinator's merge
+# throughput (result bytes / time inside merge) from its metrics, for the
+# benchmark job and for a job with large results.
+#   bench/farm_overhead.sh BUILD_DIR [ROUNDS]
+set -eu
+BIN=$(cd "${1:-build/release}" && pwd)
+ROUNDS=${2:-5}
+SRC=$(cd "$(dirname "$0")/.." && pwd)
+T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-farm.XXXXXX")
+PIDS=""
+cleanup() {
+    for p in $PIDS; do kill "$p" 2>/dev/null || true; done
+    wait 2>/dev/null || true
+    rm -rf "$T"
+}
+trap cleanup EXIT INT TERM
+head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/secret"
+head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/token"
+chmod 600 "$T/secret" "$T/token"
+export GI_FARM_SECRET_FILE="$T/secret" GI_FARM_TOKEN_FILE="$T/token" GI_LOG=warn
+"$BIN/gi-farmd" --state "$T/state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 \
+    >"$T/farmd.log" 2>&1 &
+PIDS="$PIDS $!"
+while [ ! -s "$T/state/addresses" ]; do sleep 0.05; done
+export GI_FARM="http://$(awk '$1 == "api" {print $2}' "$T/state/addresses")"
+"$BIN/gi-worker" --connect "$(awk '$1 == "workers" {print $2}' "$T/state/addresses")" \
+    --procs 2 --cache "$T/cache" >"$T/worker.log" 2>&1 &
+PIDS="$PIDS $!"
+
+job() { # FILE W H SPP TILE PASS
+    cat >"$1" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 1,
+ "image": {"width": $2, "height": $3}, "pt": {"spp": $4, "tile": $5, "pass_spp": $6},
+ "outputs": {"exr": "img.exr"}}
+JOB
+}
+now() { date +%s.%N; }
+metric() {
+    curl -s -H "Authorization: Bearer $(cat "$T/token")" "$GI_FARM/metrics" | awk -v m="$1" '$1 == m {print $2}'
+}
+median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
+
+# The benchmark job (override with BENCH_JOB="W H SPP TILE PASS_SPP").
+set -- ${BENCH_JOB:-320 240 96 32 16}
+job "$T/bench.json" "$@"
+echo "job: Cornell box, pt, $1x$2, $3 spp, $4-pixel tiles, $5 spp per task ($(( ($1 + $4 - 1) / $4 * (($2 + $4 - 1) / $4) * (($3 + $5 - 1) / $5) )) tasks)"
+# Warm-up: page cache, the worker's asset cache and its children's first job.
+"$BIN/gi" submit "$T/bench.json" --wait --out "$T/o" --progress none >/dev/null 2>&1
+: >"$T/local"
+: >"$T/farm"
+b0=$(metric gi_farm_merged_bytes_total)
+m0=$(metric gi_farm_merge_seconds_total)
+i=0
+while [ $i -lt "$ROUNDS" ]; do
+    t0=$(now)
+    "$BIN/gi" render "$T/bench.json" --workers 2 --out "$T/l" --progress none >/dev/null
+    t1=$(now)
+    "$BIN/gi" submit "$T/bench.json" --wait --out "$T/f" --progress none >/dev/null 2>&1
+    t2=$(now)
+    cmp -s "$T/l/img.exr" "$T/f/img.exr" || { echo "outputs differ"; exit 1; }
+    awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}' >>"$T/local"
+    awk -v a="$t1" -v b="$t2" 'BEGIN {print b - a}' >>"$T/farm"
+    printf 'round %d: gi render %.2f s, farm %.2f s\n' $((i + 1)) "$(tail -n 1 "$T/local")" "$(tail -n 1 "$T/farm")"
+    i=$((i + 1))
+done
+l=$(median <"$T/local")
+f=$(median <"$T/farm")
+awk -v l="$l" -v f="$f" 'BEGIN {printf "median: gi render --workers 2 %.2f s, farm %.2f s, overhead %+.1f%%\n", l, f, 100 * (f - l) / l}'
+l=$(sort -g "$T/local" | head -n 1)
+f=$(sort -g "$T/farm" | head -n 1)
+awk -v l="$l" -v f="$f" 'BEGIN {printf "fastest: gi render --workers 2 %.2f s, farm %.2f s, overhead %+.1f%%\n", l, f, 100 * (f - l) / l}'
+b1=$(metric gi_farm_merged_bytes_total)
+m1=$(metric gi_farm_merge_seconds_total)
+awk -v b0="$b0" -v b1="$b1" -v m0="$m0" -v m1="$m1" -v r="$ROUNDS" 'BEGIN {b = b1 - b0; m = m1 - m0;
+    printf "merge: %.1f MB of results per job, %.1f ms merging per job, %.0f MB/s\n", b / r / 1e6, 1000 * m / r, b / m / 1e6}'
+
+# Large results: 1024x1024, 256-pixel tiles, 1 spp per task (2 MiB per result).
+job "$T/big.json" 1024 1024 4 256 1
+b0=$(metric gi_farm_merged_bytes_total)
+m0=$(metric gi_farm_merge_seconds_total)
+"$BIN/gi" submit "$T/big.json" --wait --out "$T/b" --progress none >/dev/null 2>&1
+b1=$(metric gi_farm_merged_bytes_total)
+m1=$(metric gi_farm_merge_seconds_total)
+awk -v b0="$b0" -v b1="$b1" -v m0="$m0" -v m1="$m1" 'BEGIN {b = b1 - b0; m = m1 - m0;
+    printf "merge, large results (1024x1024, 2 MiB per task): %.0f MB in %.1f ms, %.0f MB/s\n", b / 1e6, 1000 * m, b / m / 1e6}'

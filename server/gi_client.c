@@ -1,0 +1,580 @@
+/* gi_client: farm commands of `gi` (submit, status, wait, cancel, jobs,
+ * workers, fetch) over the HTTP/JSON API. */
+#include "gi_client.h"
+
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <cjson/cJSON.h>
+
+#include "gi_args.h"
+#include "gi_auth.h"
+#include "gi_farm_submit.h"
+#include "gi_fs.h"
+#include "gi_http_client.h"
+#include "gi_job.h"
+#include "gi_progress.h"
+
+#define MAX_JSON_BODY ((uint64_t)64 << 20)
+#define POLL_S 0.1
+
+const char gi_client_usage[] =
+    "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
+    "       gi status ID [--json] | gi jobs [--json] | gi workers [--json]\n"
+    "       gi wait ID [--out DIR] [--progress MODE] | gi cancel ID | gi fetch ID [--out DIR]\n"
+    "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070) and\n"
+    "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN)\n";
+
+static volatile sig_atomic_t interrupted;
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    interrupted = 1;
+}
+
+typedef struct client {
+    gi_http_url url;
+    char token[GI_SECRET_MAX_BYTES + 1];
+    /* Options. */
+    const char *out_dir, *progress;
+    int json, wait;
+    int64_t priority;
+    const char *arg; /* the command's operand (job file or id) */
+} client;
+
+static const char *const commands[] = {"submit", "status", "wait",  "cancel",
+                                       "jobs",   "workers", "fetch", NULL};
+
+int gi_client_is_command(const char *cmd)
+{
+    for (int i = 0; commands[i]; i++)
+        if (strcmp(cmd, commands[i]) == 0)
+            return 1;
+    return 0;
+}
+
+static int fail_msg(int status, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+static int fail_msg(int status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "gi: ");
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, "\n");
+    va_end(ap);
+    return status;
+}
+
+/* ---- requests ------------------------------------------------------------ */
+
+/* The message of an {"error": ...} body, or the body itself. */
+static void error_text(const gi_buf *body, char *out, size_t n)
+{
+    cJSON *doc = cJSON_ParseWithLength((const char *)body->data, body->len);
+    const cJSON *e = doc ? cJSON_GetObjectItemCaseSensitive(doc, "error") : NULL;
+    if (cJSON_IsString(e))
+        snprintf(out, n, "%s", e->valuestring);
+    else
+        snprintf(out, n, "%.*s", (int)(body->len < 300 ? body->len : 300), (const char *)body->data);
+    cJSON_Delete(doc);
+    out[strcspn(out, "\n")] = '\0';
+}
+
+/* Exit status for an HTTP failure: 2 for the caller's input, 1 otherwise. */
+static int http_failure(const char *what, int status, const gi_buf *body)
+{
+    char msg[1200];
+    error_text(body, msg, sizeof msg);
+    if (status == 401)
+        return fail_msg(1, "%s: the farm refused the API token: %s", what, msg);
+    return fail_msg(status == 400 ? 2 : 1, "%s: %s (HTTP %d)", what, msg, status);
+}
+
+static int request(client *c, const char *method, const char *path, const void *body, size_t len,
+                   const char *type, gi_buf *resp, const char *to_file, gi_error *err)
+{
+    gi_http_request rq = {method, path, c->token, body, len, type, 60.0};
+    return gi_http_do(&c->url, &rq, resp, MAX_JSON_BODY, to_file, err);
+}
+
+/* A request that must answer `want` (or also `want2` when non-zero): 0, or
+ * the exit status with the message printed. The body is left in *resp. */
+static int call(client *c, const char *method, const char *path, const void *body, size_t len,
+                const char *type, int want, int want2, gi_buf *resp, const char *to_file)
+{
+    gi_error err;
+    int st = request(c, method, path, body, len, type, resp, to_file, &err);
+    if (st < 0)
+        return fail_msg(1, "%s", err.msg);
+    if (st != want && (!want2 || st != want2))
+        return http_failure(path, st, resp);
+    return 0;
+}
+
+/* GET path as JSON: 0 with *doc, else the exit status (message printed). */
+static int get_json(client *c, const char *path, cJSON **doc)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, NULL);
+    if (rc == 0 && !(*doc = cJSON_ParseWithLength((const char *)b.data, b.len)))
+        rc = fail_msg(1, "%s: the farm's answer is not JSON", path);
+    gi_buf_free(&b);
+    return rc;
+}
+
+static int get_job(client *c, uint64_t id, cJSON **doc)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
+    return get_json(c, path, doc);
+}
+
+static double num(const cJSON *o, const char *k, double dflt)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
+    return cJSON_IsNumber(v) ? v->valuedouble : dflt;
+}
+
+static const char *str(const cJSON *o, const char *k)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
+    return cJSON_IsString(v) ? v->valuestring : "";
+}
+
+static int print_json(const cJSON *doc)
+{
+    char *s = cJSON_Print(doc);
+    printf("%s\n", s ? s : "null");
+    cJSON_free(s);
+    return 0;
+}
+
+static int parse_id(const char *s, uint64_t *id)
+{
+    int64_t v;
+    if (!s || gi_args_int(s, 1, INT64_MAX, &v))
+        return -1;
+    *id = (uint64_t)v;
+    return 0;
+}
+
+/* ---- fetch ------------------------------------------------------------------ */
+
+static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
+{
+    gi_error err;
+    if (gi_mkdirs(c->out_dir, &err))
+        return fail_msg(1, "--out: %s", err.msg);
+    const cJSON *outs = cJSON_GetObjectItemCaseSensitive(job, "outputs");
+    int n = 0;
+    for (const cJSON *o = outs ? outs->child : NULL; o; o = o->next) {
+        const char *name = str(o, "name");
+        /* The farm names outputs as the job does: plain file names. Refuse
+         * anything else rather than write outside --out. */
+        if (!name[0] || strchr(name, '/') || name[0] == '.')
+            return fail_msg(1, "job %llu: refusing output name \"%s\"", (unsigned long long)id,
+                            name);
+        char path[512], *dest = gi_path_join(c->out_dir, name);
+        snprintf(path, sizeof path, "/api/v1/jobs/%llu/outputs/%s", (unsigned long long)id, name);
+        gi_buf b;
+        gi_buf_init(&b);
+        int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, dest);
+        if (rc == 0)
+            printf("  %-4s %s\n", strrchr(name, '.') ? strrchr(name, '.') + 1 : "", dest);
+        gi_buf_free(&b);
+        free(dest);
+        if (rc)
+            return rc;
+        n++;
+    }
+    if (n == 0)
+        return fail_msg(1, "job %llu has no outputs to fetch", (unsigned long long)id);
+    return 0;
+}
+
+/* ---- wait --------------------------------------------------------------------- */
+
+static void sleep_s(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    nanosleep(&ts, NULL);
+}
+
+/* Exit status for a job that ended without success. */
+static int job_failed(uint64_t id, const cJSON *job)
+{
+    const char *state = str(job, "state");
+    const cJSON *e = cJSON_GetObjectItemCaseSensitive(job, "error");
+    int status = (int)num(e, "exit_status", 1);
+    return fail_msg(status == 2 ? 2 : 1, "job %llu %s: %s", (unsigned long long)id, state,
+                    str(e, "message"));
+}
+
+static void print_summary(uint64_t id, const cJSON *job)
+{
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
+    const cJSON *s = cJSON_GetObjectItemCaseSensitive(job, "stats");
+    char a[32], b[32];
+    printf("%s: job %llu (%s) done on the farm\n", str(job, "name"), (unsigned long long)id,
+           str(job, "method"));
+    printf("  %s%s, %srays, %.0f tasks", gi_si(num(s, "samples", 0), a, sizeof a), str(job, "unit"),
+           gi_si(num(s, "rays", 0), b, sizeof b), num(t, "total", 0));
+    if (num(t, "retries", 0) > 0)
+        printf(", %.0f retried", num(t, "retries", 0));
+    printf("\n");
+}
+
+/* Polls the job until it ends (showing progress), then fetches its outputs. */
+static int wait_job(client *c, uint64_t id, int fetch)
+{
+    gi_progress_mode mode;
+    if (gi_progress_mode_parse(c->progress, &mode))
+        return fail_msg(2, "--progress must be auto, bar, lines, json or none");
+    gi_progress prog;
+    int started = 0;
+    struct sigaction sa, old;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigaction(SIGINT, &sa, &old);
+    int rc;
+    for (;;) {
+        cJSON *job = NULL;
+        if ((rc = get_job(c, id, &job)) != 0)
+            break;
+        const char *state = str(job, "state");
+        const cJSON *work = cJSON_GetObjectItemCaseSensitive(job, "work");
+        const cJSON *stats = cJSON_GetObjectItemCaseSensitive(job, "stats");
+        if (!started && strcmp(state, "checking") != 0) {
+            static char name[256], unit[64];
+            snprintf(name, sizeof name, "%s", str(job, "name"));
+            snprintf(unit, sizeof unit, "%s", str(job, "unit"));
+            gi_progress_init(&prog, mode, stderr, name, unit);
+            started = 1;
+        }
+        int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
+                  strcmp(state, "cancelled") == 0;
+        if (started)
+            gi_progress_update(&prog, num(work, "done", 0), num(work, "total", 1),
+                               num(stats, "rays", 0), end);
+        if (end) {
+            if (started)
+                gi_progress_end(&prog);
+            if (strcmp(state, "done") != 0) {
+                rc = job_failed(id, job);
+            } else {
+                print_summary(id, job);
+                rc = fetch ? fetch_outputs(c, id, job) : 0;
+            }
+            cJSON_Delete(job);
+            break;
+        }
+        cJSON_Delete(job);
+        if (interrupted) {
+            if (started)
+                gi_progress_end(&prog);
+            fprintf(stderr, "gi: interrupted; job %llu goes on on the farm (gi wait %llu)\n",
+                    (unsigned long long)id, (unsigned long long)id);
+            rc = 130;
+            break;
+        }
+        sleep_s(POLL_S);
+    }
+    sigaction(SIGINT, &old, NULL);
+    return rc;
+}
+
+/* ---- submit ------------------------------------------------------------------- */
+
+static int upload_assets(client *c, const gi_job *job)
+{
+    for (size_t i = 0; i < job->manifest.count; i++) {
+        const gi_manifest_entry *e = &job->manifest.entries[i];
+        char path[128];
+        snprintf(path, sizeof path, "/api/v1/assets/%s", e->hash);
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_error err;
+        int st = request(c, "HEAD", path, NULL, 0, NULL, &b, NULL, &err);
+        int rc = st < 0 ? fail_msg(1, "%s", err.msg) : st == 200 || st == 404 ? 0 : http_failure(path, st, &b);
+        if (rc == 0 && st == 404) {
+            const gi_buf *bytes = job->assets ? gi_asset_store_get(job->assets, e->hash) : NULL;
+            if (!bytes)
+                rc = fail_msg(1, "%s: the bytes of %s are not loaded", job->file, e->name);
+            else if ((rc = call(c, "PUT", path, bytes->data, bytes->len, "application/octet-stream",
+                                201, 200, &b, NULL)) == 0)
+                fprintf(stderr, "gi: uploaded %s (%zu bytes)\n", e->name, bytes->len);
+        }
+        gi_buf_free(&b);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
+static int cmd_submit(client *c)
+{
+    gi_error err;
+    gi_job job;
+    /* Checked here first: a bad job never reaches the farm. */
+    if (gi_job_load(c->arg, &job, &err)) {
+        gi_job_free(&job);
+        return fail_msg(gi_error_exit_status(&err), "%s", err.msg);
+    }
+    int rc = upload_assets(c, &job);
+    uint64_t id = 0;
+    if (rc == 0) {
+        const char *base = strrchr(c->arg, '/');
+        gi_buf body, resp;
+        gi_buf_init(&body);
+        gi_buf_init(&resp);
+        gi_farm_submission_build(&body, base ? base + 1 : c->arg, job.text, &job.manifest,
+                                 (uint32_t)c->priority);
+        rc = call(c, "POST", "/api/v1/jobs", body.data, body.len, "application/json", 201, 0, &resp,
+                  NULL);
+        if (rc == 0) {
+            cJSON *doc = cJSON_ParseWithLength((const char *)resp.data, resp.len);
+            id = (uint64_t)num(doc, "id", 0);
+            cJSON_Delete(doc);
+            if (!id)
+                rc = fail_msg(1, "the farm's answer has no job id");
+        }
+        gi_buf_free(&body);
+        gi_buf_free(&resp);
+    }
+    gi_job_free(&job);
+    if (rc)
+        return rc;
+    fprintf(stderr, "gi: submitted %s as job %llu\n", c->arg, (unsigned long long)id);
+    if (c->wait)
+        return wait_job(c, id, 1);
+    /* Wait for the farm's own scene check, so a scene it refuses is an
+     * error here rather than a surprise later. */
+    for (;;) {
+        cJSON *doc = NULL;
+        if ((rc = get_job(c, id, &doc)) != 0)
+            return rc;
+        const char *state = str(doc, "state");
+        if (strcmp(state, "checking") != 0) {
+            if (strcmp(state, "failed") == 0)
+                rc = job_failed(id, doc);
+            cJSON_Delete(doc);
+            break;
+        }
+        cJSON_Delete(doc);
+        sleep_s(0.1);
+    }
+    if (rc == 0)
+        printf("%llu\n", (unsigned long long)id);
+    return rc;
+}
+
+/* ---- the other commands ---------------------------------------------------------- */
+
+static int cmd_status(client *c, uint64_t id)
+{
+    cJSON *job = NULL;
+    int rc = get_job(c, id, &job);
+    if (rc)
+        return rc;
+    if (c->json) {
+        print_json(job);
+        cJSON_Delete(job);
+        return 0;
+    }
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
+    char eta[32];
+    double e = num(job, "eta_seconds", -1);
+    printf("job %llu: %s (%s), %s, priority %.0f\n", (unsigned long long)id, str(job, "name"),
+           str(job, "method"), str(job, "state"), num(job, "priority", 0));
+    printf("  progress %.1f%%%s%s\n", 100.0 * num(job, "progress", 0), e >= 0 ? ", ETA " : "",
+           e >= 0 ? gi_duration(e, eta, sizeof eta) : "");
+    printf("  tasks: %.0f total, %.0f merged, %.0f leased, %.0f pending, %.0f retries",
+           num(t, "total", 0), num(t, "merged", 0), num(t, "leased", 0), num(t, "pending", 0),
+           num(t, "retries", 0));
+    if (num(t, "resumed_merged", 0) > 0)
+        printf(", %.0f merged before a restart", num(t, "resumed_merged", 0));
+    printf("\n");
+    const cJSON *err = cJSON_GetObjectItemCaseSensitive(job, "error");
+    if (cJSON_IsObject(err))
+        printf("  error: %s\n", str(err, "message"));
+    const cJSON *te = cJSON_GetObjectItemCaseSensitive(job, "task_errors");
+    int n = cJSON_GetArraySize(te);
+    if (n > 0)
+        printf("  task errors (last %d):\n", n > 5 ? 5 : n);
+    for (int i = n > 5 ? n - 5 : 0; i < n; i++) {
+        const cJSON *x = cJSON_GetArrayItem(te, i);
+        printf("    task %.0f attempt %.0f on %s: %s\n", num(x, "task", 0), num(x, "attempt", 0),
+               str(x, "worker"), str(x, "message"));
+    }
+    const cJSON *log = cJSON_GetObjectItemCaseSensitive(job, "log");
+    n = cJSON_GetArraySize(log);
+    if (n > 0)
+        printf("  log (last %d):\n", n > 8 ? 8 : n);
+    for (int i = n > 8 ? n - 8 : 0; i < n; i++) {
+        const cJSON *x = cJSON_GetArrayItem(log, i);
+        printf("    %s\n", cJSON_IsString(x) ? x->valuestring : "");
+    }
+    cJSON_Delete(job);
+    return 0;
+}
+
+static int cmd_jobs(client *c)
+{
+    cJSON *doc = NULL;
+    int rc = get_json(c, "/api/v1/jobs", &doc);
+    if (rc)
+        return rc;
+    if (c->json)
+        return print_json(doc), cJSON_Delete(doc), 0;
+    printf("%-6s %-10s %5s %8s %9s %-12s %s\n", "ID", "STATE", "PRIO", "PROGRESS", "ETA", "METHOD",
+           "NAME");
+    const cJSON *jobs = cJSON_GetObjectItemCaseSensitive(doc, "jobs");
+    for (const cJSON *j = jobs ? jobs->child : NULL; j; j = j->next) {
+        char eta[32] = "";
+        double e = num(j, "eta_seconds", -1);
+        if (e >= 0)
+            gi_duration(e, eta, sizeof eta);
+        printf("%-6.0f %-10s %5.0f %7.1f%% %9s %-12s %s\n", num(j, "id", 0), str(j, "state"),
+               num(j, "priority", 0), 100.0 * num(j, "progress", 0), eta, str(j, "method"),
+               str(j, "name"));
+    }
+    cJSON_Delete(doc);
+    return 0;
+}
+
+static int cmd_workers(client *c)
+{
+    cJSON *doc = NULL;
+    int rc = get_json(c, "/api/v1/workers", &doc);
+    if (rc)
+        return rc;
+    if (c->json)
+        return print_json(doc), cJSON_Delete(doc), 0;
+    printf("%-20s %-22s %-12s %5s %5s %7s %6s %7s %6s %s\n", "NAME", "ADDRESS", "STATE", "PROCS",
+           "CORES", "MEMORY", "LEASED", "DONE", "FAILED", "VERSION");
+    const cJSON *ws = cJSON_GetObjectItemCaseSensitive(doc, "workers");
+    for (const cJSON *w = ws ? ws->child : NULL; w; w = w->next)
+        printf("%-20s %-22s %-12s %5.0f %5.0f %5.1fG %6.0f %7.0f %6.0f %s\n", str(w, "name"),
+               str(w, "address"), str(w, "state"), num(w, "processes", 0), num(w, "cores", 0),
+               num(w, "memory_bytes", 0) / (1 << 30), num(w, "tasks_leased", 0),
+               num(w, "tasks_done", 0), num(w, "tasks_failed", 0), str(w, "version"));
+    cJSON_Delete(doc);
+    return 0;
+}
+
+static int cmd_cancel(client *c, uint64_t id)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = call(c, "DELETE", path, NULL, 0, NULL, 200, 0, &b, NULL);
+    if (rc == 0 && b.len && memmem(b.data, b.len, "\"purged\":true", 13))
+        printf("job %llu removed (it had ended; its outputs are deleted)\n", (unsigned long long)id);
+    else if (rc == 0)
+        printf("job %llu cancelled\n", (unsigned long long)id);
+    gi_buf_free(&b);
+    return rc;
+}
+
+static int cmd_fetch(client *c, uint64_t id)
+{
+    cJSON *job = NULL;
+    int rc = get_job(c, id, &job);
+    if (rc)
+        return rc;
+    if (strcmp(str(job, "state"), "done") != 0)
+        rc = fail_msg(1, "job %llu is %s, not done", (unsigned long long)id, str(job, "state"));
+    else
+        rc = fetch_outputs(c, id, job);
+    cJSON_Delete(job);
+    return rc;
+}
+
+int gi_client_main(int argc, char **argv)
+{
+    const char *cmd = argv[1];
+    client c;
+    memset(&c, 0, sizeof c);
+    c.out_dir = "out";
+    c.progress = "auto";
+    c.priority = GI_FARM_PRIORITY_DEFAULT;
+    const char *farm = getenv("GI_FARM"), *token_file = NULL, *prio = NULL;
+    if (!farm || !farm[0])
+        farm = "http://127.0.0.1:7070";
+    for (int i = 2; i < argc; i++) {
+        const char *v;
+        int rc;
+        const char *names[] = {"--farm", "--token-file", "--out", "--progress", "--priority"};
+        const char **dst[] = {&farm, &token_file, &c.out_dir, &c.progress, &prio};
+        size_t k;
+        for (k = 0, rc = 0; k < GI_ARRAY_LEN(names); k++)
+            if ((rc = gi_args_take(argc, argv, &i, names[k], &v)) != 0)
+                break;
+        if (rc < 0)
+            return fail_msg(2, "%s needs a value", names[k]);
+        if (rc > 0) {
+            *dst[k] = v;
+            continue;
+        }
+        if (strcmp(argv[i], "--json") == 0)
+            c.json = 1;
+        else if (strcmp(argv[i], "--wait") == 0 && strcmp(cmd, "submit") == 0)
+            c.wait = 1;
+        else if (strncmp(argv[i], "--token", 7) == 0)
+            return fail_msg(2, "tokens are not taken from the command line (other users can read "
+                               "it): use --token-file or GI_FARM_TOKEN");
+        else if (argv[i][0] == '-' && argv[i][1])
+            return fail_msg(2, "%s: unknown option %s", cmd, argv[i]);
+        else if (c.arg)
+            return fail_msg(2, "%s: more than one operand (%s, %s)", cmd, c.arg, argv[i]);
+        else
+            c.arg = argv[i];
+    }
+    if (prio && gi_args_int(prio, 1, GI_FARM_PRIORITY_MAX, &c.priority))
+        return fail_msg(2, "--priority must be an integer in [1, %d]", GI_FARM_PRIORITY_MAX);
+    int needs_arg = strcmp(cmd, "jobs") != 0 && strcmp(cmd, "workers") != 0;
+    if (needs_arg != (c.arg != NULL))
+        return fail_msg(2, "%s: %s", cmd, needs_arg ? "missing operand" : "takes no operand");
+    uint64_t id = 0;
+    if (needs_arg && strcmp(cmd, "submit") != 0 && parse_id(c.arg, &id))
+        return fail_msg(2, "%s: \"%s\" is not a job id", cmd, c.arg);
+    gi_error err;
+    if (gi_http_url_parse(farm, &c.url, &err))
+        return fail_msg(2, "%s", err.msg);
+    gi_buf tok;
+    gi_buf_init(&tok);
+    if (gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token", &tok, &err)) {
+        gi_http_url_free(&c.url);
+        return fail_msg(2, "%s", err.msg);
+    }
+    memcpy(c.token, tok.data, tok.len);
+    c.token[tok.len] = '\0';
+    gi_secret_free(&tok);
+    int rc;
+    if (strcmp(cmd, "submit") == 0)
+        rc = cmd_submit(&c);
+    else if (strcmp(cmd, "status") == 0)
+        rc = cmd_status(&c, id);
+    else if (strcmp(cmd, "wait") == 0)
+        rc = wait_job(&c, id, 1);
+    else if (strcmp(cmd, "cancel") == 0)
+        rc = cmd_cancel(&c, id);
+    else if (strcmp(cmd, "jobs") == 0)
+        rc = cmd_jobs(&c);
+    else if (strcmp(cmd, "workers") == 0)
+        rc = cmd_workers(&c);
+    else
+        rc = cmd_fetch(&c, id);
+    gi_http_url_free(&c.url);
+    memset(c.token, 0, sizeof c.token);
+    return rc;
+}

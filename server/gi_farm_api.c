@@ -1,0 +1,569 @@
+/* gi_farm_api: the HTTP/JSON API (docs/farm.md, "API") on libmicrohttpd.
+ *
+ * Threading: MHD runs without threads of its own (MHD_USE_EPOLL, no internal
+ * polling thread). Its epoll descriptor is one more entry in the
+ * coordinator's poll set and MHD_run is called from the loop, so handlers
+ * run on the loop's thread and read and change the coordinator's state
+ * directly. Handlers never block: request bodies arrive in pieces (assets
+ * stream to a temporary file while being hashed), outputs are sent from
+ * their file descriptor by MHD.
+ *
+ * Every endpoint but the static dashboard page needs
+ * "Authorization: Bearer <token>"; the comparison hashes both sides and
+ * compares the digests in constant time. Refusals (no token, wrong token,
+ * bodies over their limit, invalid jobs) are logged with the peer and the
+ * reason, never with the token. */
+#include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <microhttpd.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "gi_farm_impl.h"
+#include "gi_farm_submit.h"
+#include "gi_log.h"
+#include "gi_net.h"
+
+typedef enum {
+    R_NONE,
+    R_DASHBOARD,
+    R_METRICS,
+    R_JOBS_LIST,
+    R_JOBS_SUBMIT,
+    R_JOB_GET,
+    R_JOB_DELETE,
+    R_JOB_OUTPUT,
+    R_ASSET_PUT,
+    R_ASSET_HEAD,
+    R_WORKERS
+} route_id;
+
+typedef struct api_req {
+    route_id route;
+    int responded;     /* a response is queued: ignore the rest of the body */
+    int status;        /* for a body-phase failure */
+    char err[1100];
+    char peer[80];
+    uint64_t job_id;
+    char name[256];    /* output name or asset hash */
+    gi_buf body;
+    gi_farm_upload *up;
+    uint64_t received, limit;
+} api_req;
+
+/* ---- helpers ------------------------------------------------------------- */
+
+/* A request target for logs: printable ASCII only, cut short. */
+static void log_safe(const char *in, char *out, size_t n)
+{
+    size_t k = 0;
+    for (; *in && k + 5 < n; in++)
+        if (isprint((unsigned char)*in))
+            out[k++] = *in;
+        else
+            k += (size_t)snprintf(out + k, n - k, "\\x%02x", (unsigned char)*in);
+    out[k] = '\0';
+}
+
+/* body is malloc'ed (freed by MHD) unless persistent. */
+static enum MHD_Result send_body(struct MHD_Connection *conn, unsigned status, char *body,
+                                 size_t len, const char *type, int persistent)
+{
+    struct MHD_Response *r = MHD_create_response_from_buffer(
+        len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
+    if (!r) {
+        if (!persistent)
+            free(body);
+        return MHD_NO;
+    }
+    MHD_add_response_header(r, "Content-Type", type);
+    MHD_add_response_header(r, "Cache-Control", "no-store");
+    if (status == MHD_HTTP_UNAUTHORIZED)
+        MHD_add_response_header(r, "WWW-Authenticate", "Bearer realm=\"gi-farm\"");
+    enum MHD_Result rc = MHD_queue_response(conn, status, r);
+    MHD_destroy_response(r);
+    return rc;
+}
+
+static enum MHD_Result send_response(struct MHD_Connection *conn, unsigned status, char *body,
+                                     size_t len, const char *type)
+{
+    return send_body(conn, status, body, len, type, body == NULL);
+}
+
+static enum MHD_Result send_json(struct MHD_Connection *conn, unsigned status, char *json)
+{
+    size_t n = strlen(json);
+    /* Newline-terminated: nicer with curl. */
+    json = gi_xrealloc(json, n + 2);
+    json[n] = '\n';
+    json[n + 1] = '\0';
+    return send_response(conn, status, json, n + 1, "application/json");
+}
+
+static char *json_error(const char *msg)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "error", msg);
+    char *s = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    return s;
+}
+
+/* Answers an error, logging it as a refusal for 4xx statuses. */
+static enum MHD_Result refuse(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                              const char *method, const char *url, unsigned status,
+                              const char *fmt, ...) __attribute__((format(printf, 7, 8)));
+
+static enum MHD_Result refuse(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                              const char *method, const char *url, unsigned status,
+                              const char *fmt, ...)
+{
+    char msg[1200];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    char u[300];
+    log_safe(url, u, sizeof u);
+    if (status == MHD_HTTP_UNAUTHORIZED)
+        f->m.api_refused_auth++;
+    else if (status >= 400 && status < 500 && status != MHD_HTTP_NOT_FOUND)
+        f->m.api_refused_input++;
+    if (status != MHD_HTTP_NOT_FOUND)
+        gi_warn("api: refused %s %s from %s: %s", method, u, r->peer, msg);
+    r->responded = 1;
+    return send_json(conn, status, json_error(msg));
+}
+
+static int authorized(gi_farm *f, struct MHD_Connection *conn, const char **why)
+{
+    const char *h = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION);
+    if (!h) {
+        *why = "missing bearer token (send \"Authorization: Bearer <token>\")";
+        return 0;
+    }
+    if (strncasecmp(h, "Bearer ", 7) != 0) {
+        *why = "the Authorization header is not a bearer token";
+        return 0;
+    }
+    const char *t = h + 7;
+    while (*t == ' ')
+        t++;
+    if (!gi_token_equal(&f->cfg.token, t, strlen(t))) {
+        *why = "wrong bearer token";
+        return 0;
+    }
+    return 1;
+}
+
+/* Parses a decimal job id (no sign, no leading zeros beyond "0"). */
+static int parse_id(const char *s, size_t n, uint64_t *out)
+{
+    if (n == 0 || n > 19 || (n > 1 && s[0] == '0'))
+        return -1;
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9')
+            return -1;
+        v = v * 10 + (uint64_t)(s[i] - '0');
+    }
+    *out = v;
+    return 0;
+}
+
+/* Maps method + path to a route; 0 = found, 404 / 405 otherwise. */
+static unsigned route(const char *method, const char *url, api_req *r)
+{
+    int get = strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0;
+    const char *p;
+    if (strcmp(url, "/") == 0)
+        return get ? (r->route = R_DASHBOARD, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+    if (strcmp(url, "/metrics") == 0)
+        return get ? (r->route = R_METRICS, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+    if (strcmp(url, "/api/v1/workers") == 0)
+        return get ? (r->route = R_WORKERS, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+    if (strcmp(url, "/api/v1/jobs") == 0) {
+        if (get)
+            r->route = R_JOBS_LIST;
+        else if (strcmp(method, "POST") == 0)
+            r->route = R_JOBS_SUBMIT;
+        else
+            return MHD_HTTP_METHOD_NOT_ALLOWED;
+        return 0;
+    }
+    if (strncmp(url, "/api/v1/assets/", 15) == 0) {
+        p = url + 15;
+        if (strlen(p) >= sizeof r->name)
+            return MHD_HTTP_NOT_FOUND;
+        snprintf(r->name, sizeof r->name, "%s", p);
+        if (strcmp(method, "PUT") == 0)
+            r->route = R_ASSET_PUT;
+        else if (strcmp(method, "HEAD") == 0)
+            r->route = R_ASSET_HEAD;
+        else
+            return MHD_HTTP_METHOD_NOT_ALLOWED;
+        return 0;
+    }
+    if (strncmp(url, "/api/v1/jobs/", 13) == 0) {
+        p = url + 13;
+        const char *slash = strchr(p, '/');
+        size_t n = slash ? (size_t)(slash - p) : strlen(p);
+        if (parse_id(p, n, &r->job_id))
+            return MHD_HTTP_NOT_FOUND;
+        if (!slash) {
+            if (get)
+                r->route = R_JOB_GET;
+            else if (strcmp(method, "DELETE") == 0)
+                r->route = R_JOB_DELETE;
+            else
+                return MHD_HTTP_METHOD_NOT_ALLOWED;
+            return 0;
+        }
+        if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/') &&
+            strlen(slash + 9) < sizeof r->name) {
+            snprintf(r->name, sizeof r->name, "%s", slash + 9);
+            return get ? (r->route = R_JOB_OUTPUT, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+        }
+    }
+    return MHD_HTTP_NOT_FOUND;
+}
+
+/* ---- endpoints ------------------------------------------------------------- */
+
+static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                                 const char *method, const char *url)
+{
+    gi_farm_submission s;
+    gi_error err;
+    if (gi_farm_submission_parse((const char *)r->body.data, r->body.len, &s, &err))
+        return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST, "%s", err.msg);
+    gi_farm_job *j = gi_farm_job_submit(f, s.file, s.text, &s.manifest, s.priority, &err);
+    if (!j) {
+        gi_farm_submission_free(&s);
+        return refuse(f, conn, r, method, url,
+                      err.code == GI_EINVAL   ? MHD_HTTP_BAD_REQUEST
+                      : err.code == GI_ENOMEM ? MHD_HTTP_SERVICE_UNAVAILABLE
+                                              : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                      "%s", err.msg);
+    }
+    s.text = NULL; /* the job owns it */
+    gi_farm_submission_free(&s);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", (double)j->id);
+    cJSON_AddStringToObject(o, "state", gi_fj_state_name(j->state));
+    char *json = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    return send_json(conn, MHD_HTTP_CREATED, json);
+}
+
+static const char *content_type(const char *name)
+{
+    const char *dot = strrchr(name, '.');
+    if (dot && strcmp(dot, ".png") == 0)
+        return "image/png";
+    if (dot && strcmp(dot, ".exr") == 0)
+        return "image/x-exr";
+    if (dot && strcmp(dot, ".json") == 0)
+        return "application/json";
+    return "application/octet-stream";
+}
+
+static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                                 gi_farm_job *j, const char *method, const char *url)
+{
+    if (j->state != GI_FJ_DONE)
+        return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT, "job %llu is %s, not done",
+                      (unsigned long long)j->id, gi_fj_state_name(j->state));
+    char *path = gi_farm_job_output_path(j, r->name);
+    if (!path)
+        return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "job %llu has no output \"%s\"",
+                      (unsigned long long)j->id, r->name);
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    free(path);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0) {
+        if (fd >= 0)
+            close(fd);
+        return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND,
+                      "output \"%s\" of job %llu was not written", r->name,
+                      (unsigned long long)j->id);
+    }
+    struct MHD_Response *resp = MHD_create_response_from_fd64((uint64_t)st.st_size, fd);
+    if (!resp) {
+        close(fd);
+        return MHD_NO;
+    }
+    MHD_add_response_header(resp, "Content-Type", content_type(r->name));
+    char disp[300];
+    snprintf(disp, sizeof disp, "attachment; filename=\"%s\"", r->name);
+    MHD_add_response_header(resp, "Content-Disposition", disp);
+    enum MHD_Result rc = MHD_queue_response(conn, MHD_HTTP_OK, resp);
+    MHD_destroy_response(resp);
+    return rc;
+}
+
+static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                                const char *method, const char *url)
+{
+    gi_farm_job *j = NULL;
+    if (r->route == R_JOB_GET || r->route == R_JOB_DELETE || r->route == R_JOB_OUTPUT) {
+        j = gi_farm_job_find(f, r->job_id);
+        if (!j)
+            return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no job %llu",
+                          (unsigned long long)r->job_id);
+    }
+    gi_error err;
+    switch (r->route) {
+    case R_DASHBOARD:
+        return send_body(conn, MHD_HTTP_OK, (char *)gi_farm_dashboard_html,
+                         strlen(gi_farm_dashboard_html), "text/html; charset=utf-8", 1);
+    case R_METRICS: {
+        char *m = gi_farm_view_metrics(f);
+        return send_response(conn, MHD_HTTP_OK, m, strlen(m), "text/plain; version=0.0.4");
+    }
+    case R_JOBS_LIST:
+        return send_json(conn, MHD_HTTP_OK, gi_farm_view_jobs(f));
+    case R_WORKERS:
+        return send_json(conn, MHD_HTTP_OK, gi_farm_view_workers(f));
+    case R_JOB_GET:
+        return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
+    case R_JOB_DELETE:
+        if (gi_farm_job_cancel(f, j, "requested through the API") == 0)
+            return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
+        {
+            uint64_t id = j->id;
+            if (gi_farm_job_purge(f, j, &err))
+                return refuse(f, conn, r, method, url, MHD_HTTP_INTERNAL_SERVER_ERROR, "%s", err.msg);
+            char body[64];
+            snprintf(body, sizeof body, "{\"id\":%llu,\"purged\":true}", (unsigned long long)id);
+            return send_json(conn, MHD_HTTP_OK, gi_xstrdup(body));
+        }
+    case R_JOB_OUTPUT:
+        return do_output(f, conn, r, j, method, url);
+    case R_ASSET_HEAD: {
+        uint64_t size;
+        int have = gi_farm_store_has(f, r->name, &size);
+        return send_response(conn, have ? MHD_HTTP_OK : MHD_HTTP_NOT_FOUND, NULL, 0,
+                             "application/octet-stream");
+    }
+    case R_ASSET_PUT: {
+        gi_farm_upload *u = r->up;
+        r->up = NULL;
+        uint64_t bytes = r->received;
+        if (f->store_bytes + bytes > f->cfg.max_store_bytes) {
+            gi_farm_upload_abort(u);
+            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
+                          "the asset store is full (%llu bytes, limit %llu)",
+                          (unsigned long long)f->store_bytes,
+                          (unsigned long long)f->cfg.max_store_bytes);
+        }
+        if (gi_farm_upload_finish(f, u, &err))
+            return refuse(f, conn, r, method, url,
+                          err.code == GI_EINVAL ? MHD_HTTP_BAD_REQUEST : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                          "%s", err.msg);
+        char body[400];
+        snprintf(body, sizeof body, "{\"hash\":\"%s\",\"bytes\":%llu}", r->name,
+                 (unsigned long long)bytes);
+        return send_json(conn, MHD_HTTP_CREATED, gi_xstrdup(body));
+    }
+    case R_JOBS_SUBMIT:
+        return do_submit(f, conn, r, method, url);
+    case R_NONE:
+        break;
+    }
+    return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no such endpoint");
+}
+
+/* First call of a request: route, authenticate, prepare for its body. */
+static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r,
+                             const char *method, const char *url)
+{
+    unsigned status = route(method, url, r);
+    /* Authentication first, so that without the token every path looks
+     * the same (no probing for endpoints or job ids). */
+    const char *why;
+    if (r->route != R_DASHBOARD && !authorized(f, conn, &why))
+        return refuse(f, conn, r, method, url, MHD_HTTP_UNAUTHORIZED, "%s", why);
+    if (status == MHD_HTTP_NOT_FOUND)
+        return refuse(f, conn, r, method, url, status, "no such endpoint: %s %s", method, url);
+    if (status == MHD_HTTP_METHOD_NOT_ALLOWED)
+        return refuse(f, conn, r, method, url, status, "%s is not allowed on %s", method, url);
+    if (r->route == R_JOBS_SUBMIT)
+        r->limit = GI_FARM_SUBMIT_MAX_BYTES;
+    else if (r->route == R_ASSET_PUT)
+        r->limit = f->cfg.max_asset_bytes;
+    else
+        r->limit = 0;
+    const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Content-Length");
+    if (cl) {
+        unsigned long long n = strtoull(cl, NULL, 10);
+        if (n > r->limit)
+            return refuse(f, conn, r, method, url, MHD_HTTP_CONTENT_TOO_LARGE,
+                          "request body of %llu bytes is over the limit of %llu", n,
+                          (unsigned long long)r->limit);
+        if (r->route == R_ASSET_PUT && f->store_bytes + n > f->cfg.max_store_bytes)
+            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
+                          "the asset store is full (%llu bytes, limit %llu)",
+                          (unsigned long long)f->store_bytes,
+                          (unsigned long long)f->cfg.max_store_bytes);
+    }
+    if (r->route == R_ASSET_PUT) {
+        gi_error err;
+        r->up = gi_farm_upload_begin(f, r->name, &err);
+        if (!r->up)
+            return refuse(f, conn, r, method, url,
+                          err.code == GI_EINVAL ? MHD_HTTP_BAD_REQUEST : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                          "%s", err.msg);
+    }
+    return MHD_YES;
+}
+
+/* A piece of a request body. */
+static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
+{
+    if (r->status)
+        return; /* already failed: the rest is discarded */
+    r->received += n;
+    if (r->received > r->limit) {
+        r->status = MHD_HTTP_CONTENT_TOO_LARGE;
+        snprintf(r->err, sizeof r->err, "request body is over the limit of %llu bytes",
+                 (unsigned long long)r->limit);
+        return;
+    }
+    if (r->up) {
+        gi_error err;
+        if (gi_farm_upload_write(r->up, data, n, &err)) {
+            r->status = MHD_HTTP_INTERNAL_SERVER_ERROR;
+            snprintf(r->err, sizeof r->err, "%s", err.msg);
+        }
+    } else if (r->route == R_JOBS_SUBMIT) {
+        gi_buf_put(&r->body, data, n);
+    } else {
+        r->status = MHD_HTTP_BAD_REQUEST;
+        snprintf(r->err, sizeof r->err, "this endpoint takes no request body");
+    }
+    (void)f;
+}
+
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
+                                  const char *method, const char *version,
+                                  const char *upload_data, size_t *upload_data_size,
+                                  void **con_cls)
+{
+    gi_farm *f = cls;
+    api_req *r = *con_cls;
+    if (!r) {
+        r = gi_xcalloc(1, sizeof *r);
+        gi_buf_init(&r->body);
+        *con_cls = r;
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+        if (ci && ci->client_addr)
+            gi_net_sockaddr_name(ci->client_addr, r->peer, sizeof r->peer);
+        else
+            snprintf(r->peer, sizeof r->peer, "?");
+        f->m.api_requests++;
+        return begin(f, conn, r, method, url);
+    }
+    if (r->responded) {
+        *upload_data_size = 0; /* discarded */
+        return MHD_YES;
+    }
+    if (*upload_data_size) {
+        body_piece(f, r, upload_data, *upload_data_size);
+        *upload_data_size = 0;
+        if (r->status == MHD_HTTP_CONTENT_TOO_LARGE) {
+            /* Answer now: MHD closes the connection instead of reading on. */
+            gi_farm_upload_abort(r->up);
+            r->up = NULL;
+            return refuse(f, conn, r, method, url, (unsigned)r->status, "%s", r->err);
+        }
+        return MHD_YES;
+    }
+    if (r->status) {
+        gi_farm_upload_abort(r->up);
+        r->up = NULL;
+        return refuse(f, conn, r, method, url, (unsigned)r->status, "%s", r->err);
+    }
+    r->responded = 1;
+    (void)version;
+    return dispatch(f, conn, r, method, url);
+}
+
+static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
+                         enum MHD_RequestTerminationCode toe)
+{
+    api_req *r = *con_cls;
+    if (!r)
+        return;
+    gi_farm_upload_abort(r->up); /* a client that went away mid-upload */
+    gi_buf_free(&r->body);
+    free(r);
+    *con_cls = NULL;
+    (void)cls;
+    (void)conn;
+    (void)toe;
+}
+
+static void on_mhd_log(void *cls, const char *fmt, va_list ap)
+{
+    char msg[600];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    msg[strcspn(msg, "\n")] = '\0';
+    gi_info("api: %s", msg);
+    (void)cls;
+}
+
+int gi_farm_api_start(gi_farm *f, gi_error *err)
+{
+    f->api_fd = gi_net_listen(f->cfg.listen_api, f->api_addr, sizeof f->api_addr, err);
+    if (f->api_fd < 0)
+        return -1;
+    f->mhd = MHD_start_daemon(
+        MHD_USE_EPOLL | MHD_USE_ERROR_LOG, 0, NULL, NULL, on_request, f,
+        MHD_OPTION_EXTERNAL_LOGGER, on_mhd_log, f, MHD_OPTION_LISTEN_SOCKET, f->api_fd,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, f, MHD_OPTION_CONNECTION_LIMIT, 256u,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, 64u, MHD_OPTION_CONNECTION_TIMEOUT, 60u,
+        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(256u << 10), MHD_OPTION_END);
+    if (!f->mhd) {
+        close(f->api_fd);
+        f->api_fd = -1;
+        return gi_fail(err, GI_EIO, "cannot start the HTTP API on %s", f->cfg.listen_api);
+    }
+    return 0;
+}
+
+int gi_farm_api_fd(gi_farm *f)
+{
+    const union MHD_DaemonInfo *info = MHD_get_daemon_info(f->mhd, MHD_DAEMON_INFO_EPOLL_FD);
+    return info ? info->epoll_fd : -1;
+}
+
+int gi_farm_api_timeout_ms(gi_farm *f)
+{
+    MHD_UNSIGNED_LONG_LONG t;
+    if (MHD_get_timeout(f->mhd, &t) != MHD_YES)
+        return -1;
+    return t > 1000 ? 1000 : (int)t;
+}
+
+void gi_farm_api_run(gi_farm *f)
+{
+    MHD_run(f->mhd);
+}
+
+void gi_farm_api_stop(gi_farm *f)
+{
+    if (f->mhd)
+        MHD_stop_daemon(f->mhd);
+    f->mhd = NULL;
+    if (f->api_fd >= 0)
+        close(f->api_fd);
+    f->api_fd = -1;
+}

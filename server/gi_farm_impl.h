@@ -1,0 +1,305 @@
+/* gi_farm_impl: the coordinator's structures, shared by its subsystems
+ * (one file each, like a Redis server.h):
+ *   gi_farm.c        the context and the poll loop, timers, signals
+ *   gi_farm_conn.c   worker connections: accept, handshake, frames in/out
+ *   gi_farm_sched.c  leases, results, failures, fair sharing, blocklisting
+ *   gi_farm_jobs.c   job records: submit, check, run, checkpoint, end, replay
+ *   gi_farm_check.c  the forked scene checker
+ *   gi_farm_store.c  the content-addressed asset store on disk
+ *   gi_farm_api.c    the HTTP API (libmicrohttpd), gi_farm_views.c its JSON
+ * Everything runs on the loop's thread. */
+#ifndef GI_FARM_IMPL_H
+#define GI_FARM_IMPL_H
+
+#include <stdint.h>
+#include <sys/types.h>
+
+#include "gi_auth.h"
+#include "gi_farm.h"
+#include "gi_frame.h"
+#include "gi_job.h"
+#include "gi_jobrun.h"
+#include "gi_journal.h"
+#include "gi_msg_ctrl.h"
+#include "gi_netio.h"
+
+struct MHD_Daemon;
+
+/* ---- jobs -------------------------------------------------------------- */
+
+typedef enum {
+    GI_FJ_CHECKING, /* waiting for (or in) the scene checker */
+    GI_FJ_RUNNING,  /* its gi_jobrun is live */
+    GI_FJ_DONE,
+    GI_FJ_FAILED,
+    GI_FJ_CANCELLED
+} gi_fj_state;
+
+const char *gi_fj_state_name(gi_fj_state s);
+
+#define GI_FJ_LOG_KEEP 64    /* log lines kept in memory per job */
+#define GI_FJ_ERRORS_KEEP 32 /* task errors kept per job */
+
+typedef struct gi_fj_task_error {
+    double when;
+    uint64_t task_id;
+    uint32_t attempt;
+    char worker[GI_MSG_MAX_NAME + 1];
+    char message[512];
+} gi_fj_task_error;
+
+typedef struct gi_farm_job {
+    uint64_t id;
+    gi_fj_state state;
+    uint32_t priority;
+    double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
+    char *file, *text;
+    gi_manifest manifest;
+    char *name, *method; /* from parsing the text, for listings */
+    char **outputs;      /* output file names */
+    int output_count;
+    char *dir; /* <state>/jobs/<id> */
+    gi_error error; /* why it failed */
+
+    /* Checker. */
+    pid_t check_pid;
+    int check_fd;
+    double check_deadline; /* monotonic */
+    gi_buf check_msg;
+
+    /* Running. */
+    int loaded;
+    gi_job job;
+    gi_jobrun jr;
+    double pass;        /* stride scheduling: worker-seconds / priority */
+    double est_task_s;  /* mean worker-seconds of its tasks so far */
+    uint64_t est_n;
+    double run_t0;          /* monotonic start of this process's run */
+    double cost_done_t0;    /* cost already done at run_t0 */
+    uint64_t resumed_merged; /* tasks merged before a restart (from a checkpoint) */
+    uint64_t results_accepted, results_late, leases, lease_expiries;
+    double merge_s, finish_s; /* coordinator time in method merge / finish */
+    uint64_t result_bytes;    /* result data accepted */
+    uint64_t merged_bytes;    /* result data merged (in task order) */
+    /* Task counts and statistics as they stood when the run ended. */
+    uint64_t final_tasks, final_merged, final_retries;
+    gi_task_stats final_stats;
+    uint64_t ckpt_seq, ckpt_merged;
+    double ckpt_done_cost;
+    double ckpt_last; /* monotonic */
+
+    char *log[GI_FJ_LOG_KEEP];
+    int log_start, log_count;
+    gi_fj_task_error errors[GI_FJ_ERRORS_KEEP];
+    int err_start, err_count;
+} gi_farm_job;
+
+/* ---- workers ----------------------------------------------------------- */
+
+typedef enum {
+    GI_FC_HELLO,    /* waiting for HELLO */
+    GI_FC_AUTH,     /* CHALLENGE sent, waiting for AUTH */
+    GI_FC_ACTIVE,   /* authenticated, takes tasks */
+    GI_FC_DRAINING, /* finishing its tasks, takes no more */
+    GI_FC_CLOSING   /* flushing its last frames, then closed */
+} gi_fc_state;
+
+typedef struct gi_farm_lease {
+    uint64_t job_id, task_id;
+    uint32_t attempt;
+    double deadline; /* monotonic */
+    double est_s;    /* worker-seconds charged to the job's pass when leased */
+} gi_farm_lease;
+
+/* A worker by name: what outlives its connections (blocklisting). */
+typedef struct gi_farm_host {
+    char name[GI_MSG_MAX_NAME + 1];
+    uint32_t consecutive_failures;
+    uint64_t failures, successes;
+    double blocked_until; /* monotonic; 0 = not blocklisted */
+    char last_error[512];
+} gi_farm_host;
+
+typedef struct gi_farm_conn {
+    uint64_t id; /* worker id once authenticated, else a connection number */
+    int fd;
+    char peer[80];
+    gi_fc_state state;
+    gi_frame_decoder dec;
+    double connected, last_heard; /* monotonic */
+    double next_heartbeat;
+    gi_msg_hello hello;
+    int have_hello;
+    gi_buf hello_raw;
+    uint8_t nonce[GI_MSG_NONCE_BYTES];
+    gi_farm_host *host;
+    gi_outq out; /* frames not yet written */
+    /* Leases held. */
+    gi_farm_lease *leases;
+    size_t lease_count, lease_cap;
+    /* Jobs whose JOB frame this connection has had. */
+    uint64_t *jobs_sent;
+    size_t jobs_sent_count, jobs_sent_cap;
+    /* ASSET_NEEDs waiting for room in the output queue (answered in order). */
+    char (*asset_q)[GI_HASH_HEX];
+    size_t asset_q_head, asset_q_count, asset_q_cap;
+    uint64_t tasks_done, tasks_failed, result_bytes;
+    char close_reason[256];
+} gi_farm_conn;
+
+/* ---- counters (GET /metrics) ------------------------------------------- */
+
+typedef struct gi_farm_metrics {
+    uint64_t jobs_submitted, jobs_done, jobs_failed, jobs_cancelled;
+    uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
+    uint64_t requeued;
+    uint64_t result_bytes, merged_bytes;
+    double merge_s, finish_s;
+    uint64_t checkpoints, checkpoint_bytes;
+    uint64_t workers_accepted, workers_refused, frames_refused;
+    uint64_t api_requests, api_refused_auth, api_refused_input;
+    uint64_t assets_uploaded, asset_bytes_uploaded, assets_served;
+} gi_farm_metrics;
+
+/* ---- the context ------------------------------------------------------- */
+
+struct gi_farm {
+    gi_farm_config cfg;
+    uint8_t key[GI_AUTH_KEY_BYTES];
+    volatile int stop;
+    int lock_fd;
+    char *assets_dir, *jobs_dir;
+    gi_journal journal;
+    double started; /* monotonic */
+    double started_wall;
+
+    gi_farm_job **jobs; /* by submission order */
+    size_t job_count, job_cap;
+    uint64_t next_job_id;
+    uint64_t store_bytes; /* bytes in the asset store */
+
+    int worker_fd;
+    char worker_addr[80];
+    gi_farm_conn **conns;
+    size_t conn_count, conn_cap;
+    uint64_t next_conn_id;
+    gi_farm_host **hosts;
+    size_t host_count, host_cap;
+
+    int api_fd;
+    char api_addr[80];
+    struct MHD_Daemon *mhd;
+
+    gi_farm_metrics m;
+};
+
+double gi_farm_wallnow(void); /* epoch seconds (monotonic time is gi_now) */
+
+/* gi_farm_jobs.c */
+int gi_farm_jobs_replay(gi_farm *f, gi_error *err);
+/* A validated submission: takes over text (malloc'ed) and manifest. Returns
+ * the new job, or NULL with err (GI_EINVAL: bad job; GI_ENOMEM: full). */
+gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
+                                gi_manifest *manifest, uint32_t priority, gi_error *err);
+gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
+int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why);
+int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err);
+/* Called after merges: ends the job if its run is done (outputs written or failed). */
+void gi_farm_job_settle(gi_farm *f, gi_farm_job *j);
+void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why);
+void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
+                            const char *worker, const char *msg);
+/* Timers: checker deadlines and periodic checkpoints. */
+void gi_farm_jobs_tick(gi_farm *f);
+/* Checkpoints every running job now (shutdown). */
+void gi_farm_jobs_checkpoint_all(gi_farm *f);
+void gi_farm_jobs_free(gi_farm *f);
+/* Output file path of a finished job, or NULL if the job has no such output. */
+char *gi_farm_job_output_path(const gi_farm_job *j, const char *name);
+/* Progress in [0, 1], and an ETA in seconds (< 0 when unknown). */
+double gi_farm_job_progress(const gi_farm_job *j);
+double gi_farm_job_eta(const gi_farm_job *j);
+
+/* The checker's verdict (NULL: the scene loads): loads and starts the job,
+ * or fails it. */
+void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why);
+
+/* gi_farm_check.c. Test hook: with GI_FAULT_CHECK_CRASH set in gi-farmd's
+ * environment, every checker crashes (SIGSEGV) as a hostile mesh might make
+ * it. */
+#define GI_FAULT_CHECK_CRASH_ENV "GI_FAULT_CHECK_CRASH"
+int gi_farm_check_start(gi_farm *f, gi_farm_job *j, gi_error *err);
+/* Reads what the checker wrote; at its end, calls gi_farm_job_checked. */
+void gi_farm_check_readable(gi_farm *f, gi_farm_job *j);
+void gi_farm_check_deadline(gi_farm *f, gi_farm_job *j, double now);
+void gi_farm_check_kill(gi_farm_job *j);
+/* Parses the job text and loads its scene from the store through the
+ * manifest (the checker child and then the coordinator itself). */
+int gi_farm_load_job(const gi_farm *f, const gi_farm_job *j, gi_job *job, gi_error *err);
+
+/* gi_farm_store.c: content-addressed bytes in <state>/assets. */
+char *gi_farm_store_path(const gi_farm *f, const char *hash);
+int gi_farm_store_has(const gi_farm *f, const char *hash, uint64_t *size);
+int gi_farm_store_read(const gi_farm *f, const char *hash, gi_buf *out, gi_error *err);
+int gi_farm_store_put(gi_farm *f, const char *hash, const void *data, size_t len, gi_error *err);
+/* Streaming upload: bytes go to a temporary file while being hashed. */
+typedef struct gi_farm_upload gi_farm_upload;
+gi_farm_upload *gi_farm_upload_begin(gi_farm *f, const char *hash, gi_error *err);
+int gi_farm_upload_write(gi_farm_upload *u, const void *data, size_t len, gi_error *err);
+/* Verifies the hash and moves the file into place; frees u. */
+int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err);
+void gi_farm_upload_abort(gi_farm_upload *u);
+int gi_farm_store_scan(gi_farm *f, gi_error *err);
+/* Bytes of hash for a worker: a live job's published data, else the store. */
+int gi_farm_asset_bytes(gi_farm *f, const char *hash, gi_buf *out, gi_error *err);
+
+/* gi_farm_conn.c */
+int gi_farm_conn_accept(gi_farm *f);
+void gi_farm_conn_readable(gi_farm *f, gi_farm_conn *c);
+void gi_farm_conn_writable(gi_farm *f, gi_farm_conn *c);
+void gi_farm_conn_send(gi_farm_conn *c, uint16_t type, const gi_buf *payload, int compress);
+/* Refuses or ends a connection: logs the reason, sends ERROR when it can,
+ * hands its leases back. */
+void gi_farm_conn_close(gi_farm *f, gi_farm_conn *c, gi_errcode code, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+void gi_farm_conns_tick(gi_farm *f);
+/* Removes connections marked closed (after the loop dispatched events). */
+void gi_farm_conns_reap(gi_farm *f);
+int gi_farm_conn_wants_write(const gi_farm_conn *c);
+/* Sends the job's JOB frame once per connection. */
+void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j);
+
+/* gi_farm_sched.c */
+void gi_farm_schedule(gi_farm *f);
+void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload);
+void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload);
+void gi_farm_sched_heartbeat(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *hb);
+void gi_farm_sched_drain(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *back);
+/* A connection is going away: its leases fail (crash = 1: the worker was
+ * lost) or go back to their queues unrun (crash = 0: it said goodbye). */
+void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *why);
+void gi_farm_sched_expire(gi_farm *f, double now);
+/* Forgets every lease of a job (cancelled / failed / done) and tells the
+ * workers holding them. */
+void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j);
+gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
+int gi_farm_host_blocked(const gi_farm_host *h, double now);
+/* Makes a job that just became runnable start at the current fair share. */
+void gi_farm_sched_join(gi_farm *f, gi_farm_job *j);
+
+/* gi_farm_api.c */
+int gi_farm_api_start(gi_farm *f, gi_error *err);
+int gi_farm_api_fd(gi_farm *f);      /* MHD's epoll descriptor */
+int gi_farm_api_timeout_ms(gi_farm *f);
+void gi_farm_api_run(gi_farm *f);
+void gi_farm_api_stop(gi_farm *f);
+
+/* gi_farm_views.c: JSON documents and metrics (strings are malloc'ed). */
+char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j);
+char *gi_farm_view_jobs(gi_farm *f);
+char *gi_farm_view_workers(gi_farm *f);
+char *gi_farm_view_metrics(gi_farm *f);
+extern const char gi_farm_dashboard_html[];
+
+#endif

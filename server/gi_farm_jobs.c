@@ -1,0 +1,761 @@
+/* gi_farm_jobs: the coordinator's job records and their life:
+ *
+ *   submit -> CHECKING (forked scene check) -> RUNNING (gi_jobrun) -> DONE
+ *                  \-> FAILED                     \-> FAILED / CANCELLED
+ *
+ * Every transition that must survive a crash is journaled before it is
+ * acted on; running jobs are checkpointed periodically (gi_jobrun_checkpoint
+ * into <state>/jobs/<id>/checkpoint, replaced atomically). A restarted
+ * coordinator replays the journal, checks every unfinished job's scene
+ * again, and restores it from its checkpoint, so tasks merged before the
+ * checkpoint are not run again. */
+#include <dirent.h>
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "gi_farm_impl.h"
+#include "gi_progress.h"
+#include "gi_fs.h"
+#include "gi_log.h"
+
+#define COMPACT_AFTER_RECORDS 4096
+#define MAX_MANIFEST_ENTRIES 10000
+
+const char *gi_fj_state_name(gi_fj_state s)
+{
+    switch (s) {
+    case GI_FJ_CHECKING: return "checking";
+    case GI_FJ_RUNNING: return "running";
+    case GI_FJ_DONE: return "done";
+    case GI_FJ_FAILED: return "failed";
+    case GI_FJ_CANCELLED: return "cancelled";
+    }
+    return "unknown";
+}
+
+static void start_checkers(gi_farm *f);
+
+static int terminal(const gi_farm_job *j)
+{
+    return j->state == GI_FJ_DONE || j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED;
+}
+
+/* ---- records ----------------------------------------------------------- */
+
+static gi_farm_job *job_new(gi_farm *f, uint64_t id)
+{
+    gi_farm_job *j = gi_xcalloc(1, sizeof *j);
+    j->id = id;
+    j->state = GI_FJ_CHECKING;
+    j->check_fd = -1;
+    j->est_task_s = 1.0;
+    gi_manifest_init(&j->manifest);
+    gi_buf_init(&j->check_msg);
+    size_t n = strlen(f->jobs_dir) + 32;
+    j->dir = gi_xmalloc(n);
+    snprintf(j->dir, n, "%s/%llu", f->jobs_dir, (unsigned long long)id);
+    if (f->job_count == f->job_cap) {
+        f->job_cap = f->job_cap ? 2 * f->job_cap : 16;
+        f->jobs = gi_xrealloc(f->jobs, f->job_cap * sizeof *f->jobs);
+    }
+    f->jobs[f->job_count++] = j;
+    if (id >= f->next_job_id)
+        f->next_job_id = id + 1;
+    return j;
+}
+
+static void run_free(gi_farm_job *j)
+{
+    if (!j->loaded)
+        return;
+    gi_jobrun_free(&j->jr);
+    gi_job_free(&j->job);
+    j->loaded = 0;
+}
+
+static void job_free(gi_farm_job *j)
+{
+    gi_farm_check_kill(j);
+    run_free(j);
+    free(j->file);
+    free(j->text);
+    free(j->name);
+    free(j->method);
+    for (int i = 0; i < j->output_count; i++)
+        free(j->outputs[i]);
+    free(j->outputs);
+    free(j->dir);
+    gi_manifest_free(&j->manifest);
+    gi_buf_free(&j->check_msg);
+    for (int i = 0; i < j->log_count; i++)
+        free(j->log[(j->log_start + i) % GI_FJ_LOG_KEEP]);
+    free(j);
+}
+
+gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id)
+{
+    for (size_t i = 0; i < f->job_count; i++)
+        if (f->jobs[i]->id == id)
+            return f->jobs[i];
+    return NULL;
+}
+
+static void push_log_line(gi_farm_job *j, char *line)
+{
+    if (j->log_count == GI_FJ_LOG_KEEP) {
+        free(j->log[j->log_start]);
+        j->log[j->log_start] = line;
+        j->log_start = (j->log_start + 1) % GI_FJ_LOG_KEEP;
+    } else {
+        j->log[(j->log_start + j->log_count++) % GI_FJ_LOG_KEEP] = line;
+    }
+}
+
+void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
+{
+    char msg[1200];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    char stamp[32];
+    time_t t = (time_t)gi_farm_wallnow();
+    struct tm tm;
+    gmtime_r(&t, &tm);
+    strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    char line[1300];
+    snprintf(line, sizeof line, "%s %s", stamp, msg);
+    push_log_line(j, gi_xstrdup(line));
+    gi_info("job %llu: %s", (unsigned long long)j->id, msg);
+    /* The log file outlives restarts; the in-memory ring is its tail. */
+    char path[4200];
+    snprintf(path, sizeof path, "%s/log", j->dir);
+    FILE *fp = fopen(path, "ae");
+    if (fp) {
+        fprintf(fp, "%s\n", line);
+        fclose(fp);
+    }
+}
+
+void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
+                            const char *worker, const char *msg)
+{
+    gi_fj_task_error *e;
+    if (j->err_count == GI_FJ_ERRORS_KEEP) {
+        e = &j->errors[j->err_start];
+        j->err_start = (j->err_start + 1) % GI_FJ_ERRORS_KEEP;
+    } else {
+        e = &j->errors[(j->err_start + j->err_count++) % GI_FJ_ERRORS_KEEP];
+    }
+    e->when = gi_farm_wallnow();
+    e->task_id = task;
+    e->attempt = attempt;
+    snprintf(e->worker, sizeof e->worker, "%.255s", worker);
+    snprintf(e->message, sizeof e->message, "%.500s", msg);
+}
+
+/* Reloads the tail of a job's log file into its ring (after a restart). */
+static void load_log_tail(gi_farm_job *j)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/log", j->dir);
+    FILE *fp = fopen(path, "re");
+    if (!fp)
+        return;
+    char line[1400];
+    while (fgets(line, sizeof line, fp)) {
+        line[strcspn(line, "\n")] = '\0';
+        push_log_line(j, gi_xstrdup(line));
+    }
+    fclose(fp);
+}
+
+/* Fills name, method and outputs from the job text (for listings). */
+static int describe(gi_farm_job *j, gi_job *parsed)
+{
+    j->name = gi_xstrdup(parsed->name);
+    j->method = gi_xstrdup(parsed->method->name);
+    j->output_count = parsed->output_count;
+    j->outputs = gi_xcalloc((size_t)parsed->output_count + 1, sizeof *j->outputs);
+    for (int i = 0; i < parsed->output_count; i++)
+        j->outputs[i] = gi_xstrdup(parsed->outputs[i].file);
+    return 0;
+}
+
+/* ---- journal ----------------------------------------------------------- */
+
+static int journal(gi_farm *f, const gi_jrec *r)
+{
+    gi_error err;
+    if (gi_journal_append(&f->journal, r, &err)) {
+        gi_error_log("journal: %s", err.msg);
+        return -1;
+    }
+    return 0;
+}
+
+static void submit_record(const gi_farm_job *j, gi_jrec *r)
+{
+    gi_jrec_init(r, GI_JREC_SUBMIT, j->id);
+    r->priority = j->priority;
+    r->submitted = j->submitted;
+    r->file = j->file;
+    r->text = j->text;
+    r->manifest = j->manifest; /* borrowed: not freed */
+}
+
+static void end_record(const gi_farm_job *j, gi_jrec *r)
+{
+    gi_jrec_init(r, GI_JREC_END, j->id);
+    r->end = j->state == GI_FJ_DONE     ? GI_JOB_END_DONE
+             : j->state == GI_FJ_FAILED ? GI_JOB_END_FAILED
+                                        : GI_JOB_END_CANCELLED;
+    r->code = (uint32_t)j->error.code;
+    r->message = (char *)j->error.msg;
+    r->when = j->ended;
+}
+
+static void ckpt_record(const gi_farm_job *j, gi_jrec *r)
+{
+    gi_jrec_init(r, GI_JREC_CHECKPOINT, j->id);
+    r->seq = j->ckpt_seq;
+    r->merged = j->ckpt_merged;
+    r->tasks = j->loaded ? j->jr.task_count : j->ckpt_merged;
+}
+
+/* Rewrites the journal as the current state: per job one SUBMIT, the last
+ * CHECKPOINT of an unfinished job, and the END of a finished one. */
+static int compact(gi_farm *f, gi_error *err)
+{
+    size_t n = 0;
+    gi_jrec *recs = gi_xcalloc(3 * f->job_count + 1, sizeof *recs);
+    const gi_jrec **ptrs = gi_xcalloc(3 * f->job_count + 1, sizeof *ptrs);
+    for (size_t i = 0; i < f->job_count; i++) {
+        const gi_farm_job *j = f->jobs[i];
+        submit_record(j, &recs[n++]);
+        if (terminal(j))
+            end_record(j, &recs[n++]);
+        else if (j->ckpt_seq)
+            ckpt_record(j, &recs[n++]);
+    }
+    for (size_t i = 0; i < n; i++)
+        ptrs[i] = &recs[i];
+    int rc = gi_journal_rewrite(&f->journal, ptrs, n, err);
+    free(ptrs);
+    free(recs); /* every string was borrowed */
+    return rc;
+}
+
+static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
+{
+    gi_farm *f = ctx;
+    gi_farm_job *j = gi_farm_job_find(f, r->job_id);
+    switch (r->type) {
+    case GI_JREC_SUBMIT: {
+        if (j)
+            return gi_fail(err, GI_EPROTO, "job %llu is submitted twice",
+                           (unsigned long long)r->job_id);
+        j = job_new(f, r->job_id);
+        j->priority = r->priority;
+        j->submitted = r->submitted;
+        j->file = gi_xstrdup(r->file);
+        j->text = gi_xstrdup(r->text);
+        for (size_t i = 0; i < r->manifest.count; i++)
+            gi_manifest_put(&j->manifest, r->manifest.entries[i].name,
+                            r->manifest.entries[i].hash, r->manifest.entries[i].size);
+        return 0;
+    }
+    case GI_JREC_CHECKPOINT:
+        if (j) {
+            j->ckpt_seq = r->seq;
+            j->ckpt_merged = r->merged;
+        }
+        return 0;
+    case GI_JREC_END:
+        if (j) {
+            j->state = r->end == GI_JOB_END_DONE     ? GI_FJ_DONE
+                       : r->end == GI_JOB_END_FAILED ? GI_FJ_FAILED
+                                                     : GI_FJ_CANCELLED;
+            j->error.code = (gi_errcode)r->code;
+            snprintf(j->error.msg, sizeof j->error.msg, "%s", r->message ? r->message : "");
+            j->ended = r->when;
+        }
+        return 0;
+    case GI_JREC_PURGE:
+        for (size_t i = 0; i < f->job_count; i++)
+            if (f->jobs[i]->id == r->job_id) {
+                job_free(f->jobs[i]);
+                memmove(&f->jobs[i], &f->jobs[i + 1], (f->job_count - i - 1) * sizeof *f->jobs);
+                f->job_count--;
+                break;
+            }
+        return 0;
+    }
+    return 0;
+}
+
+int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/journal", f->cfg.state_dir);
+    int damaged;
+    if (gi_journal_open(&f->journal, path, replay_one, f, &damaged, err))
+        return -1;
+    size_t unfinished = 0;
+    for (size_t i = 0; i < f->job_count; i++) {
+        gi_farm_job *j = f->jobs[i];
+        gi_error perr;
+        gi_job parsed;
+        if (gi_job_parse(j->text, strlen(j->text), j->file, &parsed, &perr) == 0) {
+            describe(j, &parsed);
+        } else {
+            /* Accepted once, refused now: a method or limit changed. */
+            j->name = gi_xstrdup("?");
+            j->method = gi_xstrdup("?");
+            j->outputs = gi_xcalloc(1, sizeof *j->outputs);
+        }
+        gi_job_free(&parsed);
+        load_log_tail(j);
+        if (!terminal(j))
+            unfinished++;
+    }
+    if (f->job_count)
+        gi_info("journal: %zu jobs, %zu unfinished", f->job_count, unfinished);
+    /* Start from a compact journal (and without a damaged tail). */
+    if (compact(f, err))
+        return -1;
+    for (size_t i = 0; i < f->job_count; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (terminal(j))
+            continue;
+        gi_farm_job_log(j, "coordinator restarted: resuming%s", j->ckpt_seq ? " from its checkpoint" : "");
+    }
+    start_checkers(f);
+    return 0;
+}
+
+/* ---- submit / check / run ---------------------------------------------- */
+
+/* Scene checkers run at most this many at once (a restart with many
+ * unfinished jobs must not fork them all together); the others wait in
+ * CHECKING, in submission order. */
+#define MAX_CHECKERS 4
+
+static void start_checkers(gi_farm *f)
+{
+    int running = 0;
+    for (size_t i = 0; i < f->job_count; i++)
+        running += f->jobs[i]->check_pid > 0;
+    for (size_t i = 0; i < f->job_count && running < MAX_CHECKERS; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (j->state != GI_FJ_CHECKING || j->check_pid > 0)
+            continue;
+        gi_error err;
+        if (gi_farm_check_start(f, j, &err))
+            gi_farm_job_fail(f, j, &err);
+        else
+            running++;
+    }
+}
+
+static size_t unfinished_jobs(const gi_farm *f)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < f->job_count; i++)
+        n += !terminal(f->jobs[i]);
+    return n;
+}
+
+gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
+                                gi_manifest *manifest, uint32_t priority, gi_error *err)
+{
+    if (unfinished_jobs(f) >= f->cfg.max_jobs) {
+        gi_fail(err, GI_ENOMEM, "the farm already has %u unfinished jobs (its limit)",
+                f->cfg.max_jobs);
+        return NULL;
+    }
+    /* Everything that can be checked without loading the scene is checked
+     * here, so a bad submission is refused at once with a 400. */
+    gi_job parsed;
+    if (gi_job_parse(text, strlen(text), file, &parsed, err)) {
+        gi_job_free(&parsed);
+        return NULL;
+    }
+    int rc = 0;
+    uint64_t pixels = (uint64_t)parsed.width * (uint64_t)parsed.height;
+    if (pixels > f->cfg.max_job_pixels)
+        rc = gi_fail(err, GI_EINVAL, "%s: image: %d x %d pixels is over this farm's limit of %llu",
+                     file, parsed.width, parsed.height, (unsigned long long)f->cfg.max_job_pixels);
+    if (rc == 0 && manifest->count > MAX_MANIFEST_ENTRIES)
+        rc = gi_fail(err, GI_EINVAL, "%s: %zu assets (limit %d)", file, manifest->count,
+                     MAX_MANIFEST_ENTRIES);
+    if (rc == 0 && !gi_manifest_find(manifest, parsed.scene_name))
+        rc = gi_fail(err, GI_EINVAL,
+                     "%s: scene: \"%s\" is not among the job's assets (upload it and list it "
+                     "under \"assets\")",
+                     file, parsed.scene_name);
+    for (size_t i = 0; rc == 0 && i < manifest->count; i++) {
+        gi_manifest_entry *e = &manifest->entries[i];
+        uint64_t size;
+        if (!gi_farm_store_has(f, e->hash, &size))
+            rc = gi_fail(err, GI_EINVAL, "%s: assets: \"%s\": asset %.16s... was never uploaded",
+                         file, e->name, e->hash);
+        else
+            e->size = size;
+    }
+    if (rc) {
+        gi_job_free(&parsed);
+        return NULL;
+    }
+    gi_farm_job *j = job_new(f, f->next_job_id);
+    j->priority = priority;
+    j->submitted = gi_farm_wallnow();
+    j->file = gi_xstrdup(file);
+    j->text = text;
+    j->manifest = *manifest;
+    gi_manifest_init(manifest);
+    describe(j, &parsed);
+    gi_job_free(&parsed);
+    char out[4300];
+    snprintf(out, sizeof out, "%s/out", j->dir);
+    gi_jrec r;
+    submit_record(j, &r);
+    if (gi_mkdirs(out, err) || gi_journal_append(&f->journal, &r, err)) {
+        /* Not journaled: forget it (the id is not reused). */
+        f->job_count--;
+        j->text = NULL;
+        job_free(j);
+        return NULL;
+    }
+    f->m.jobs_submitted++;
+    gi_farm_job_log(j, "submitted: %s, method %s, priority %u, %zu assets", j->file, j->method,
+                    j->priority, j->manifest.count);
+    start_checkers(f);
+    gi_error cerr;
+    if (f->journal.records > COMPACT_AFTER_RECORDS && compact(f, &cerr))
+        gi_warn("journal compaction: %s", cerr.msg);
+    return j;
+}
+
+static char *checkpoint_path(const gi_farm_job *j)
+{
+    size_t n = strlen(j->dir) + 16;
+    char *p = gi_xmalloc(n);
+    snprintf(p, n, "%s/checkpoint", j->dir);
+    return p;
+}
+
+static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
+{
+    j->state = state;
+    j->ended = gi_farm_wallnow();
+    gi_farm_check_kill(j);
+    gi_farm_sched_drop_job(f, j);
+    gi_jrec r;
+    end_record(j, &r);
+    journal(f, &r);
+    if (j->loaded) {
+        j->final_tasks = j->jr.task_count;
+        j->final_merged = j->jr.merge_next;
+        j->final_retries = j->jr.retries;
+        j->final_stats = j->jr.stats;
+    }
+    run_free(j);
+    char *ck = checkpoint_path(j);
+    unlink(ck); /* nothing left to resume */
+    free(ck);
+}
+
+void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
+{
+    if (terminal(j))
+        return;
+    j->error = *why;
+    gi_farm_job_log(j, "failed: %s", why->msg);
+    f->m.jobs_failed++;
+    end_job(f, j, GI_FJ_FAILED);
+}
+
+int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why)
+{
+    if (terminal(j))
+        return -1;
+    gi_fail(&j->error, GI_ECANCEL, "cancelled: %s", why);
+    gi_farm_job_log(j, "cancelled: %s", why);
+    f->m.jobs_cancelled++;
+    end_job(f, j, GI_FJ_CANCELLED);
+    return 0;
+}
+
+static int remove_tree(const char *path)
+{
+    DIR *d = opendir(path);
+    if (!d)
+        return unlink(path);
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+            continue;
+        char p[4400];
+        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
+        if (e->d_type == DT_DIR)
+            remove_tree(p);
+        else
+            unlink(p);
+    }
+    closedir(d);
+    return rmdir(path);
+}
+
+int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
+{
+    if (!terminal(j))
+        return gi_fail(err, GI_EINVAL, "job %llu is %s: cancel it first",
+                       (unsigned long long)j->id, gi_fj_state_name(j->state));
+    gi_jrec r;
+    gi_jrec_init(&r, GI_JREC_PURGE, j->id);
+    if (gi_journal_append(&f->journal, &r, err))
+        return -1;
+    remove_tree(j->dir);
+    for (size_t i = 0; i < f->job_count; i++)
+        if (f->jobs[i] == j) {
+            memmove(&f->jobs[i], &f->jobs[i + 1], (f->job_count - i - 1) * sizeof *f->jobs);
+            f->job_count--;
+            break;
+        }
+    job_free(j);
+    return 0;
+}
+
+/* Loads the job in the coordinator, outputs going to <dir>/out. */
+static int load_for_run(gi_farm *f, gi_farm_job *j, gi_error *err)
+{
+    if (gi_farm_load_job(f, j, &j->job, err)) {
+        gi_job_free(&j->job);
+        return -1;
+    }
+    size_t n = strlen(j->dir) + 8;
+    j->job.out_dir = gi_xmalloc(n);
+    snprintf(j->job.out_dir, n, "%s/out", j->dir);
+    return 0;
+}
+
+/* Restores the run from the job's checkpoint file: 1 if restored, 0 if
+ * there is none or it is unusable (then the job is loaded afresh), -1 if
+ * the job cannot be loaded again. */
+static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
+{
+    char *ck = checkpoint_path(j);
+    if (access(ck, F_OK) != 0) {
+        free(ck);
+        return 0;
+    }
+    gi_buf cp;
+    gi_buf_init(&cp);
+    int rc = gi_read_file(ck, (size_t)1 << 40, &cp, err);
+    free(ck);
+    if (rc == 0)
+        rc = gi_jobrun_restore(&j->jr, &j->job, &cp, err);
+    gi_buf_free(&cp);
+    if (rc == 0)
+        return 1;
+    /* A checkpoint that does not restore costs its work, not the job. The
+     * method may have half-built its state: start from a fresh load. */
+    gi_farm_job_log(j, "checkpoint unusable, starting over: %s", err->msg);
+    gi_jobrun_free(&j->jr);
+    gi_job_free(&j->job);
+    return load_for_run(f, j, err) ? -1 : 0;
+}
+
+void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
+{
+    if (j->state != GI_FJ_CHECKING)
+        return;
+    if (why) {
+        gi_farm_job_fail(f, j, why);
+        return;
+    }
+    gi_error err;
+    gi_error_clear(&err);
+    if (load_for_run(f, j, &err)) {
+        gi_farm_job_fail(f, j, &err);
+        return;
+    }
+    int resumed = restore(f, j, &err);
+    if (resumed < 0) {
+        gi_farm_job_fail(f, j, &err);
+        return;
+    }
+    int rc = resumed ? 0 : gi_jobrun_start(&j->jr, &j->job, &err);
+    j->loaded = 1;
+    if (rc) {
+        gi_farm_job_fail(f, j, &err);
+        return;
+    }
+    j->jr.max_attempts = f->cfg.max_attempts;
+    j->state = GI_FJ_RUNNING;
+    if (!j->started)
+        j->started = gi_farm_wallnow();
+    j->run_t0 = gi_now();
+    j->cost_done_t0 = j->jr.cost_done;
+    j->ckpt_last = j->run_t0;
+    j->ckpt_merged = j->jr.merge_next;
+    j->ckpt_done_cost = j->jr.cost_done;
+    if (resumed) {
+        j->resumed_merged = j->jr.merge_next;
+        gi_farm_job_log(j, "resumed from checkpoint %llu: %llu of %llu tasks already merged",
+                        (unsigned long long)j->ckpt_seq, (unsigned long long)j->jr.merge_next,
+                        (unsigned long long)j->jr.task_count);
+    } else {
+        gi_farm_job_log(j, "running: %llu tasks planned", (unsigned long long)j->jr.task_count);
+    }
+    gi_farm_sched_join(f, j);
+    gi_farm_job_settle(f, j);
+}
+
+void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
+{
+    if (j->state != GI_FJ_RUNNING || !gi_jobrun_done(&j->jr))
+        return;
+    if (j->jr.failed) {
+        gi_error e = j->jr.error;
+        gi_farm_job_fail(f, j, &e);
+        return;
+    }
+    char list[1024] = "";
+    size_t k = 0;
+    for (int i = 0; i < j->output_count && k < sizeof list; i++)
+        k += (size_t)snprintf(list + k, sizeof list - k, "%s%s", i ? ", " : "", j->outputs[i]);
+    gi_farm_job_log(j, "done: %llu tasks, %llu retries, %llu results this run; outputs: %s",
+                    (unsigned long long)j->jr.task_count, (unsigned long long)j->jr.retries,
+                    (unsigned long long)j->results_accepted, list);
+    f->m.jobs_done++;
+    gi_error_clear(&j->error);
+    end_job(f, j, GI_FJ_DONE);
+}
+
+/* ---- checkpoints ------------------------------------------------------- */
+
+static int checkpoint(gi_farm *f, gi_farm_job *j, gi_error *err)
+{
+    /* Data the method published for its tasks must outlive a restart too:
+     * into the store, where workers' requests find it by hash. */
+    if (j->job.assets) {
+        for (size_t i = 0; i < gi_asset_store_count(j->job.assets); i++) {
+            char hash[GI_HASH_HEX];
+            const gi_buf *b = gi_asset_store_at(j->job.assets, i, hash);
+            if (gi_farm_store_put(f, hash, b->data, b->len, err))
+                return -1;
+        }
+    }
+    gi_buf cp;
+    gi_buf_init(&cp);
+    int rc = gi_jobrun_checkpoint(&j->jr, &cp, err);
+    char *path = checkpoint_path(j);
+    if (rc == 0)
+        rc = gi_write_file_atomic(path, cp.data, cp.len, err);
+    free(path);
+    if (rc == 0) {
+        j->ckpt_seq++;
+        j->ckpt_merged = j->jr.merge_next;
+        j->ckpt_done_cost = j->jr.cost_done;
+        f->m.checkpoints++;
+        f->m.checkpoint_bytes += cp.len;
+        gi_jrec r;
+        ckpt_record(j, &r);
+        rc = gi_journal_append(&f->journal, &r, err);
+        gi_debug("job %llu: checkpoint %llu (%llu tasks merged, %zu bytes)",
+                 (unsigned long long)j->id, (unsigned long long)j->ckpt_seq,
+                 (unsigned long long)j->ckpt_merged, cp.len);
+    }
+    gi_buf_free(&cp);
+    return rc;
+}
+
+static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
+{
+    if (j->state != GI_FJ_RUNNING)
+        return;
+    if (!force && now - j->ckpt_last < f->cfg.checkpoint_s)
+        return;
+    j->ckpt_last = now;
+    if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
+        return; /* nothing merged since the last one */
+    gi_error err;
+    if (checkpoint(f, j, &err))
+        gi_warn("job %llu: checkpoint failed (the job goes on): %s", (unsigned long long)j->id,
+                err.msg);
+}
+
+void gi_farm_jobs_tick(gi_farm *f)
+{
+    start_checkers(f);
+    double now = gi_now();
+    for (size_t i = 0; i < f->job_count; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (j->state == GI_FJ_CHECKING)
+            gi_farm_check_deadline(f, j, now);
+        checkpoint_if_due(f, j, now, 0);
+    }
+    if (f->journal.records > COMPACT_AFTER_RECORDS) {
+        gi_error err;
+        if (compact(f, &err))
+            gi_warn("journal compaction: %s", err.msg);
+    }
+}
+
+void gi_farm_jobs_checkpoint_all(gi_farm *f)
+{
+    double now = gi_now();
+    for (size_t i = 0; i < f->job_count; i++)
+        checkpoint_if_due(f, f->jobs[i], now, 1);
+}
+
+void gi_farm_jobs_free(gi_farm *f)
+{
+    for (size_t i = 0; i < f->job_count; i++)
+        job_free(f->jobs[i]);
+    free(f->jobs);
+    f->jobs = NULL;
+    f->job_count = f->job_cap = 0;
+    gi_journal_close(&f->journal);
+}
+
+/* ---- views ------------------------------------------------------------- */
+
+char *gi_farm_job_output_path(const gi_farm_job *j, const char *name)
+{
+    for (int i = 0; i < j->output_count; i++)
+        if (strcmp(j->outputs[i], name) == 0) {
+            size_t n = strlen(j->dir) + strlen(name) + 8;
+            char *p = gi_xmalloc(n);
+            snprintf(p, n, "%s/out/%s", j->dir, name);
+            return p;
+        }
+    return NULL;
+}
+
+double gi_farm_job_progress(const gi_farm_job *j)
+{
+    if (j->state == GI_FJ_DONE)
+        return 1.0;
+    if (j->loaded && j->jr.cost_total > 0)
+        return j->jr.cost_done / j->jr.cost_total;
+    return 0.0;
+}
+
+double gi_farm_job_eta(const gi_farm_job *j)
+{
+    if (j->state != GI_FJ_RUNNING || !j->loaded)
+        return -1;
+    double dt = gi_now() - j->run_t0, done = j->jr.cost_done - j->cost_done_t0;
+    if (dt < 1e-3 || done <= 0)
+        return -1;
+    return (j->jr.cost_total - j->jr.cost_done) * dt / done;
+}

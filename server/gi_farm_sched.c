@@ -1,0 +1,431 @@
+/* gi_farm_sched: who runs what.
+ *
+ * Leases. A task handed to a worker is leased to that connection until
+ * `lease_s` after it was sent or last renewed (a worker's HEARTBEAT lists
+ * the tasks it holds and renews exactly those). A lease ends with the
+ * worker's RESULT or FAIL, when it expires, when the connection is lost
+ * (the task fails: retried up to max_attempts, then the job fails with the
+ * task's error) or when the worker drains and hands tasks back unrun (they
+ * are requeued, not counted as attempts). A RESULT or FAIL for a task the
+ * connection no longer holds is late: it is counted and discarded, never
+ * merged, so a task's result is merged exactly once (gi_jobrun also
+ * refuses stale attempts).
+ *
+ * Fair sharing. Jobs share workers in proportion to their priority by
+ * stride scheduling in worker-seconds: each job has a pass; a lease adds
+ * the job's mean task time divided by its priority, corrected by the time
+ * the task really took when its result arrives; the job with the lowest
+ * pass gets the next free slot. A job that becomes runnable starts at the
+ * lowest pass of the others, so waiting earns no credit.
+ *
+ * Blocklisting. A worker (by name, across reconnections) whose tasks fail
+ * `blocklist_failures` times in a row gets no tasks for `blocklist_s`.
+ * Failures that are the job's fault (GI_EINVAL: bad input) do not count. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_farm_impl.h"
+#include "gi_progress.h"
+#include "gi_log.h"
+#include "gi_msg.h"
+
+/* Output queue size above which no more work is queued on a connection. */
+#define SCHED_OUT_HIGH ((size_t)64 << 20)
+
+gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name)
+{
+    for (size_t i = 0; i < f->host_count; i++)
+        if (strcmp(f->hosts[i]->name, name) == 0)
+            return f->hosts[i];
+    if (f->host_count == f->host_cap) {
+        f->host_cap = f->host_cap ? 2 * f->host_cap : 8;
+        f->hosts = gi_xrealloc(f->hosts, f->host_cap * sizeof *f->hosts);
+    }
+    gi_farm_host *h = gi_xcalloc(1, sizeof *h);
+    snprintf(h->name, sizeof h->name, "%s", name);
+    f->hosts[f->host_count++] = h;
+    return h;
+}
+
+int gi_farm_host_blocked(const gi_farm_host *h, double now)
+{
+    return h && h->blocked_until > now;
+}
+
+static const char *conn_name(const gi_farm_conn *c)
+{
+    return c->have_hello ? c->hello.name : c->peer;
+}
+
+/* ---- lease bookkeeping -------------------------------------------------- */
+
+static long lease_find(const gi_farm_conn *c, uint64_t job, uint64_t task, uint32_t attempt)
+{
+    for (size_t i = 0; i < c->lease_count; i++) {
+        const gi_farm_lease *l = &c->leases[i];
+        if (l->job_id == job && l->task_id == task && l->attempt == attempt)
+            return (long)i;
+    }
+    return -1;
+}
+
+static gi_farm_lease lease_take(gi_farm_conn *c, size_t i)
+{
+    gi_farm_lease l = c->leases[i];
+    c->leases[i] = c->leases[--c->lease_count];
+    return l;
+}
+
+static void lease_add(gi_farm_conn *c, const gi_farm_lease *l)
+{
+    if (c->lease_count == c->lease_cap) {
+        c->lease_cap = c->lease_cap ? 2 * c->lease_cap : 8;
+        c->leases = gi_xrealloc(c->leases, c->lease_cap * sizeof *c->leases);
+    }
+    c->leases[c->lease_count++] = *l;
+}
+
+static gi_farm_job *running_job(gi_farm *f, uint64_t id)
+{
+    gi_farm_job *j = gi_farm_job_find(f, id);
+    return j && j->state == GI_FJ_RUNNING && j->loaded ? j : NULL;
+}
+
+/* ---- fair sharing -------------------------------------------------------- */
+
+void gi_farm_sched_join(gi_farm *f, gi_farm_job *j)
+{
+    double lowest = INFINITY;
+    for (size_t i = 0; i < f->job_count; i++) {
+        const gi_farm_job *o = f->jobs[i];
+        if (o != j && o->state == GI_FJ_RUNNING && o->pass < lowest)
+            lowest = o->pass;
+    }
+    if (isfinite(lowest) && lowest > j->pass)
+        j->pass = lowest;
+}
+
+static void charge(gi_farm_job *j, double seconds)
+{
+    j->pass += seconds / (double)(j->priority ? j->priority : 1);
+}
+
+static int conn_takes_work(const gi_farm *f, const gi_farm_conn *c, double now)
+{
+    if (c->state != GI_FC_ACTIVE || c->fd < 0)
+        return 0;
+    if (c->lease_count >= c->hello.slots)
+        return 0;
+    if (gi_farm_host_blocked(c->host, now))
+        return 0;
+    /* A worker we have not heard from for two heartbeats may be cut off:
+     * queue nothing more on it until it speaks again. */
+    if (now - c->last_heard > 2.0 * f->cfg.heartbeat_s)
+        return 0;
+    return gi_outq_pending(&c->out) < SCHED_OUT_HIGH;
+}
+
+void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j)
+{
+    for (size_t i = 0; i < c->jobs_sent_count; i++)
+        if (c->jobs_sent[i] == j->id)
+            return;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_job_encode(&b, j->id, j->file, j->text, &j->manifest);
+    gi_farm_conn_send(c, GI_MSG_JOB, &b, 1);
+    gi_buf_free(&b);
+    if (c->jobs_sent_count == c->jobs_sent_cap) {
+        c->jobs_sent_cap = c->jobs_sent_cap ? 2 * c->jobs_sent_cap : 8;
+        c->jobs_sent = gi_xrealloc(c->jobs_sent, c->jobs_sent_cap * sizeof *c->jobs_sent);
+    }
+    c->jobs_sent[c->jobs_sent_count++] = j->id;
+}
+
+/* The running job with the lowest pass that may still have pending tasks. */
+static gi_farm_job *pick_job(gi_farm *f, const unsigned char *exhausted)
+{
+    gi_farm_job *best = NULL;
+    for (size_t i = 0; i < f->job_count; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (exhausted[i] || j->state != GI_FJ_RUNNING || !j->loaded)
+            continue;
+        if (!best || j->pass < best->pass)
+            best = j;
+    }
+    return best;
+}
+
+void gi_farm_schedule(gi_farm *f)
+{
+    if (f->job_count == 0 || f->conn_count == 0)
+        return;
+    double now = gi_now();
+    unsigned char *exhausted = gi_xcalloc(f->job_count, 1);
+    size_t job_index_cap = f->job_count;
+    int any = 1;
+    /* Round-robin over workers, one task at a time, so a burst of work is
+     * spread rather than piled on the first worker. */
+    while (any) {
+        any = 0;
+        for (size_t ci = 0; ci < f->conn_count; ci++) {
+            gi_farm_conn *c = f->conns[ci];
+            if (!conn_takes_work(f, c, now))
+                continue;
+            const gi_task *t = NULL;
+            gi_farm_job *j;
+            while ((j = pick_job(f, exhausted))) {
+                t = gi_jobrun_lease(&j->jr);
+                if (t)
+                    break;
+                for (size_t k = 0; k < job_index_cap; k++)
+                    if (f->jobs[k] == j)
+                        exhausted[k] = 1;
+            }
+            if (!t) {
+                free(exhausted);
+                return; /* nothing is pending anywhere */
+            }
+            gi_farm_lease l = {j->id, t->id, t->attempt, now + f->cfg.lease_s, j->est_task_s};
+            lease_add(c, &l);
+            charge(j, j->est_task_s);
+            j->leases++;
+            f->m.tasks_leased++;
+            gi_farm_conn_send_job(c, j);
+            gi_buf b;
+            gi_buf_init(&b);
+            gi_msg_task_encode(&b, j->id, t);
+            gi_farm_conn_send(c, GI_MSG_TASK, &b, 1);
+            gi_buf_free(&b);
+            any = 1;
+        }
+    }
+    free(exhausted);
+}
+
+/* ---- what workers report ------------------------------------------------- */
+
+static void host_failure(gi_farm *f, gi_farm_conn *c, const gi_error *e)
+{
+    gi_farm_host *h = c->host;
+    if (!h || e->code == GI_EINVAL)
+        return;
+    h->failures++;
+    h->consecutive_failures++;
+    snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
+    if (h->consecutive_failures >= f->cfg.blocklist_failures && !gi_farm_host_blocked(h, gi_now())) {
+        h->blocked_until = gi_now() + f->cfg.blocklist_s;
+        gi_warn("worker %s blocklisted for %.0f s after %u consecutive task failures; last: %s",
+                h->name, f->cfg.blocklist_s, h->consecutive_failures, e->msg);
+    }
+}
+
+static void late(gi_farm *f, gi_farm_conn *c, const char *what, uint64_t job, uint64_t task,
+                 uint32_t attempt)
+{
+    f->m.late_results++;
+    gi_farm_job *j = gi_farm_job_find(f, job);
+    if (j)
+        j->results_late++;
+    gi_info("discarding a late %s for job %llu task %llu (attempt %u) from worker %s: it no "
+            "longer holds that lease",
+            what, (unsigned long long)job, (unsigned long long)task, attempt, conn_name(c));
+}
+
+/* The task failed on a worker (reported, lost or expired). */
+static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l,
+                        const gi_error *e)
+{
+    f->m.task_failures++;
+    c->tasks_failed++;
+    gi_farm_job_task_error(j, l->task_id, l->attempt, conn_name(c), e->msg);
+    gi_farm_job_log(j, "task %llu (attempt %u) failed on %s: %s", (unsigned long long)l->task_id,
+                    l->attempt, conn_name(c), e->msg);
+    gi_jobrun_fail(&j->jr, l->task_id, l->attempt, e);
+    gi_farm_job_settle(f, j);
+}
+
+/* The lease a RESULT or FAIL answers, taken from the connection, and its
+ * running job (NULL if the job has ended). Returns 0, or -1 when the
+ * connection does not hold that lease: the answer is late (counted). */
+static int answered(gi_farm *f, gi_farm_conn *c, const char *what, uint64_t job, uint64_t task,
+                    uint32_t attempt, gi_farm_lease *l, gi_farm_job **j)
+{
+    long i = lease_find(c, job, task, attempt);
+    if (i < 0) {
+        late(f, c, what, job, task, attempt);
+        return -1;
+    }
+    *l = lease_take(c, (size_t)i);
+    *j = running_job(f, l->job_id);
+    return 0;
+}
+
+void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
+{
+    gi_msg_result r;
+    gi_error err;
+    if (gi_msg_result_decode(payload, &r, &err)) {
+        gi_farm_conn_close(f, c, GI_EPROTO, "%s", err.msg);
+        return;
+    }
+    gi_farm_lease l;
+    gi_farm_job *j;
+    if (answered(f, c, "result", r.job_id, r.task_id, r.attempt, &l, &j) || !j) {
+        gi_buf_free(&r.data);
+        return;
+    }
+    if (c->host) {
+        c->host->consecutive_failures = 0;
+        c->host->successes++;
+    }
+    c->tasks_done++;
+    c->result_bytes += r.data.len;
+    /* Correct the provisional charge with what the task really cost. */
+    double secs = isfinite(r.stats.seconds) && r.stats.seconds >= 0 ? r.stats.seconds : l.est_s;
+    charge(j, secs - l.est_s);
+    j->est_n++;
+    j->est_task_s += (secs - j->est_task_s) / (double)(j->est_n < 64 ? j->est_n : 64);
+    if (j->est_task_s < 1e-3)
+        j->est_task_s = 1e-3;
+    size_t bytes = r.data.len;
+    double m0 = j->jr.merge_seconds, f0 = j->jr.finish_seconds;
+    uint64_t b0 = j->jr.merged_bytes;
+    gi_jobrun_complete(&j->jr, l.task_id, l.attempt, &r.data, &r.stats);
+    gi_buf_free(&r.data);
+    double dm = j->jr.merge_seconds - m0, df = j->jr.finish_seconds - f0;
+    uint64_t db = j->jr.merged_bytes - b0;
+    j->merge_s += dm;
+    j->finish_s += df;
+    j->merged_bytes += db;
+    j->result_bytes += bytes;
+    j->results_accepted++;
+    f->m.merge_s += dm;
+    f->m.finish_s += df;
+    f->m.merged_bytes += db;
+    f->m.result_bytes += bytes;
+    f->m.task_results++;
+    gi_farm_job_settle(f, j);
+}
+
+void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
+{
+    gi_msg_fail m;
+    gi_error err;
+    if (gi_msg_fail_decode(payload, &m, &err)) {
+        gi_farm_conn_close(f, c, GI_EPROTO, "%s", err.msg);
+        return;
+    }
+    gi_farm_lease l;
+    gi_farm_job *j;
+    if (answered(f, c, "failure", m.job_id, m.task_id, m.attempt, &l, &j) || !j)
+        return;
+    charge(j, -l.est_s);
+    host_failure(f, c, &m.error);
+    task_failed(f, c, j, &l, &m.error);
+}
+
+void gi_farm_sched_heartbeat(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *hb)
+{
+    double deadline = gi_now() + f->cfg.lease_s;
+    for (uint32_t k = 0; k < hb->count; k++) {
+        long i = lease_find(c, hb->refs[k].job_id, hb->refs[k].task_id, hb->refs[k].attempt);
+        if (i >= 0)
+            c->leases[i].deadline = deadline;
+    }
+}
+
+void gi_farm_sched_drain(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *back)
+{
+    if (c->state == GI_FC_ACTIVE)
+        gi_info("worker %s (%s) is draining: %u tasks handed back", conn_name(c), c->peer,
+                back->count);
+    c->state = GI_FC_DRAINING;
+    for (uint32_t k = 0; k < back->count; k++) {
+        long i = lease_find(c, back->refs[k].job_id, back->refs[k].task_id, back->refs[k].attempt);
+        if (i < 0)
+            continue;
+        gi_farm_lease l = lease_take(c, (size_t)i);
+        gi_farm_job *j = running_job(f, l.job_id);
+        if (!j)
+            continue;
+        charge(j, -l.est_s);
+        gi_jobrun_requeue(&j->jr, l.task_id);
+        f->m.requeued++;
+    }
+}
+
+void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *why)
+{
+    while (c->lease_count) {
+        gi_farm_lease l = lease_take(c, c->lease_count - 1);
+        gi_farm_job *j = running_job(f, l.job_id);
+        if (!j)
+            continue;
+        charge(j, -l.est_s);
+        if (!crash) {
+            gi_jobrun_requeue(&j->jr, l.task_id);
+            f->m.requeued++;
+            continue;
+        }
+        gi_error e;
+        gi_fail(&e, GI_ECRASH, "worker %s (%s) was lost: %s", conn_name(c), c->peer, why);
+        task_failed(f, c, j, &l, &e);
+    }
+}
+
+void gi_farm_sched_expire(gi_farm *f, double now)
+{
+    for (size_t ci = 0; ci < f->conn_count; ci++) {
+        gi_farm_conn *c = f->conns[ci];
+        for (size_t i = 0; i < c->lease_count;) {
+            if (c->leases[i].deadline > now) {
+                i++;
+                continue;
+            }
+            gi_farm_lease l = lease_take(c, i);
+            gi_farm_job *j = running_job(f, l.job_id);
+            if (!j)
+                continue;
+            j->lease_expiries++;
+            f->m.lease_expiries++;
+            charge(j, -l.est_s);
+            gi_error e;
+            gi_fail(&e, GI_ECRASH, "lease expired on worker %s (%s): not renewed for %.1f s",
+                    conn_name(c), c->peer, f->cfg.lease_s);
+            task_failed(f, c, j, &l, &e);
+        }
+    }
+}
+
+void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
+{
+    for (size_t ci = 0; ci < f->conn_count; ci++) {
+        gi_farm_conn *c = f->conns[ci];
+        int had = 0;
+        for (size_t i = 0; i < c->lease_count;) {
+            if (c->leases[i].job_id == j->id) {
+                lease_take(c, i);
+                had = 1;
+            } else {
+                i++;
+            }
+        }
+        for (size_t i = 0; i < c->jobs_sent_count; i++)
+            if (c->jobs_sent[i] == j->id) {
+                c->jobs_sent[i] = c->jobs_sent[--c->jobs_sent_count];
+                had = 1;
+                break;
+            }
+        if (had && c->fd >= 0 && c->state != GI_FC_CLOSING) {
+            gi_msg_cancel m = {j->id, GI_MSG_ALL_TASKS};
+            gi_buf b;
+            gi_buf_init(&b);
+            gi_msg_cancel_encode(&b, &m);
+            gi_farm_conn_send(c, GI_MSG_CANCEL, &b, 0);
+            gi_buf_free(&b);
+        }
+    }
+}

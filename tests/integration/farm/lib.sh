@@ -1,0 +1,191 @@
+# Sourced by the farm_*.sh integration tests (after ../lib.sh). Starts
+# gi-farmd and gi-worker processes, remembers their pids, and cleans up
+# (processes and network namespaces) on exit, whether the test passed or not.
+FARMD=${FARMD:-$BUILD/asan/gi-farmd}
+WORKER=${WORKER:-$BUILD/release/gi-worker}
+WORKER_ASAN=$BUILD/asan/gi-worker
+RAWPEER=$BUILD/release/tools/gi_rawpeer
+NETNS=$SRC/deploy/netns-farm.sh
+FARM_PIDS=""
+FARM_NS=""
+FARM_EXEC="" # a prefix that runs API clients where the API is reachable (a namespace)
+
+farm_cleanup() {
+    for p in $FARM_PIDS; do kill -9 "$p" 2>/dev/null || true; done
+    [ -n "$FARM_NS" ] && sh "$NETNS" down "$FARM_NS" >/dev/null 2>&1 || true
+}
+trap farm_cleanup EXIT INT TERM
+
+# Secrets in $TMP, passed through the environment as files.
+make_secrets() {
+    head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$TMP/secret"
+    head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$TMP/token"
+    chmod 600 "$TMP/secret" "$TMP/token"
+    export GI_FARM_SECRET_FILE="$TMP/secret" GI_FARM_TOKEN_FILE="$TMP/token"
+}
+
+# start_farmd STATE LOG [prefix command...] -- [gi-farmd options...]
+# Loopback on kernel-chosen ports unless options say otherwise; sets
+# FARMD_PID, API (host:port) and WADDR (host:port).
+start_farmd() {
+    state=$1
+    log=$2
+    shift 2
+    pre=""
+    while [ $# -gt 0 ] && [ "$1" != "--" ]; do pre="$pre $1"; shift; done
+    [ $# -gt 0 ] && shift
+    rm -f "$state/addresses"
+    # shellcheck disable=SC2086
+    $pre "$FARMD" --state "$state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 "$@" \
+        >>"$log" 2>&1 &
+    FARMD_PID=$!
+    FARM_PIDS="$FARM_PIDS $FARMD_PID"
+    i=0
+    while [ ! -s "$state/addresses" ]; do
+        i=$((i + 1))
+        [ $i -lt 200 ] || { cat "$log"; fail "gi-farmd did not start"; }
+        kill -0 "$FARMD_PID" 2>/dev/null || { cat "$log"; fail "gi-farmd exited"; }
+        sleep 0.05
+    done
+    API=$(awk '$1 == "api" {print $2}' "$state/addresses")
+    WADDR=$(awk '$1 == "workers" {print $2}' "$state/addresses")
+    export GI_FARM="http://$API"
+}
+
+# start_worker LOG [prefix command...] -- [gi-worker options...]; sets WORKER_PID.
+start_worker() {
+    log=$1
+    shift
+    pre=""
+    while [ $# -gt 0 ] && [ "$1" != "--" ]; do pre="$pre $1"; shift; done
+    [ $# -gt 0 ] && shift
+    # shellcheck disable=SC2086
+    $pre "$WORKER" --backoff-max 0.5 "$@" >>"$log" 2>&1 &
+    WORKER_PID=$!
+    FARM_PIDS="$FARM_PIDS $WORKER_PID"
+}
+
+# api PATH [curl options]: an authenticated API call (prints the body).
+api() {
+    path=$1
+    shift
+    $FARM_EXEC curl -sS --max-time 30 -H "Authorization: Bearer $(cat "$GI_FARM_TOKEN_FILE")" "$@" \
+        "$GI_FARM$path"
+}
+
+# A task count of a job: jnum ID KEY (total, merged, retries, results_this_run,
+# resumed_merged, late_results, lease_expiries, ...).
+jnum() {
+    api "/api/v1/jobs/$1" | sed -n 's/.*"tasks":{\([^}]*\)}.*/\1/p' | tr ',' '\n' |
+        awk -F: -v k="\"$2\"" '$1 == k {print $2}'
+}
+
+jstate() {
+    api "/api/v1/jobs/$1" | grep -o '"state":"[a-z]*"' | head -n 1 | cut -d'"' -f4
+}
+
+# wait_state ID STATE SECONDS
+wait_state() {
+    n=0
+    while [ "$(jstate "$1")" != "$2" ]; do
+        n=$((n + 1))
+        [ $n -lt $(($3 * 10)) ] || { api "/api/v1/jobs/$1"; echo; fail "job $1 not $2 after $3 s"; }
+        sleep 0.1
+    done
+}
+
+# A metric's value from /metrics.
+metric() {
+    api /metrics | awk -v m="$1" '$1 == m {print $2}'
+}
+
+# stop_farmd: SIGTERM, a clean exit (status 0) and, under ASan, no leaks.
+stop_farmd() {
+    kill -TERM "$FARMD_PID"
+    wait "$FARMD_PID" || { tail -n 30 "$1"; fail "gi-farmd exited with status $? on SIGTERM"; }
+    ! grep -q "LeakSanitizer\|AddressSanitizer\|runtime error" "$1" || { cat "$1"; fail "sanitizer report"; }
+}
+
+# Needs root and network namespaces, or exits 77 (skipped) saying why.
+need_netns() {
+    [ "$(id -u)" = 0 ] || skip "multi-host tests need root for network namespaces"
+    command -v ip >/dev/null 2>&1 || skip "iproute2 (ip) is not installed"
+    probe="giprobe$$"
+    ip netns add "$probe" 2>/dev/null || skip "cannot create network namespaces here"
+    ip netns del "$probe"
+}
+
+# netns_up PREFIX WORKERS: the namespace farm (deleted on exit).
+netns_up() {
+    FARM_NS=$1
+    sh "$NETNS" down "$1" >/dev/null 2>&1 || true
+    sh "$NETNS" up "$1" "$2" || fail "cannot build the namespace farm"
+}
+
+# The job's last checkpoint: jckpt ID KEY (seq, merged).
+jckpt() {
+    api "/api/v1/jobs/$1" | sed -n 's/.*"checkpoint":{\([^}]*\)}.*/\1/p' | tr ',' '\n' |
+        awk -F: -v k="\"$2\"" '$1 == k {print $2}'
+}
+
+# wait_log FILE PATTERN: until the log has a line matching PATTERN (10 s).
+wait_log() {
+    n=0
+    until grep -q -- "$2" "$1"; do
+        n=$((n + 1))
+        [ $n -lt 200 ] || { tail -n 30 "$1"; fail "not logged: $2"; }
+        sleep 0.05
+    done
+}
+
+# netns_farm PREFIX [gi-farmd options...]: a coordinator host and three
+# worker hosts (one process each) in network namespaces. Sets C (the
+# coordinator's address) and FARM_EXEC (runs API clients on its host).
+netns_farm() {
+    P=$1
+    shift
+    need_netns
+    make_secrets
+    netns_up "$P" 3
+    C=$(sh "$NETNS" addr "$P" c)
+    FARM_EXEC="ip netns exec $P-c"
+    start_farmd "$TMP/state" "$TMP/farmd.log" ip netns exec "$P-c" -- \
+        --listen-workers "$C:7071" --listen-api "$C:7070" "$@"
+    for i in 1 2 3; do
+        start_worker "$TMP/w$i.log" ip netns exec "$P-w$i" -- --connect "$C:7071" --procs 1 \
+            --cache "$TMP/cache$i" --name "host$i"
+    done
+}
+
+# cornell_job FILE SEED WIDTH HEIGHT SPP [PASS_SPP]: a Cornell box pt job
+# writing img.exr, and its reference rendering by `gi render` into FILE.ref/.
+cornell_job() {
+    write_job "$1" <<JOB
+{
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "pt",
+  "seed": $2,
+  "image": {"width": $3, "height": $4},
+  "pt": {"spp": $5, "tile": 16, "pass_spp": ${6:-8}},
+  "outputs": {"exr": "img.exr"}
+}
+JOB
+    "$GI_RELEASE" render "$1" --workers 2 --out "$1.ref" --progress none >/dev/null 2>&1 ||
+        fail "reference render of $1"
+}
+
+# wait_merged ID DIVISOR [checkpoint]: until at least total/DIVISOR tasks are
+# merged (or, with "checkpoint", are in the last checkpoint), and the job is
+# still running (for a test that must act mid-job). Sets merged and total.
+wait_merged() {
+    n=0
+    while :; do
+        if [ "${3:-}" = checkpoint ]; then merged=$(jckpt "$1" merged); else merged=$(jnum "$1" merged); fi
+        total=$(jnum "$1" total)
+        [ "${total:-0}" -gt 0 ] && [ "${merged:-0}" -ge $((total / $2)) ] && break
+        n=$((n + 1))
+        [ $n -lt 600 ] || fail "job $1 did not progress"
+        sleep 0.05
+    done
+    [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
+}

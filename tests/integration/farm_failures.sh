@@ -1,0 +1,47 @@
+# Task failures on the farm: a worker whose tasks keep failing is
+# blocklisted and the others finish the job (identical image); a task that
+# fails on every attempt fails its job with the task's error.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+LOG="$TMP/farmd.log"
+start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10 --blocklist-failures 3 \
+    --max-attempts 4
+PORTS="--listen-workers $WADDR --listen-api $API"
+write_job "$TMP/job.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 8,
+ "image": {"width": 32, "height": 32}, "pt": {"spp": 32, "tile": 16, "pass_spp": 8},
+ "outputs": {"exr": "img.exr"}}
+JOB
+"$GI_RELEASE" render "$TMP/job.json" --workers 1 --out "$TMP/ref" --progress none >/dev/null 2>&1
+
+# A worker whose children die on task 0 (three attempts in a row, since a
+# retry goes first in line): it is blocklisted, and a healthy worker then
+# does the rest.
+start_worker "$TMP/bad.log" env GI_FAULT_CRASH_TASK="0:0,0:1,0:2" -- \
+    --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/c1" --name bad
+id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
+wait_log "$LOG" "worker bad blocklisted"
+"$GI" workers | grep -q "^bad .*blocklisted" || { "$GI" workers; fail "gi workers does not show it"; }
+start_worker "$TMP/good.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c2" --name good
+wait_state "$id" done 60
+"$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
+cmp "$TMP/ref/img.exr" "$TMP/out/img.exr" || fail "image differs after the failures"
+[ "$(jnum "$id" retries)" -ge 3 ] || fail "retries: $(jnum "$id" retries)"
+api "/api/v1/jobs/$id" | grep -q '"worker":"bad","message":"bad: pool child 0' || fail "task errors name the worker"
+kill -9 $FARM_PIDS 2>/dev/null || true
+
+# A task that fails every time: the job fails with its error after 4 runs.
+start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10 --blocklist-failures 100 \
+    --max-attempts 4 $PORTS
+start_worker "$TMP/flaky.log" env GI_FAULT_CRASH_TASK="2:0,2:1,2:2,2:3" -- \
+    --connect "$WADDR" --procs 1 --cache "$TMP/c3" --name flaky
+set +e
+"$GI" submit "$TMP/job.json" --wait --progress none >"$TMP/wait.log" 2>&1
+rc=$?
+set -e
+[ $rc -eq 1 ] || { cat "$TMP/wait.log"; fail "a job whose task always fails: exit $rc"; }
+grep -q "failed: task 2 failed 4 times; last error: flaky: pool child 0 .* was killed by signal 9" "$TMP/wait.log" ||
+    { cat "$TMP/wait.log"; fail "no clear error"; }
+stop_farmd "$LOG"
+echo ok

@@ -1,0 +1,111 @@
+# gi-farmd refuses, each with a logged reason, and keeps serving:
+# a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
+# an oversized frame, a frame with a bad CRC, an unknown message type, frames
+# a connection may not carry, an oversized upload, jobs that name files
+# outside their uploaded assets, and a scene whose parser crashes (in the
+# forked checker). Then a job still renders.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+LOG="$TMP/farmd.log"
+start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10 --max-result-bytes 16M \
+    --max-asset-bytes 1M
+logged() { grep -q -- "$1" "$LOG" || { cat "$LOG"; fail "not logged: $1"; }; }
+
+# Wrong farm secret: the worker is refused and says why.
+head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$TMP/wrong"
+chmod 600 "$TMP/wrong"
+if "$WORKER" --connect "$WADDR" --procs 1 --cache "$TMP/c0" --secret-file "$TMP/wrong" --once \
+    >"$TMP/wrong.log" 2>&1; then fail "a worker with the wrong secret was accepted"; fi
+grep -q "authentication failed" "$TMP/wrong.log" || { cat "$TMP/wrong.log"; fail "the worker was not told"; }
+logged "refused .*authentication failed: the worker does not know the farm secret"
+
+# Malformed frames, before and after authenticating.
+peer() {
+    out=$(GI_FARM_SECRET_FILE="$TMP/secret" "$RAWPEER" "$WADDR" "$1") || fail "$1: not refused ($out)"
+    echo "$out" | grep -q -- "$2" || fail "$1: \"$out\" does not say \"$2\""
+    logged "$2"
+}
+peer oversized "HELLO frame payload of 1073741824 bytes exceeds the limit of 65536 bytes"
+peer badcrc "HELLO frame CRC32C mismatch"
+peer unknown-type "frame type 99 is unknown"
+peer garbage 'bad magic "GET "'
+peer version "worker speaks protocol versions 2-3; this coordinator speaks 1"
+peer result-first "RESULT frames are not accepted on this connection"
+peer auth-oversized-result "RESULT frame payload of 67108864 bytes exceeds the limit of 16777216 bytes"
+peer auth-badcrc "HELLO frames are not accepted on this connection"
+peer auth-unknown-type "frame type 99 is unknown"
+peer auth-unexpected "ASSET_PUT frames are not accepted on this connection"
+
+# The API: no token, a wrong token.
+code=$(curl -s -o "$TMP/r" -w '%{http_code}' "$GI_FARM/api/v1/jobs")
+[ "$code" = 401 ] || fail "no token: HTTP $code"
+logged "api: refused GET /api/v1/jobs from 127.0.0.1:[0-9]*: missing bearer token"
+code=$(curl -s -o "$TMP/r" -w '%{http_code}' -H "Authorization: Bearer not-the-token" \
+    -X POST --data-binary '{}' "$GI_FARM/api/v1/jobs")
+[ "$code" = 401 ] || fail "wrong token: HTTP $code"
+logged "api: refused POST /api/v1/jobs from .*: wrong bearer token"
+! grep -q "$(cat "$TMP/token")" "$LOG" || fail "the token appears in the log"
+! grep -q "$(cat "$TMP/secret")" "$LOG" || fail "the secret appears in the log"
+
+# Uploads: over the size limit; bytes that do not match their name.
+head -c 2000000 /dev/zero >"$TMP/big"
+code=$(api "/api/v1/assets/$(b2sum -l 256 "$TMP/big" | cut -d' ' -f1)" -o "$TMP/r" -w '%{http_code}' \
+    -X PUT --data-binary @"$TMP/big")
+[ "$code" = 413 ] || fail "oversized upload: HTTP $code"
+logged "over the limit of 1048576"
+code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 64))" -o "$TMP/r" -w '%{http_code}' -X PUT \
+    --data-binary 'not these bytes')
+[ "$code" = 400 ] || fail "mismatched upload: HTTP $code"
+logged "hash to"
+
+# Jobs naming files outside their assets.
+job_body() { # SCENE ASSETS-JSON
+    printf '{"job": {"scene": "%s", "method": "pt", "image": {"width": 8, "height": 8}}, "assets": %s}' "$1" "$2"
+}
+code=$(api /api/v1/jobs -o "$TMP/r" -w '%{http_code}' -X POST --data-binary "$(job_body ../../../etc/passwd '{}')")
+[ "$code" = 400 ] || fail "scene outside the assets: HTTP $code"
+grep -q "not among the job's assets" "$TMP/r" || { cat "$TMP/r"; fail "no reason given"; }
+logged 'scene: "../../../etc/passwd" is not among the job'"'"'s assets'
+code=$(api /api/v1/jobs -o "$TMP/r" -w '%{http_code}' -X POST \
+    --data-binary "$(job_body s.json '{"s.json": "'"$(printf 'b%.0s' $(seq 64))"'"}')")
+[ "$code" = 400 ] && grep -q "was never uploaded" "$TMP/r" || { cat "$TMP/r"; fail "asset never uploaded"; }
+# A scene that reaches for a file it did not upload: accepted, then failed by the checker.
+cat >"$TMP/escape.json" <<SCENE
+{"materials": {"l": {"emission": [1, 1, 1]}},
+ "objects": [{"name": "lamp", "material": "l", "quad": {"size": [1, 1]}},
+             {"name": "loot", "mesh": "../../../../../../etc/hostname"}]}
+SCENE
+h=$(b2sum -l 256 "$TMP/escape.json" | cut -d' ' -f1)
+api "/api/v1/assets/$h" -o /dev/null -X PUT --data-binary @"$TMP/escape.json"
+api /api/v1/jobs -o "$TMP/r" -X POST --data-binary "$(job_body escape.json '{"escape.json": "'"$h"'"}')"
+id=$(grep -o '"id":[0-9]*' "$TMP/r" | cut -d: -f2)
+wait_state "$id" failed 30
+api "/api/v1/jobs/$id" | grep -q "etc/hostname: not among the job's assets" || fail "no reason for the escape"
+logged "job $id: failed: .*etc/hostname: not among the job's assets"
+
+# A scene checker that crashes (as on a hostile mesh) fails that job only.
+stop_farmd "$LOG"
+start_farmd "$TMP/state" "$LOG" env GI_FAULT_CHECK_CRASH=1 -- --heartbeat 0.2 --lease 2 --dead 10
+api /api/v1/jobs -o "$TMP/r" -X POST --data-binary "$(job_body escape.json '{"escape.json": "'"$h"'"}')"
+id=$(grep -o '"id":[0-9]*' "$TMP/r" | cut -d: -f2)
+wait_state "$id" failed 30
+logged "job $id: failed: .*loading the scene crashed (signal 11)"
+stop_farmd "$LOG"
+
+# Still serving: a job renders (ASan worker, so its children are checked too).
+start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10
+WORKER=$WORKER_ASAN start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+write_job "$TMP/job.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "image": {"width": 32, "height": 32},
+ "pt": {"spp": 4, "tile": 16}, "outputs": {"exr": "img.exr"}}
+JOB
+"$GI" submit "$TMP/job.json" --wait --out "$TMP/out" --progress none >"$TMP/submit.log" 2>&1 ||
+    { cat "$TMP/submit.log"; fail "a job after the refusals"; }
+"$GI_RELEASE" render "$TMP/job.json" --workers 1 --out "$TMP/ref" --progress none >/dev/null 2>&1
+cmp "$TMP/ref/img.exr" "$TMP/out/img.exr" || fail "image differs"
+kill -TERM "$WORKER_PID"
+wait "$WORKER_PID" || fail "the worker did not drain cleanly"
+! grep -q "LeakSanitizer\|AddressSanitizer\|runtime error" "$TMP/worker.log" || { cat "$TMP/worker.log"; fail "sanitizer"; }
+stop_farmd "$LOG"
+echo "every refusal logged; the farm still renders"

@@ -1,0 +1,54 @@
+# kill -9 of gi-farmd in the middle of a job, then a restart on the same
+# state directory: the job resumes from its last checkpoint and completes
+# with a byte-identical image; the tasks merged before that checkpoint are
+# not run again (the new coordinator accepts exactly total - resumed
+# results). Then the same after a clean stop (SIGTERM checkpoints at once).
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+cornell_job "$TMP/job.json" 21 128 96 512
+OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
+
+# 1. kill -9 with at least a fifth merged and checkpointed.
+wait_merged "$id" 5 checkpoint
+seen=$merged
+kill -9 "$FARMD_PID"
+wait "$FARMD_PID" 2>/dev/null || true
+echo "killed gi-farmd -9 with $seen of $total tasks in the last checkpoint seen"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
+wait_state "$id" running 60
+resumed=$(jnum "$id" resumed_merged)
+[ "$resumed" -ge "$seen" ] || fail "resumed with $resumed merged, the checkpoint had $seen"
+
+# 2. A clean stop later on: SIGTERM checkpoints everything merged so far.
+wait_merged "$id" 2 checkpoint
+stop_farmd "$TMP/farmd.log"
+grep -q "stopping: checkpointing running jobs" "$TMP/farmd.log" || fail "no checkpoint on SIGTERM"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
+wait_state "$id" done 120
+resumed2=$(jnum "$id" resumed_merged)
+results=$(jnum "$id" results_this_run)
+total=$(jnum "$id" total)
+[ "$resumed2" -gt "$resumed" ] || fail "the second restart resumed from $resumed2 <= $resumed"
+# Not redone: this coordinator ran exactly the tasks the checkpoint lacked.
+[ "$results" -eq $((total - resumed2)) ] ||
+    fail "accepted $results results after resuming at $resumed2 of $total"
+api "/api/v1/jobs/$id" | grep -q "resumed from checkpoint" || fail "no resume in the job's log"
+"$GI" fetch "$id" --out "$TMP/farm" >/dev/null || fail "fetch"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the restarts"
+# The journal's replay survives a torn tail (a crash in the middle of an append).
+stop_farmd "$TMP/farmd.log"
+printf '\003\000\000\000\377\377' >>"$TMP/state/journal"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
+grep -q "journal: record at byte .* is torn" "$TMP/farmd.log" || fail "the torn record was not reported"
+[ "$(jstate "$id")" = done ] || fail "the job is not remembered as done"
+stop_farmd "$TMP/farmd.log"
+echo "identical; resumed at $resumed then $resumed2 of $total merged, $results results after the last restart"

@@ -1,0 +1,256 @@
+/* Unit tests: the farm's control messages (handshake, heartbeat, drain,
+ * cancel), worker authentication, secrets and tokens, per-connection frame
+ * limits. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "gi_auth.h"
+#include "gi_frame.h"
+#include "gi_msg_ctrl.h"
+#include "gi_test.h"
+
+static gi_msg_hello sample_hello(void)
+{
+    gi_msg_hello h;
+    memset(&h, 0, sizeof h);
+    h.proto_min = 1;
+    h.proto_max = 3;
+    for (int i = 0; i < GI_MSG_NONCE_BYTES; i++)
+        h.nonce[i] = (uint8_t)(7 * i + 1);
+    h.name = "render-07";
+    h.version = "0.1.0";
+    h.procs = 8;
+    h.slots = 12;
+    h.cores = 16;
+    h.memory = UINT64_C(68719476736);
+    return h;
+}
+
+GI_TEST(test_msg_hello_roundtrip)
+{
+    gi_msg_hello h = sample_hello(), d;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_hello_encode(&b, &h);
+    gi_error err;
+    GI_REQUIRE_OK(gi_msg_hello_decode(&b, &d, &err));
+    GI_CHECK(d.proto_min == 1 && d.proto_max == 3);
+    GI_CHECK(memcmp(d.nonce, h.nonce, GI_MSG_NONCE_BYTES) == 0);
+    GI_CHECK(strcmp(d.name, "render-07") == 0 && strcmp(d.version, "0.1.0") == 0);
+    GI_CHECK(d.procs == 8 && d.slots == 12 && d.cores == 16 && d.memory == h.memory);
+    gi_msg_hello_free(&d);
+    /* Every truncation and a trailing byte are refused. */
+    for (size_t n = 0; n < b.len; n++) {
+        gi_buf t = {b.data, n, n};
+        GI_CHECK_MSG(gi_msg_hello_decode(&t, &d, &err) != 0, "prefix of %zu bytes accepted", n);
+    }
+    gi_buf_put_u8(&b, 0);
+    GI_CHECK(gi_msg_hello_decode(&b, &d, &err) != 0);
+    GI_CHECK(strstr(err.msg, "trailing") != NULL);
+    gi_buf_free(&b);
+}
+
+GI_TEST(test_msg_hello_refusals)
+{
+    static const char *const what[] = {"empty name", "control character", "no processes",
+                                       "slots < processes", "empty version range"};
+    for (int c = 0; c < 5; c++) {
+        gi_msg_hello h = sample_hello(), d;
+        if (c == 0)
+            h.name = "";
+        if (c == 1)
+            h.name = "evil\nlog line";
+        if (c == 2)
+            h.procs = 0;
+        if (c == 3)
+            h.slots = 4;
+        if (c == 4)
+            h.proto_min = 5;
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_msg_hello_encode(&b, &h);
+        gi_error err;
+        GI_CHECK_MSG(gi_msg_hello_decode(&b, &d, &err) != 0, "%s accepted", what[c]);
+        GI_CHECK(strncmp(err.msg, "HELLO message", 13) == 0);
+        gi_buf_free(&b);
+    }
+}
+
+GI_TEST(test_msg_handshake_roundtrips)
+{
+    gi_error err;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_challenge ch = {.proto = 1}, ch2;
+    memset(ch.nonce, 0xab, sizeof ch.nonce);
+    gi_msg_challenge_encode(&b, &ch);
+    GI_REQUIRE_OK(gi_msg_challenge_decode(&b, &ch2, &err));
+    GI_CHECK(ch2.proto == 1 && memcmp(ch2.nonce, ch.nonce, sizeof ch.nonce) == 0);
+
+    uint8_t mac[GI_MSG_MAC_BYTES], mac2[GI_MSG_MAC_BYTES];
+    for (int i = 0; i < GI_MSG_MAC_BYTES; i++)
+        mac[i] = (uint8_t)i;
+    gi_buf_reset(&b);
+    gi_msg_auth_encode(&b, mac);
+    GI_REQUIRE_OK(gi_msg_auth_decode(&b, mac2, &err));
+    GI_CHECK(memcmp(mac, mac2, sizeof mac) == 0);
+    b.len--;
+    GI_CHECK(gi_msg_auth_decode(&b, mac2, &err) != 0);
+
+    gi_msg_welcome w = {.worker_id = 42, .heartbeat_ms = 500, .lease_ms = 2000}, w2;
+    memcpy(w.mac, mac, sizeof mac);
+    gi_buf_reset(&b);
+    gi_msg_welcome_encode(&b, &w);
+    GI_REQUIRE_OK(gi_msg_welcome_decode(&b, &w2, &err));
+    GI_CHECK(w2.worker_id == 42 && w2.heartbeat_ms == 500 && w2.lease_ms == 2000);
+    /* A lease shorter than two heartbeats would expire on healthy workers. */
+    w.lease_ms = 900;
+    gi_buf_reset(&b);
+    gi_msg_welcome_encode(&b, &w);
+    GI_CHECK(gi_msg_welcome_decode(&b, &w2, &err) != 0);
+    gi_buf_free(&b);
+}
+
+GI_TEST(test_msg_tasklist_and_cancel)
+{
+    gi_msg_taskref refs[3] = {{1, 2, 0}, {1, 7, 3}, {UINT64_MAX, 0, UINT32_MAX}};
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_tasklist_encode(&b, 99, refs, 3);
+    gi_msg_tasklist tl;
+    gi_error err;
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", &tl, &err));
+    GI_CHECK(tl.seq == 99 && tl.count == 3);
+    for (int i = 0; i < 3; i++)
+        GI_CHECK(tl.refs[i].job_id == refs[i].job_id && tl.refs[i].task_id == refs[i].task_id &&
+                 tl.refs[i].attempt == refs[i].attempt);
+    gi_msg_tasklist_free(&tl);
+    /* A count the bytes cannot hold is refused before anything is allocated. */
+    gi_buf_reset(&b);
+    gi_buf_put_u64(&b, 1);
+    gi_buf_put_u32(&b, 4000);
+    GI_CHECK(gi_msg_tasklist_decode(&b, "DRAIN message", &tl, &err) != 0);
+    GI_CHECK(strstr(err.msg, "DRAIN message: 4000 task references") != NULL);
+    gi_buf_reset(&b);
+    gi_msg_tasklist_encode(&b, 0, NULL, 0);
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "DRAIN message", &tl, &err));
+    GI_CHECK(tl.count == 0);
+    gi_msg_tasklist_free(&tl);
+
+    gi_msg_cancel c = {5, GI_MSG_ALL_TASKS}, c2;
+    gi_buf_reset(&b);
+    gi_msg_cancel_encode(&b, &c);
+    GI_REQUIRE_OK(gi_msg_cancel_decode(&b, &c2, &err));
+    GI_CHECK(c2.job_id == 5 && c2.task_id == GI_MSG_ALL_TASKS);
+    gi_buf_free(&b);
+}
+
+static void key_from(const char *s, uint8_t key[GI_AUTH_KEY_BYTES])
+{
+    gi_buf b = {(uint8_t *)s, strlen(s), strlen(s)};
+    gi_auth_key(&b, key);
+}
+
+GI_TEST(test_auth_macs)
+{
+    uint8_t k1[32], k2[32], cn[32], wn[32], m1[32], m2[32];
+    key_from("the farm secret, 32 bytes long..", k1);
+    key_from("another farm's secret, not ours.", k2);
+    gi_auth_random(cn, sizeof cn);
+    gi_auth_random(wn, sizeof wn);
+    GI_CHECK(memcmp(cn, wn, 32) != 0);
+    const char hello[] = "hello payload";
+    gi_auth_worker_mac(k1, cn, wn, hello, sizeof hello, m1);
+    gi_auth_worker_mac(k1, cn, wn, hello, sizeof hello, m2);
+    GI_CHECK(gi_auth_mac_equal(m1, m2));
+    gi_auth_worker_mac(k2, cn, wn, hello, sizeof hello, m2); /* wrong secret */
+    GI_CHECK(!gi_auth_mac_equal(m1, m2));
+    gi_auth_worker_mac(k1, wn, cn, hello, sizeof hello, m2); /* nonces swapped */
+    GI_CHECK(!gi_auth_mac_equal(m1, m2));
+    gi_auth_worker_mac(k1, cn, wn, "hello payloaD", sizeof hello, m2); /* HELLO altered */
+    GI_CHECK(!gi_auth_mac_equal(m1, m2));
+    /* The coordinator's proof is not the worker's, even over the same bytes. */
+    gi_auth_coord_mac(k1, cn, wn, 0, m2);
+    GI_CHECK(!gi_auth_mac_equal(m1, m2));
+    gi_auth_coord_mac(k1, wn, cn, 1, m1);
+    gi_auth_coord_mac(k1, wn, cn, 2, m2); /* bound to the worker id */
+    GI_CHECK(!gi_auth_mac_equal(m1, m2));
+}
+
+GI_TEST(test_token_compare)
+{
+    const char *t = "s3cret-token-value";
+    gi_buf tok = {(uint8_t *)t, strlen(t), strlen(t)};
+    GI_CHECK(gi_token_equal(&tok, t, strlen(t)));
+    GI_CHECK(!gi_token_equal(&tok, t, strlen(t) - 1));
+    GI_CHECK(!gi_token_equal(&tok, "s3cret-token-valuf", strlen(t)));
+    GI_CHECK(!gi_token_equal(&tok, "", 0));
+}
+
+static void write_file(const char *path, const char *text, mode_t mode)
+{
+    FILE *f = fopen(path, "w");
+    fputs(text, f);
+    fclose(f);
+    chmod(path, mode);
+}
+
+GI_TEST(test_secret_read)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/secret", gi_test_tmpdir());
+    gi_buf s;
+    gi_buf_init(&s);
+    gi_error err;
+    write_file(path, "0123456789abcdef0123\n", 0600);
+    GI_REQUIRE_OK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err));
+    GI_CHECK(s.len == 20 && memcmp(s.data, "0123456789abcdef0123", 20) == 0);
+    /* Readable by others: refused, and the message holds no secret byte. */
+    chmod(path, 0644);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(strstr(err.msg, "chmod 600") && !strstr(err.msg, "0123456789"));
+    write_file(path, "short\n", 0600);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(strstr(err.msg, "shorter than 16 bytes") != NULL);
+    /* From a variable naming a file, then from the value itself, which is
+     * then removed from the environment. */
+    write_file(path, "file secret, long enough", 0600);
+    setenv("GI_TEST_SECRET_FILE", path, 1);
+    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", &s, &err));
+    GI_CHECK(s.len == 24);
+    unsetenv("GI_TEST_SECRET_FILE");
+    setenv("GI_TEST_SECRET", "environment secret value", 1);
+    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", &s, &err));
+    GI_CHECK(s.len == 24 && memcmp(s.data, "environment", 11) == 0);
+    GI_CHECK(getenv("GI_TEST_SECRET") == NULL);
+    GI_CHECK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "API token", &s, &err) != 0);
+    GI_CHECK(strstr(err.msg, "no API token") && strstr(err.msg, "GI_TEST_SECRET"));
+    gi_secret_free(&s);
+}
+
+GI_TEST(test_frame_zero_limit_refuses_type)
+{
+    gi_frame_limits lim = gi_frame_limits_default();
+    lim.max_payload[GI_MSG_RESULT] = 0;
+    gi_frame_decoder d;
+    gi_frame_decoder_init(&d, NULL, "peer");
+    gi_frame_decoder_set_limits(&d, &lim);
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_frame_encode(&b, GI_MSG_BYE, NULL, 0, 0);     /* empty: fine */
+    gi_frame_encode(&b, GI_MSG_RESULT, NULL, 0, 0);  /* empty: passes, the caller decides */
+    gi_frame_encode(&b, GI_MSG_RESULT, "x", 1, 0);   /* refused from its header */
+    gi_frame_decoder_feed(&d, b.data, b.len);
+    gi_frame f;
+    gi_error err;
+    GI_CHECK(gi_frame_decoder_next(&d, &f, &err) == 1 && f.type == GI_MSG_BYE);
+    gi_frame_free(&f);
+    GI_CHECK(gi_frame_decoder_next(&d, &f, &err) == 1 && f.type == GI_MSG_RESULT);
+    gi_frame_free(&f);
+    GI_CHECK(gi_frame_decoder_next(&d, &f, &err) == -1);
+    GI_CHECK(strstr(err.msg, "RESULT frames are not accepted on this connection") != NULL);
+    gi_frame_decoder_free(&d);
+    gi_buf_free(&b);
+}
