@@ -14,6 +14,25 @@ typedef struct gi_bsdf {
     gi_vec3 n;   /* shading normal, facing the outgoing direction */
 } gi_bsdf;
 
+/* The shading normal at barycentrics (u, v) of triangle tri, on the side of
+ * ng_facing (the geometric normal facing the outgoing direction). */
+static inline gi_vec3 gi_bsdf_shading_normal(const gi_scene *s, uint32_t tri, float u, float v,
+                                             gi_vec3 ng_facing)
+{
+    if (!s->tri_smooth[tri])
+        return ng_facing;
+    const uint32_t *ix = &s->indices[3 * tri];
+    gi_vec3 n = gi_add(gi_add(gi_scale(s->normals[ix[0]], 1.0f - u - v),
+                              gi_scale(s->normals[ix[1]], u)),
+                       gi_scale(s->normals[ix[2]], v));
+    n = gi_normalize(n);
+    /* Interpolated normals may point to the other side near silhouettes;
+     * the geometric side decides which side we are on. */
+    if (!(gi_dot(n, ng_facing) > 0.0f))
+        n = gi_dot(n, ng_facing) < 0.0f ? gi_neg(n) : ng_facing;
+    return n;
+}
+
 static inline gi_bsdf gi_bsdf_at(const gi_material *m, gi_vec3 n_facing)
 {
     gi_bsdf b = {m->diffuse, n_facing};

@@ -5,28 +5,6 @@
 #include "gi_light.h"
 #include "pt.h"
 
-static inline gi_vec3 shading_normal(const gi_scene *s, uint32_t tri, float u, float v,
-                                     gi_vec3 ng_facing)
-{
-    if (!s->tri_smooth[tri])
-        return ng_facing;
-    const uint32_t *ix = &s->indices[3 * tri];
-    gi_vec3 n = gi_add(gi_add(gi_scale(s->normals[ix[0]], 1.0f - u - v),
-                              gi_scale(s->normals[ix[1]], u)),
-                       gi_scale(s->normals[ix[2]], v));
-    n = gi_normalize(n);
-    /* Interpolated normals may point to the other side near silhouettes;
-     * the geometric side decides which side we are on. */
-    if (!(gi_dot(n, ng_facing) > 0.0f))
-        n = gi_dot(n, ng_facing) < 0.0f ? gi_neg(n) : ng_facing;
-    return n;
-}
-
-static inline float offset_scale(gi_vec3 p)
-{
-    return 2e-5f * gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
-}
-
 /* Next-event estimation: radiance from a sampled emitter point, weighted.
  * Written for few divisions and square roots: this runs once per vertex. */
 static gi_vec3 sample_light(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 ng_f,
@@ -52,13 +30,9 @@ static gi_vec3 sample_light(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 ng_f,
         return gi_v3(0, 0, 0);
     float inv_cos_l = 1.0f / fabsf(cos_l);
     float pdf_light = ls.pdf_area * dist2 * inv_cos_l; /* per solid angle */
-    /* The shadow ray leaves from p moved e off the surface; that brings the
-     * light's plane up to e / |cos_l| closer, so it stops that much (plus a
-     * margin) short of the light point. */
-    float e = offset_scale(p);
-    gi_vec3 org = gi_madd(p, ng_f, e);
-    float tfar = dist - e * inv_cos_l - 2.0f * offset_scale(ls.p);
-    if (tfar <= 0.0f)
+    gi_vec3 org;
+    float tfar;
+    if (!gi_rt_shadow_segment(p, ng_f, ls.p, dist, inv_cos_l, &org, &tfar))
         return gi_v3(0, 0, 0);
     if (tr->log)
         tr->log->ray(tr->log->user, org, wi, 0.0f, tfar, 1);
@@ -111,7 +85,7 @@ gi_vec3 gi_pt_radiance(const gi_pt_tracer *tr, gi_vec3 org, gi_vec3 dir, gi_rng 
             break;
         if (gi_is_black(m->diffuse))
             break;
-        gi_bsdf bsdf = gi_bsdf_at(m, shading_normal(s, h.tri, h.u, h.v, ng_f));
+        gi_bsdf bsdf = gi_bsdf_at(m, gi_bsdf_shading_normal(s, h.tri, h.u, h.v, ng_f));
 
         if (prm->strategy != GI_PT_BSDF)
             L = gi_add(L, gi_mul(beta, sample_light(tr, p, ng_f, &bsdf, rng)));
