@@ -34,10 +34,9 @@ static void build_boole(const gi_quad_rule *r, const gi_quad_analysis *a, const 
     double trap[GI_QUAD_MAX_CHANNELS];
     gi_quad_interp_integral(g, lo, hi, trap);
     for (int c = 0; c < nc; c++) {
-        int nonneg = 1;
-        for (int k = 0; k < 25; k++)
-            nonneg &= g->v[k * nc + c] >= 0.0;
-        if (nonneg && trap[c] > 0.0) {
+        /* Light-integrated with positive weights, the grid of a non-negative
+         * channel is non-negative. */
+        if (a->nonneg[c] && trap[c] > 0.0) {
             double s = a->est[c] / trap[c];
             for (int k = 0; k < 25; k++)
                 g->v[k * nc + c] *= s;
@@ -57,7 +56,7 @@ static void build_gm(const gi_quad_rule *r, const gi_quad_analysis *a, gi_quad_i
                a3 = a->image[3 * nc + c];
         /* At the corners |a1 X + a2 Y + a3 XY| <= |a1| + |a2| + |a3|. */
         double slope = fabs(a1) + fabs(a2) + fabs(a3), theta = 1.0;
-        if (slope > a0)
+        if (a->nonneg[c] && slope > a0)
             theta = a0 > 0.0 ? a0 / slope : 0.0;
         for (int ix = 0; ix < 2; ix++)
             for (int iy = 0; iy < 2; iy++) {

@@ -13,15 +13,16 @@
  *     patches give the composite trapezoid rule (weights 1,2,2,2,1 / 8 per
  *     axis), not Boole's: the digest's note that the splatted value is not
  *     the estimate whose error was measured. To make them agree, each
- *     channel is scaled by Q_Boole / Q_trapezoid when its grid is
+ *     channel is scaled by Q_Boole / Q_trapezoid when its samples are
  *     non-negative (radiance always is; Boole's weights are positive, so
  *     the ratio lies in [0.28, 2.03] and zeros stay zeros), else shifted by
  *     the constant (Q_Boole - Q_trapezoid) / area. Either way the
  *     interpolant integrates to Q_Boole, up to rounding.
  *   - Genz-Malik (n = 2): one bilinear patch, the L2 projection of G onto
  *     {1, X, Y, XY} computed by the degree-7 rule, its non-constant part
- *     scaled down just enough that no corner is negative (a slope limiter;
- *     the non-constant part integrates to 0, so the integral is unchanged).
+ *     scaled down, for a channel whose samples are non-negative, just enough
+ *     that no corner is negative (a slope limiter; the non-constant part
+ *     integrates to 0, so the integral is unchanged).
  *
  * Node values are stored x-major: v[(ix * n + iy) * C + c]. */
 #ifndef GI_QUAD_INTERP_H

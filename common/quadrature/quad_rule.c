@@ -73,7 +73,12 @@ void gi_quad_rule_analyse(const gi_quad_rule *r, gi_quad_axis_rule axis_rule, co
     else
         gi_quad_gm_analyse(r, f, lo, hi, out);
     double e = 0;
-    for (int c = 0; c < r->channels; c++)
+    for (int c = 0; c < r->channels; c++) {
         e += fabs(out->est[c] - out->low[c]); /* eq. 4.4 */
+        out->nonneg[c] = 1;
+    }
     out->err_raw = e;
+    for (size_t i = 0; i < r->points; i++)
+        for (int c = 0; c < r->channels; c++)
+            out->nonneg[c] &= f[i * r->channels + c] >= 0.0;
 }

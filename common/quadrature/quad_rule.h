@@ -55,6 +55,7 @@ typedef struct gi_quad_analysis {
     double err_raw;                    /* || est - low ||_1, eq. 4.4 */
     double d4[GI_QUAD_MAX_DIMS];       /* fourth difference per axis, eq. 4.6 */
     double d4_scale[GI_QUAD_MAX_DIMS]; /* magnitude of the values it came from */
+    int nonneg[GI_QUAD_MAX_CHANNELS];  /* no sample of the channel is negative */
     /* Image-plane data for the interpolant. Boole: the nodes x nodes grid of
      * the samples integrated over the other axes (times their extent).
      * Genz-Malik: Legendre moments a0, a1 (x), a2 (y), a3 (xy) of the same
