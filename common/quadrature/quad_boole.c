@@ -19,46 +19,49 @@
 static const double boole_w[5] = {7.0 / 90, 32.0 / 90, 12.0 / 90, 32.0 / 90, 7.0 / 90};
 static const double simpson_w[5] = {1.0 / 6, 0.0, 4.0 / 6, 0.0, 1.0 / 6};
 
+/* Advances the node index tuple k (axis 0 slowest) to the next sample. */
+static inline void odometer(int *k, int n)
+{
+    for (int d = n - 1; d >= 0; d--) {
+        if (++k[d] < 5)
+            return;
+        k[d] = 0;
+    }
+}
+
 void gi_quad_boole_points(const gi_quad_rule *r, const double *lo, const double *hi,
                           double *pts)
 {
-    int n = r->dims;
+    int n = r->dims, k[GI_QUAD_MAX_DIMS] = {0};
     double step[GI_QUAD_MAX_DIMS];
     for (int d = 0; d < n; d++)
         step[d] = (hi[d] - lo[d]) * 0.25;
-    for (size_t i = 0; i < r->points; i++) {
-        size_t rest = i;
-        for (int d = n - 1; d >= 0; d--) {
-            pts[i * n + d] = lo[d] + (double)(rest % 5) * step[d];
-            rest /= 5;
-        }
-    }
+    for (size_t i = 0; i < r->points; i++, odometer(k, n))
+        for (int d = 0; d < n; d++)
+            pts[i * n + d] = lo[d] + (double)k[d] * step[d];
 }
 
 size_t gi_quad_boole_child(const gi_quad_rule *r, const double *parent_f, int axis, int side,
                            const double *clo, const double *chi, double *child_f, double *pts,
                            size_t *idx)
 {
-    int n = r->dims, nc = r->channels;
+    int n = r->dims, nc = r->channels, k[GI_QUAD_MAX_DIMS] = {0};
     size_t stride = r->pow5[n - 1 - axis], count = 0;
     double step[GI_QUAD_MAX_DIMS];
     for (int d = 0; d < n; d++)
         step[d] = (chi[d] - clo[d]) * 0.25;
-    for (size_t i = 0; i < r->points; i++) {
-        int k = (int)((i / stride) % 5);
-        if (k % 2 == 0) {
+    for (size_t i = 0; i < r->points; i++, odometer(k, n)) {
+        int ka = k[axis];
+        if (ka % 2 == 0) {
             /* The child's nodes 0, 2, 4 are the parent's 0, 1, 2 (lower
              * half) or 2, 3, 4 (upper half). */
-            int pk = 2 * side + k / 2;
-            size_t pi = i + ((size_t)pk - (size_t)k) * stride;
+            int pk = 2 * side + ka / 2;
+            size_t pi = i + ((size_t)pk - (size_t)ka) * stride;
             memcpy(child_f + i * nc, parent_f + pi * nc, sizeof(double) * nc);
             continue;
         }
-        size_t rest = i;
-        for (int d = n - 1; d >= 0; d--) {
-            pts[count * n + d] = clo[d] + (double)(rest % 5) * step[d];
-            rest /= 5;
-        }
+        for (int d = 0; d < n; d++)
+            pts[count * n + d] = clo[d] + (double)k[d] * step[d];
         idx[count++] = i;
     }
     return count;
@@ -75,21 +78,6 @@ static void collapse(const double *src, size_t A, size_t B, const double w[5], d
             dst[a * B + b] = w[0] * s[b] + w[1] * s[B + b] + w[2] * s[2 * B + b] +
                              w[3] * s[3 * B + b] + w[4] * s[4 * B + b];
     }
-}
-
-/* Integrates the samples over the axes [keep, N) (the slowest `keep` axes
- * stay) with weights w: out gets 5^keep * C values. */
-static void collapse_tail(const gi_quad_rule *r, const double *f, int keep, const double w[5],
-                          double *out)
-{
-    int n = r->dims, nc = r->channels;
-    if (keep == n) {
-        memcpy(out, f, sizeof(double) * r->points * nc);
-        return;
-    }
-    collapse(f, r->pow5[n - 1], (size_t)nc, w, out);
-    for (int m = n - 1; m > keep; m--)
-        collapse(out, r->pow5[m - 1], (size_t)nc, w, out);
 }
 
 /* Fourth difference (eq. 4.6) of five values along an axis, at the
@@ -114,34 +102,41 @@ void gi_quad_boole_analyse(const gi_quad_rule *r, gi_quad_axis_rule axis_rule, c
                            const double *lo, const double *hi, gi_quad_analysis *out)
 {
     int n = r->dims, nc = r->channels;
-    /* Scratch for 5^(N-1) * C doubles: N <= GI_QUAD_BOOLE_MAX_DIMS keeps it
-     * at 100 KB. */
-    double buf[5 * 5 * 5 * 5 * 5 * GI_QUAD_MAX_CHANNELS];
+    /* tail[k]: the samples integrated over axes k..N-1 with Boole's weights
+     * (5^k x C values; tail[N] is f), computed as one chain: every sum below
+     * starts from one of them. Sizes add up to < 1.25 x 5^(N-1) C. */
+    double chain[5 * 5 * 5 * 5 * 5 * GI_QUAD_MAX_CHANNELS * 5 / 4 + 8];
+    double tmp[5 * 5 * 5 * 5 * 5 * GI_QUAD_MAX_CHANNELS];
+    const double *tail[GI_QUAD_MAX_DIMS + 1];
     double vol = 1.0, light_vol = 1.0;
     for (int d = 0; d < n; d++) {
         vol *= hi[d] - lo[d];
         if (d >= 2)
             light_vol *= hi[d] - lo[d];
     }
-    const double *src = f;
-    /* Boole and Simpson estimates (iterated over every axis). */
-    collapse_tail(r, src, 0, boole_w, buf);
-    for (int c = 0; c < nc; c++)
-        out->est[c] = vol * buf[c];
-    collapse_tail(r, src, 0, simpson_w, buf);
-    for (int c = 0; c < nc; c++)
-        out->low[c] = vol * buf[c];
-
-    /* Image plane: the 5 x 5 grid integrated over the other axes. */
-    if (n >= 2) {
-        collapse_tail(r, src, 2, boole_w, buf);
-        for (size_t i = 0; i < 25 * (size_t)nc; i++)
-            out->image[i] = light_vol * buf[i];
+    tail[n] = f;
+    double *next = chain;
+    for (int k = n - 1; k >= 0; k--) {
+        collapse(tail[k + 1], r->pow5[k], (size_t)nc, boole_w, next);
+        tail[k] = next;
+        next += r->pow5[k] * (size_t)nc;
     }
+    for (int c = 0; c < nc; c++)
+        out->est[c] = vol * tail[0][c];
+    /* Image plane: the 5 x 5 grid integrated over the other axes. */
+    if (n >= 2)
+        for (size_t i = 0; i < 25 * (size_t)nc; i++)
+            out->image[i] = light_vol * tail[2][i];
+    /* Simpson: its own chain, in place. */
+    collapse(f, r->pow5[n - 1], (size_t)nc, simpson_w, tmp);
+    for (int k = n - 2; k >= 0; k--)
+        collapse(tmp, r->pow5[k], (size_t)nc, simpson_w, tmp);
+    for (int c = 0; c < nc; c++)
+        out->low[c] = vol * tmp[c];
 
     /* Fourth differences per axis. */
     for (int a = 0; a < n; a++) {
-        double m[5 * GI_QUAD_MAX_CHANNELS];
+        const double *m;
         if (axis_rule == GI_QUAD_AXIS_CENTRE) {
             /* Point values on the line through the centre (eq. 4.6 as
              * printed): every other axis at node 2. */
@@ -150,27 +145,20 @@ void gi_quad_boole_analyse(const gi_quad_rule *r, gi_quad_axis_rule axis_rule, c
                 if (d != a)
                     base += 2 * r->pow5[n - 1 - d];
             for (int k = 0; k < 5; k++)
-                memcpy(m + k * nc, f + (base + (size_t)k * r->pow5[n - 1 - a]) * nc,
+                memcpy(tmp + k * nc, f + (base + (size_t)k * r->pow5[n - 1 - a]) * nc,
                        sizeof(double) * nc);
-        } else {
+            m = tmp;
+        } else if (a == 0) {
             /* The mean over the other axes (Boole weights sum to 1): sees
-             * features the centre line misses. */
-            const double *mv = f;
-            int front = a;
-            if (a < n - 1) {
-                collapse_tail(r, f, a + 1, boole_w, buf);
-                mv = buf;
-            } else if (a > 0) {
-                /* The last axis: integrate axis 0 away straight from f. */
-                collapse(f, 1, r->pow5[n - 1] * (size_t)nc, boole_w, buf);
-                mv = buf;
-                front = a - 1;
-            }
-            /* mv holds the axes a-front..a: integrate away the front ones,
-             * each of shape (1, 5, 5^(rest) C). */
-            for (int d = 0; d < front; d++)
-                collapse(buf, 1, r->pow5[front - d] * (size_t)nc, boole_w, buf);
-            memcpy(m, mv, sizeof(double) * 5 * nc);
+             * features the centre line misses. tail[1] is axis 0's. */
+            m = tail[1];
+        } else {
+            /* tail[a+1] holds axes 0..a: integrate away the front ones,
+             * axis d having shape (1, 5, 5^(a-d) C). */
+            collapse(tail[a + 1], 1, r->pow5[a] * (size_t)nc, boole_w, tmp);
+            for (int d = 1; d < a; d++)
+                collapse(tmp, 1, r->pow5[a - d] * (size_t)nc, boole_w, tmp);
+            m = tmp;
         }
         fourth_difference(m, nc, &out->d4[a], &out->d4_scale[a]);
     }

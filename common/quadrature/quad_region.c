@@ -202,7 +202,7 @@ int gi_quad_summary_get(gi_reader *r, const gi_quad_rule *rule, gi_quad_summary 
     if (r->failed)
         return gi_fail(err, GI_EPROTO, "%s: truncated region", r->what);
     int ok = s->axis >= -1 && s->axis < n && isfinite(s->err_raw) && s->err_raw >= 0 &&
-             !(s->err < 0);
+             isfinite(s->err) && s->err >= 0;
     for (int d = 0; d < n && ok; d++)
         ok = s->lo[d] >= 0.0 && s->hi[d] <= 1.0 && s->lo[d] < s->hi[d];
     for (int c = 0; c < nc && ok; c++)
