@@ -134,12 +134,12 @@ static int exr_fail(gi_error *err, const char *path, const char *step, exr_resul
 
 /* ---- writing ---------------------------------------------------------- */
 
-/* OpenEXRCore 3.1.5's ZIP compressor, when a chunk does not compress (noisy
- * float data), stores its scratch buffer - the bytes already reordered and
- * delta-coded for zlib - as the "uncompressed" chunk, which every reader
- * then decodes into garbage. A chunk stored uncompressed must be the packed
- * data itself: this wrapper puts it there after the library's compressor.
- * (Harmless where the library already does.) */
+/* OpenEXRCore 3.1.5's ZIP compressor falls back to storing a chunk raw only
+ * when deflate makes it larger; when deflate gives exactly as many bytes as
+ * the raw chunk, it keeps the deflated ones, and readers (this library's
+ * and OpenEXR's) take a chunk as long as its raw size for raw data: the
+ * pixels read back as garbage (it happened to a quadrature image). This
+ * wrapper stores such a chunk raw. */
 static exr_result_t compress_with_raw_fallback(exr_encode_pipeline_t *enc)
 {
     exr_result_t (*base)(exr_encode_pipeline_t *) = *(exr_result_t(**)(
