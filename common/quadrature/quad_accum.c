@@ -36,6 +36,21 @@ static int cmp_u32(const void *pa, const void *pb)
     return x < y ? -1 : x > y;
 }
 
+double gi_quad_accum_take_l1(gi_quad_accum *a)
+{
+    double sum = 0;
+    for (size_t i = 0; i < a->count; i++) {
+        double *v = a->px + (size_t)a->touched[i] * a->channels;
+        for (int c = 0; c < a->channels; c++) {
+            sum += fabs(v[c]);
+            v[c] = 0.0;
+        }
+        a->mark[a->touched[i]] = 0;
+    }
+    a->count = 0;
+    return sum;
+}
+
 void gi_quad_accum_emit(gi_quad_accum *a, gi_buf *out)
 {
     qsort(a->touched, a->count, sizeof(uint32_t), cmp_u32);

@@ -36,6 +36,9 @@ static inline void gi_quad_accum_add(gi_quad_accum *a, uint32_t pixel, const dou
         p[c] += scale * v[c];
 }
 
+/* The L1 norm (over pixels and channels) of what was added; resets. */
+double gi_quad_accum_take_l1(gi_quad_accum *a);
+
 /* Serializes the touched pixels (sorted) and resets the accumulator. */
 void gi_quad_accum_emit(gi_quad_accum *a, gi_buf *out);
 

@@ -99,3 +99,44 @@ void gi_quad_interp_eval(const gi_quad_interp *g, const double *lo, const double
         out[c] = (1 - fx) * ((1 - fy) * v00[c] + fy * v01[c]) +
                  fx * ((1 - fy) * v10[c] + fy * v11[c]);
 }
+
+void gi_quad_interp_coarse_diff(const gi_quad_interp *g, const double *lo, const double *hi,
+                                gi_quad_interp *out)
+{
+    int n = g->n, nc = g->channels;
+    *out = *g;
+    double fine[GI_QUAD_MAX_CHANNELS], coarse[GI_QUAD_MAX_CHANNELS];
+    gi_quad_interp_integral(g, lo, hi, fine);
+    if (n == 2) {
+        /* Genz-Malik: the patch minus its mean (a0). */
+        double area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+        for (int c = 0; c < nc; c++)
+            for (int k = 0; k < 4; k++)
+                out->v[k * nc + c] -= area > 0 ? fine[c] / area : 0.0;
+        return;
+    }
+    /* Boole: the 3 x 3 sub-grid (nodes 0, 2, 4), bilinear on its 2 x 2
+     * cells, is also bilinear on each of the 4 x 4 fine cells: its values
+     * at the fine nodes are averages of its own. */
+    gi_quad_interp c3;
+    memset(&c3, 0, sizeof c3);
+    c3.n = 3;
+    c3.channels = nc;
+    for (int ix = 0; ix < 3; ix++)
+        for (int iy = 0; iy < 3; iy++)
+            memcpy(c3.v + (ix * 3 + iy) * nc, g->v + (2 * ix * n + 2 * iy) * nc,
+                   sizeof(double) * nc);
+    gi_quad_interp_integral(&c3, lo, hi, coarse);
+    for (int ix = 0; ix < n; ix++)
+        for (int iy = 0; iy < n; iy++) {
+            int x0 = ix / 2, x1 = (ix + 1) / 2, y0 = iy / 2, y1 = (iy + 1) / 2;
+            for (int c = 0; c < nc; c++) {
+                double v = 0.25 * (c3.v[(x0 * 3 + y0) * nc + c] + c3.v[(x0 * 3 + y1) * nc + c] +
+                                   c3.v[(x1 * 3 + y0) * nc + c] + c3.v[(x1 * 3 + y1) * nc + c]);
+                /* Same integral as the fine one: scale (or shift). */
+                if (coarse[c] != 0.0 && fine[c] / coarse[c] > 0.0)
+                    v *= fine[c] / coarse[c];
+                out->v[(ix * n + iy) * nc + c] -= v;
+            }
+        }
+}

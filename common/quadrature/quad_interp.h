@@ -41,6 +41,16 @@ typedef struct gi_quad_interp {
 void gi_quad_interp_build(const gi_quad_rule *r, const gi_quad_analysis *a, const double *lo,
                           const double *hi, gi_quad_interp *out);
 
+/* The interpolant minus the next coarser reconstruction of the same data,
+ * scaled to the same integral (so the difference is only in how the
+ * region's integral is spread over its footprint): Boole's 5 x 5 grid
+ * minus its 3 x 3 sub-grid (the nodes Simpson's rule uses), Genz-Malik's
+ * bilinear patch minus its mean. Splatted, its L1 norm over the pixels is
+ * the region's reconstruction error (quad_region.h). Written on g's node
+ * grid. */
+void gi_quad_interp_coarse_diff(const gi_quad_interp *g, const double *lo, const double *hi,
+                                gi_quad_interp *out);
+
 /* The exact integral of the interpolant over its footprint (unit coords). */
 void gi_quad_interp_integral(const gi_quad_interp *g, const double *lo, const double *hi,
                              double *out);

@@ -6,7 +6,7 @@ static int quad_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
     gi_quad_params *p = gi_xcalloc(1, sizeof *p);
     job->params = p;
-    return gi_quad_params_parse(p, params, v);
+    return gi_quad_params_parse(p, params, job->width, job->height, v);
 }
 
 static const char *const quad_outputs[] = {"exr", "png", "report", NULL};

@@ -17,7 +17,7 @@ void gi_quad_params_default(gi_quad_params *p)
     p->threshold = 0.0;
     p->tolerance = 0.0;
     p->max_evals = 2000000;
-    p->initial[0] = p->initial[1] = 4;
+    p->initial[0] = p->initial[1] = 1; /* parse picks them from the image size */
     p->initial_path = 1;
     p->round_tasks = 16;
     p->task_regions = 8;
@@ -30,9 +30,25 @@ void gi_quad_params_default(gi_quad_params *p)
 
 static int power_of_two(int64_t v) { return v > 0 && (v & (v - 1)) == 0; }
 
-int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, gi_jv *v)
+/* The smallest power of two that cuts `side` pixels into tiles of at most
+ * 8 (at most 1024): 5 Boole nodes per 8 pixels. Coarser initial regions
+ * can miss what falls between all their samples (a penumbra sliver, the
+ * edge of the floor): a region whose samples are all zero has no error
+ * estimate and is never refined. */
+static int auto_initial(int side)
+{
+    int n = 1;
+    while (n < 1024 && side > 8 * n)
+        n *= 2;
+    return n;
+}
+
+int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int height,
+                         gi_jv *v)
 {
     gi_quad_params_default(p);
+    p->initial[0] = auto_initial(width);
+    p->initial[1] = auto_initial(height);
     if (!params)
         return 0;
     static const char *const keys[] = {"dims", "rule", "axis", "heap", "threshold", "tolerance",

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "gi_rng.h"
+#include "quad_splat.h"
 
 int gi_quad_engine_init(gi_quad_engine *e, const gi_quad_rule *rule, gi_quad_axis_rule axis_rule,
                         const gi_quad_image *image, const gi_quad_integrand *fn, gi_error *err)
@@ -19,7 +20,9 @@ int gi_quad_engine_init(gi_quad_engine *e, const gi_quad_rule *rule, gi_quad_axi
     e->pts = gi_try_malloc(p * rule->dims * sizeof(double), err, "quadrature points");
     e->vals = gi_try_malloc(p * rule->channels * sizeof(double), err, "quadrature values");
     e->idx = gi_try_malloc(p * sizeof(size_t), err, "quadrature points");
-    if (!e->pts || !e->vals || !e->idx) {
+    if (!e->pts || !e->vals || !e->idx ||
+        (image->width > 0 &&
+         gi_quad_accum_init(&e->scratch, image->width, image->height, rule->channels, err))) {
         gi_quad_engine_free(e);
         return -1;
     }
@@ -38,6 +41,7 @@ void gi_quad_engine_free(gi_quad_engine *e)
     free(e->pts);
     free(e->vals);
     free(e->idx);
+    gi_quad_accum_free(&e->scratch);
     memset(e, 0, sizeof *e);
 }
 
@@ -106,11 +110,21 @@ static void analyse(gi_quad_engine *e, gi_quad_region *r)
     gi_quad_analysis a;
     gi_quad_rule_analyse(rule, e->axis_rule, r->f, s->lo, s->hi, &a);
     memcpy(s->est, a.est, sizeof(double) * rule->channels);
-    s->err_raw = a.err_raw;
-    s->err = gi_quad_region_error(&e->image, a.err_raw, s->lo, s->hi);
     s->axis = gi_quad_split_axis(&e->image, rule->dims, &a, s->lo, s->hi);
     s->id = gi_quad_box_id(s->lo, s->hi, rule->dims);
     gi_quad_interp_build(rule, &a, s->lo, s->hi, &s->interp);
+    s->err_raw = a.err_raw;
+    int px, py;
+    gi_quad_pixel_span(&e->image, s->lo, s->hi, &px, &py);
+    if (e->image.width > 0 && px * py > 1) {
+        /* The reconstruction error (quad_region.h). */
+        gi_quad_interp d;
+        gi_quad_interp_coarse_diff(&s->interp, s->lo, s->hi, &d);
+        gi_quad_splat(&d, s->lo, s->hi, 1.0, &e->scratch);
+        s->err_raw += gi_quad_accum_take_l1(&e->scratch) /
+                      ((double)e->image.width * (double)e->image.height);
+    }
+    s->err = gi_quad_region_error(&e->image, s->err_raw, s->lo, s->hi);
 }
 
 gi_quad_region *gi_quad_region_new(gi_quad_engine *e, const double *lo, const double *hi,

@@ -9,7 +9,16 @@
  * they are a pure function of the box).
  *
  * Boxes are dyadic (bisections of [0,1]), so coordinates are exact and a
- * region's id, a hash of its box, is the same wherever it is computed. The
+ * region's id, a hash of its box, is the same wherever it is computed.
+ *
+ * Error: eq. 4.4 measures how well the rule pair agrees on the region's
+ * integral, not on how the splat spreads it over pixels: a region with an
+ * accurate total can still smear a sharp edge (the light's silhouette)
+ * over the pixels it covers. Beyond the thesis, a region that spans more
+ * than one pixel also counts its reconstruction error: the L1 norm over
+ * pixels of its splat minus the splat of the next coarser reconstruction
+ * of the same data (quad_interp.h), in integral units (pixel area 1/(W H)).
+ * The engine owns a slab of fixed-size records (samples included), recycled
  * engine owns a slab of fixed-size records (samples included), recycled
  * through a free list (the thesis's object pool, sec. 5.3). */
 #ifndef GI_QUAD_REGION_H
@@ -18,14 +27,15 @@
 #include <stdint.h>
 
 #include "gi_buf.h"
+#include "quad_accum.h"
 #include "quad_axis.h"
 #include "quad_interp.h"
 #include "quad_rule.h"
 
 typedef struct gi_quad_summary {
     uint64_t id;
-    double err;     /* eq. 4.5: the heap key */
-    double err_raw; /* eq. 4.4: || Q_high - Q_low ||_1 */
+    double err;     /* eq. 4.5: err_raw weighted by image coverage, the heap key */
+    double err_raw; /* eq. 4.4 || Q_high - Q_low ||_1, plus the reconstruction error */
     int32_t axis;   /* split axis; -1: cannot be split */
     double lo[GI_QUAD_MAX_DIMS], hi[GI_QUAD_MAX_DIMS];
     double est[GI_QUAD_MAX_CHANNELS];
@@ -60,6 +70,8 @@ typedef struct gi_quad_engine {
     /* Evaluation scratch. */
     double *pts, *vals;
     size_t *idx;
+    /* Reconstruction errors are splatted here (image only). */
+    gi_quad_accum scratch;
 } gi_quad_engine;
 
 #define GI_QUAD_CHUNK 64u

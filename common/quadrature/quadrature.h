@@ -50,8 +50,9 @@ typedef struct gi_quad_params {
 } gi_quad_params;
 
 void gi_quad_params_default(gi_quad_params *p);
-/* Validates the "quadrature" block of a job. */
-int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, gi_jv *v);
+/* Validates the "quadrature" block of a job whose image is width x height. */
+int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int height,
+                         gi_jv *v);
 
 extern const gi_method gi_method_quadrature;
 
