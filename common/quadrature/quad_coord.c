@@ -30,9 +30,12 @@ typedef struct quad_state {
     uint8_t *leaf_live;
     gi_qheap *heap;
     /* Sums over every region (open and closed). */
-    double total[GI_QUAD_CHANNELS]; /* estimates */
+    double total[GI_QUAD_CHANNELS];    /* estimates */
+    double mc_total[GI_QUAD_CHANNELS]; /* Monte Carlo residuals added to the image */
     double closed_err;              /* error estimates of the closed ones */
     uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
+    uint64_t open_final; /* regions open when the refinement stopped */
+    double err_final;    /* and the sum of every region's error estimate then */
     uint32_t round;  /* the round whose tasks are out (0: the initial regions) */
     int phase;
     double threshold_abs;
@@ -259,15 +262,18 @@ int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_tas
     st->mc_samples += r.mc_samples;
     st->nonfinite += r.nonfinite;
     st->closed_err += r.closed_err;
-    for (int c = 0; c < GI_QUAD_CHANNELS; c++)
+    for (int c = 0; c < GI_QUAD_CHANNELS; c++) {
         st->total[c] += r.dtotal[c];
+        st->mc_total[c] += r.mc_total[c];
+    }
     for (uint32_t i = 0; i < r.open_count; i++)
         add_leaf(st, &r.open[i]);
     gi_quad_result_free(&r);
     return 0;
 }
 
-/* Sum of pixel values x pixel area, against the sum of region estimates. */
+/* Sum of pixel values x pixel area, less the Monte Carlo residuals, against
+ * the sum of region estimates. */
 static double splat_check(const gi_job *job, const quad_state *st)
 {
     size_t n = (size_t)job->width * job->height;
@@ -277,7 +283,7 @@ static double splat_check(const gi_job *job, const quad_state *st)
             sum[c] += st->image[GI_QUAD_CHANNELS * i + c];
     double area = 1.0 / (double)n, diff = 0;
     for (int c = 0; c < GI_QUAD_CHANNELS; c++)
-        diff += fabs(sum[c] * area - st->total[c]);
+        diff += fabs(sum[c] * area - st->mc_total[c] - st->total[c]);
     double t = l1(st->total);
     return t > 0 ? diff / t : diff;
 }
@@ -296,8 +302,8 @@ static int write_outputs(gi_job *job, quad_state *st, gi_error *err)
     gi_image_free(&img);
     if (rc)
         return -1;
-    double seconds = st->seconds + (now() - st->t0), err_est = total_error(st);
-    uint64_t open = gi_qheap_size(st->heap);
+    double seconds = st->seconds + (now() - st->t0), err_est = st->err_final;
+    uint64_t open = st->open_final;
     gi_info("%s: %llu evaluations (%llu re-evaluated), %llu regions, error estimate %.3g "
             "(relative %.3g), %.2f s",
             job->name, (unsigned long long)st->evals, (unsigned long long)st->reevals,
@@ -355,6 +361,8 @@ int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
             st->round--;
         }
         st->splat_rel = splat_check(job, st);
+        st->open_final = gi_qheap_size(st->heap);
+        st->err_final = total_error(st);
         st->phase = PHASE_DONE;
         if (p->hybrid && gi_qheap_size(st->heap) > 0) {
             st->phase = PHASE_MC;
@@ -381,7 +389,10 @@ int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err)
     gi_buf_put_f64(out, st->splat_rel);
     gi_buf_put_f64(out, st->seconds + (now() - st->t0));
     gi_buf_put_f64s(out, st->total, GI_QUAD_CHANNELS);
+    gi_buf_put_f64s(out, st->mc_total, GI_QUAD_CHANNELS);
     gi_buf_put_f64(out, st->closed_err);
+    gi_buf_put_u64(out, st->open_final);
+    gi_buf_put_f64(out, st->err_final);
     gi_buf_put_u64(out, st->evals);
     gi_buf_put_u64(out, st->reevals);
     gi_buf_put_u64(out, st->splits);
@@ -410,7 +421,10 @@ int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
     st->splat_rel = gi_get_f64(in);
     st->seconds = gi_get_f64(in);
     gi_get_f64s(in, st->total, GI_QUAD_CHANNELS);
+    gi_get_f64s(in, st->mc_total, GI_QUAD_CHANNELS);
     st->closed_err = gi_get_f64(in);
+    st->open_final = gi_get_u64(in);
+    st->err_final = gi_get_f64(in);
     st->evals = gi_get_u64(in);
     st->reevals = gi_get_u64(in);
     st->splits = gi_get_u64(in);

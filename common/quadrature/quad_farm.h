@@ -9,7 +9,8 @@
  * Result: u64 evaluations, u64 of them re-evaluations of the task's
  * regions, u64 bisections, u64 regions closed, u64 Monte Carlo samples, u64
  * non-finite samples zeroed, f64 sum of the closed regions' errors, C f64
- * change of the sum of region estimates, the image delta (quad_accum.h),
+ * change of the sum of region estimates, C f64 integral of the Monte Carlo
+ * residuals added, the image delta (quad_accum.h),
  * u32 count and the summaries of the regions left open. */
 #ifndef GI_QUAD_FARM_H
 #define GI_QUAD_FARM_H
@@ -36,6 +37,7 @@ typedef struct gi_quad_result {
     uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
     double closed_err;
     double dtotal[GI_QUAD_CHANNELS];
+    double mc_total[GI_QUAD_CHANNELS];
     gi_reader delta; /* the image delta, not yet checked */
     uint32_t open_count;
     gi_quad_summary *open;

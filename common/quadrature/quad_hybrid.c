@@ -13,7 +13,7 @@ uint64_t gi_quad_hybrid_samples(const gi_quad_summary *s, int width, int height,
 
 uint64_t gi_quad_hybrid_region(gi_quad_mc_fn fn, void *user, uint64_t seed,
                                const gi_quad_summary *s, int dims, int mc_spp,
-                               gi_quad_accum *acc)
+                               gi_quad_accum *acc, double *total)
 {
     int W = acc->width, H = acc->height, nc = acc->channels;
     uint64_t n = gi_quad_hybrid_samples(s, W, H, mc_spp);
@@ -33,8 +33,10 @@ uint64_t gi_quad_hybrid_region(gi_quad_mc_fn fn, void *user, uint64_t seed,
             u[d] = s->lo[d] + (s->hi[d] - s->lo[d]) * gi_rng_double(&rng);
         fn(user, u, &rng, f);
         gi_quad_interp_eval(&s->interp, s->lo, s->hi, u[0], u[1], g);
-        for (int c = 0; c < nc; c++)
+        for (int c = 0; c < nc; c++) {
             f[c] -= g[c] / light_vol; /* eq. 4.17: f - g */
+            total[c] += f[c] * (vol / (double)n);
+        }
         int px = (int)(u[0] * W), py = (int)(u[1] * H);
         px = px < 0 ? 0 : px >= W ? W - 1 : px;
         py = py < 0 ? 0 : py >= H ? H - 1 : py;

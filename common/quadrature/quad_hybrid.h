@@ -52,10 +52,11 @@ typedef void (*gi_quad_mc_fn)(void *user, const double *u, gi_rng *rng, double *
 /* Samples in region s for mc_spp samples per pixel (image width x height). */
 uint64_t gi_quad_hybrid_samples(const gi_quad_summary *s, int width, int height, int mc_spp);
 
-/* Adds the region's Monte Carlo residual estimate to the pixels of acc;
- * returns the number of samples taken. */
+/* Adds the region's Monte Carlo residual estimate to the pixels of acc,
+ * and its integral (per channel) to *total; returns the number of samples
+ * taken. */
 uint64_t gi_quad_hybrid_region(gi_quad_mc_fn fn, void *user, uint64_t seed,
                                const gi_quad_summary *s, int dims, int mc_spp,
-                               gi_quad_accum *acc);
+                               gi_quad_accum *acc, double *total);
 
 #endif

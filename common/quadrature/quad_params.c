@@ -30,15 +30,16 @@ void gi_quad_params_default(gi_quad_params *p)
 
 static int power_of_two(int64_t v) { return v > 0 && (v & (v - 1)) == 0; }
 
-/* The smallest power of two that cuts `side` pixels into tiles of at most
- * 8 (at most 1024): 5 Boole nodes per 8 pixels. Coarser initial regions
- * can miss what falls between all their samples (a penumbra sliver, the
- * edge of the floor): a region whose samples are all zero has no error
- * estimate and is never refined. */
+/* Initial tiles per image axis: at least 16 (regions that start as a large
+ * part of the scene can miss what falls between all their samples - a
+ * penumbra sliver at the edge of the floor: a region whose samples are all
+ * zero has no error estimate and is never refined), and tiles of at most 8
+ * pixels (5 Boole nodes per 8 pixels); a power of two, at most 1024 and not
+ * much finer than the pixels. */
 static int auto_initial(int side)
 {
     int n = 1;
-    while (n < 1024 && side > 8 * n)
+    while (n < 1024 && (n < 16 || side > 8 * n) && n < side)
         n *= 2;
     return n;
 }

@@ -101,10 +101,11 @@ int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_res
     out->nonfinite = gi_get_u64(&r);
     out->closed_err = gi_get_f64(&r);
     gi_get_f64s(&r, out->dtotal, GI_QUAD_CHANNELS);
+    gi_get_f64s(&r, out->mc_total, GI_QUAD_CHANNELS);
     int ok = !r.failed && out->reevals <= out->evals && isfinite(out->closed_err) &&
              out->closed_err >= 0;
     for (int c = 0; c < GI_QUAD_CHANNELS; c++)
-        ok = ok && isfinite(out->dtotal[c]);
+        ok = ok && isfinite(out->dtotal[c]) && isfinite(out->mc_total[c]);
     /* The delta: skipped here (u32 count, then count x (u32 + C f64)). */
     out->delta = r;
     uint32_t pixels = gi_get_u32(&r);
@@ -194,6 +195,7 @@ typedef struct refine_ctx {
     const gi_quad_params *p;
     uint64_t seed;
     double dtotal[GI_QUAD_CHANNELS];
+    double mc_total[GI_QUAD_CHANNELS];
     double closed_err;
     uint64_t closed, mc_samples;
 } refine_ctx;
@@ -231,7 +233,7 @@ static void on_close(void *user, gi_quad_region *r)
     c->closed_err += s->err_raw;
     if (c->p->hybrid)
         c->mc_samples += gi_quad_hybrid_region(mc_eval, &c->w->path, c->seed, s, c->p->dims,
-                                               c->p->mc_spp, &c->w->acc);
+                                               c->p->mc_spp, &c->w->acc, c->mc_total);
     clear_root(c->w, r->slot);
 }
 
@@ -246,6 +248,7 @@ static void put_header(gi_buf *out, uint64_t evals, uint64_t reevals, uint64_t s
     gi_buf_put_u64(out, nonfinite);
     gi_buf_put_f64(out, c->closed_err);
     gi_buf_put_f64s(out, c->dtotal, GI_QUAD_CHANNELS);
+    gi_buf_put_f64s(out, c->mc_total, GI_QUAD_CHANNELS);
 }
 
 static int run_refine(gi_worker_ctx *ctx, quad_worker *w, const gi_quad_task_in *t,
@@ -328,7 +331,7 @@ static int run_mc(gi_worker_ctx *ctx, quad_worker *w, const gi_quad_task_in *t, 
     uint64_t nonfinite0 = w->path.nonfinite;
     for (uint32_t i = 0; i < t->count; i++)
         c.mc_samples += gi_quad_hybrid_region(mc_eval, &w->path, ctx->job.seed, &t->regions[i],
-                                              p->dims, p->mc_spp, &w->acc);
+                                              p->dims, p->mc_spp, &w->acc, c.mc_total);
     put_header(result, 0, 0, 0, &c, w->path.nonfinite - nonfinite0);
     gi_quad_accum_emit(&w->acc, result);
     gi_buf_put_u32(result, 0);

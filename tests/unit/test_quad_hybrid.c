@@ -119,7 +119,8 @@ static void run_variant(toy *t, variant v, uint64_t seed, int spp, gi_quad_accum
     for (int k = 0; k < t->n; k++) {
         const gi_quad_summary *s = &t->leaf[k]->s;
         if (v == HYBRID_OK) {
-            gi_quad_hybrid_region(toy_mc, NULL, seed, s, DIMS, spp, acc);
+            double total = 0;
+            gi_quad_hybrid_region(toy_mc, NULL, seed, s, DIMS, spp, acc, &total);
             continue;
         }
         /* The flawed ones, written out like gi_quad_hybrid_region. */
