@@ -11,7 +11,7 @@ job() { # file rule heap hybrid seed
   "method": "quadrature",
   "seed": $5,
   "image": {"width": 40, "height": 32},
-  "quadrature": {"dims": 4, "rule": "$2", "heap": "$3", "max_evals": 120000,
+  "quadrature": {"dims": 4, "rule": "$2", "heap": "$3", "max_evals": 120000, "initial": [4, 4],
                  "round_tasks": 5, "task_regions": 3, "task_splits": 12,
                  "threshold": 1e-7 $( [ "$4" = 1 ] && echo ', "hybrid": true, "mc_spp": 2') },
   "outputs": {"exr": "img.exr", "report": "report.json"}
