@@ -83,6 +83,7 @@ static void radiance(gi_quad_path *p, const double *u, gi_rng *rng, double *rgb)
     if (!rng && p->cache_valid && p->cache_u0 == u[0] && p->cache_u1 == u[1]) {
         hit = p->cache_hit;
         h = p->cache_h;
+        dir = p->cache_dir;
     } else {
         dir = gi_camera_dir(&p->cam, (float)(u[0] * p->width), (float)(u[1] * p->height));
         hit = gi_rt_intersect(p->rt, p->cam.origin, dir, 0.0f, FLT_MAX, &h);
@@ -92,12 +93,12 @@ static void radiance(gi_quad_path *p, const double *u, gi_rng *rng, double *rgb)
             p->cache_u1 = u[1];
             p->cache_hit = hit;
             p->cache_h = h;
+            p->cache_dir = dir;
         }
     }
     rgb[0] = rgb[1] = rgb[2] = 0.0;
     if (!hit)
         return;
-    dir = gi_camera_dir(&p->cam, (float)(u[0] * p->width), (float)(u[1] * p->height));
     gi_vec3 org = p->cam.origin, beta = gi_v3(1, 1, 1);
     double L[3] = {0, 0, 0};
     /* The last light pair below N, reused by cut vertices beyond it. */

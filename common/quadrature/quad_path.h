@@ -56,6 +56,7 @@ typedef struct gi_quad_path {
     double cache_u0, cache_u1;
     int cache_hit;
     gi_hit cache_h;
+    gi_vec3 cache_dir;
 } gi_quad_path;
 
 int gi_quad_path_init(gi_quad_path *p, gi_rt *rt, const gi_scene *s, const gi_camera *cam,
