@@ -10,9 +10,9 @@
  *     buckets over disjoint, ordered error ranges, each a pairing heap, so
  *     the maximum is the top of the highest non-empty bucket. A bucket that
  *     holds at least 0.4 n of the n elements (eq. 5.1; once n >= 1024) is
- *     split at the median of its keys into two buckets, its elements moving
- *     to the one whose range holds them (so ranges stay disjoint and the
- *     maximum stays exact); a bucket emptied by deletions is removed (only
+ *     split at the median of (a sample of up to 1024 of) its keys into two
+ *     buckets, its elements moving to the one whose range holds them (so
+ *     ranges stay disjoint and the maximum stays exact); a bucket emptied by deletions is removed (only
  *     the top bucket loses elements, so every bucket is non-empty).
  *
  * Order: larger key first; equal keys by smaller `tie` first (the region id):

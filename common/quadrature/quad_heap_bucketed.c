@@ -71,7 +71,7 @@ static int cmp_double(const void *pa, const void *pb)
     return a < b ? -1 : a > b;
 }
 
-/* Splits bucket i at the median of its keys (eq. 5.1 fired). */
+/* Splits bucket i near the median of its keys (eq. 5.1 fired). */
 static void split_bucket(bucketed_heap *q, int i)
 {
     bucket *bk = &q->b[i];
@@ -90,22 +90,30 @@ static void split_bucket(bucketed_heap *q, int i)
         for (uint32_t y = q->s.n[x].child; y != QP_NIL; y = q->s.n[y].sibling)
             q->nodes[top++] = y;
     }
-    /* NaN keys sort as +inf for the split point. */
-    for (size_t j = 0; j < c; j++)
+    /* NaN keys count as +inf for the split point. */
+    double kmin = INFINITY;
+    for (size_t j = 0; j < c; j++) {
         if (q->keys[j] != q->keys[j])
             q->keys[j] = INFINITY;
-    qsort(q->keys, c, sizeof *q->keys, cmp_double);
-    double m = q->keys[c / 2];
-    if (m == q->keys[0]) {
-        /* The lower half is all the minimum: split just above it. */
-        size_t j = c / 2;
-        while (j < c && q->keys[j] == q->keys[0])
-            j++;
-        if (j == c || q->keys[j] == INFINITY) {
-            bk->retry_at = 2 * c;
-            return;
-        }
-        m = q->keys[j];
+        kmin = q->keys[j] < kmin ? q->keys[j] : kmin;
+    }
+    /* The median of an evenly spaced sample of at most 1024 keys: a key of
+     * the bucket, so the upper bucket is not empty; the lower one is not
+     * either once m > kmin (below). */
+    size_t stride = c > 1024 ? c / 1024 : 1, ns = 0;
+    for (size_t j = 0; j < c && ns < 1024; j += stride)
+        q->keys[ns++] = q->keys[j];
+    qsort(q->keys, ns, sizeof *q->keys, cmp_double);
+    double m = q->keys[ns / 2];
+    if (m == kmin) {
+        /* The lower half of the sample is all the minimum: split at the
+         * sample's next key, if any. */
+        m = INFINITY;
+        for (size_t j = 0; j < ns; j++)
+            if (q->keys[j] > kmin) {
+                m = q->keys[j];
+                break;
+            }
     }
     if (m == INFINITY) {
         bk->retry_at = 2 * c;
