@@ -15,25 +15,12 @@
  * comparison). */
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
+#include "bench/bench_util.h"
 #include "bench/genz.h"
 #include "gi_rng.h"
 #include "quadrature/quad_heap.h"
 #include "quadrature/quad_integrate.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 /* Returns the time; *buckets gets the final bucket count. */
 static double trace(gi_qheap_kind kind, long iterations, size_t *buckets, double *checksum)
@@ -42,7 +29,7 @@ static double trace(gi_qheap_kind kind, long iterations, size_t *buckets, double
     gi_rng rng;
     gi_rng_init(&rng, 42, 0, 0);
     uint32_t next = 0;
-    double t0 = now();
+    double t0 = gi_bench_now();
     for (int i = 0; i < 1024; i++, next++)
         gi_qheap_push(h, gi_rng_double(&rng), gi_mix64(next), next);
     double sum = 0;
@@ -55,7 +42,7 @@ static double trace(gi_qheap_kind kind, long iterations, size_t *buckets, double
         for (int c = 0; c < 2; c++, next++)
             gi_qheap_push(h, key * (0.05 + 0.55 * gi_rng_double(&rng)), gi_mix64(next), next);
     }
-    double t = now() - t0;
+    double t = gi_bench_now() - t0;
     *buckets = gi_qheap_buckets(h);
     *checksum = sum;
     gi_qheap_free(h);
@@ -77,13 +64,13 @@ static double integrate(gi_qheap_kind kind, uint64_t *regions)
     gi_quad_opts o = {GI_QUAD_GM, GI_QUAD_AXIS_MARGINAL, kind, 1e-15, 0, 2000000};
     gi_quad_result r;
     gi_error err;
-    double t0 = now();
+    double t0 = gi_bench_now();
     if (gi_quad_integrate(2, 1, &fn, &o, &r, &err)) {
         fprintf(stderr, "quad_heap: %s\n", err.msg);
         exit(1);
     }
     *regions = r.regions;
-    return now() - t0;
+    return gi_bench_now() - t0;
 }
 
 int main(int argc, char **argv)
@@ -108,10 +95,9 @@ int main(int argc, char **argv)
     printf("| heap | trace | per operation | buckets at the end | integration |\n"
            "|---|---|---|---|---|\n");
     for (int k = 0; k < 3; k++) {
-        qsort(tt[k], rounds, sizeof(double), cmp_double);
-        qsort(ti[k], rounds, sizeof(double), cmp_double);
-        printf("| %s | %.3f s | %.0f ns | %zu | %.3f s |\n", names[k], tt[k][rounds / 2],
-               1e9 * tt[k][rounds / 2] / (3.0 * iterations + 1024), buckets[k], ti[k][rounds / 2]);
+        double t = gi_bench_median(tt[k], rounds), ti_k = gi_bench_median(ti[k], rounds);
+        printf("| %s | %.3f s | %.0f ns | %zu | %.3f s |\n", names[k], t,
+               1e9 * t / (3.0 * iterations + 1024), buckets[k], ti_k);
         if (sums[k] != sums[0] || regions[k] != regions[0]) {
             fprintf(stderr, "quad_heap: %s popped a different sequence\n", names[k]);
             return 1;

@@ -50,21 +50,6 @@ GI_TEST(test_quad_light_map_covers_the_emitter_area)
     gi_scene_free(&s);
 }
 
-/* Irradiance at x (normal n) from a Lambertian polygon of radiance L
- * (Lambert's formula). */
-static double polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 n, double L)
-{
-    double sum = 0;
-    for (int i = 0; i < k; i++) {
-        gi_vec3 a = gi_normalize(gi_sub(poly[i], x));
-        gi_vec3 b = gi_normalize(gi_sub(poly[(i + 1) % k], x));
-        double theta = acos(fmax(-1.0, fmin(1.0, gi_dot(a, b))));
-        gi_vec3 g = gi_normalize(gi_cross(a, b));
-        sum += theta * gi_dot(n, g);
-    }
-    return 0.5 * L * fabs(sum);
-}
-
 typedef struct pixel_ctx {
     gi_quad_path *p;
     double u0, u1;
@@ -86,20 +71,12 @@ GI_TEST(test_quad_path_direct_light_matches_lambert_polygon_formula)
     gi_scene s;
     /* A unit square emitter (radiance 2) facing down at height 1 over a
      * large floor (rho 0.5); the camera looks at the floor from the side. */
-    const char *text =
-        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
-        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
-        " \"objects\": ["
-        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
-        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
-        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert-quad.json", text, &s, &err));
+    GI_REQUIRE_OK(gi_test_load_lambert_scene(&s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
     gi_camera cam = {{6, 0.6f, 1}, {0.3f, 0, 0.2f}, {0, 1, 0}, 30.0f};
     gi_quad_path path;
     GI_REQUIRE_OK(gi_quad_path_init(&path, &rt, &s, &cam, 64, 64, 4, -1, 3, &err));
-    gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
     double image_points[3][2] = {{0.5, 0.5}, {0.3, 0.6}, {0.71, 0.45}};
     for (int i = 0; i < 3; i++) {
         pixel_ctx c = {&path, image_points[i][0], image_points[i][1]};
@@ -110,7 +87,8 @@ GI_TEST(test_quad_path_direct_light_matches_lambert_polygon_formula)
         gi_hit h;
         GI_REQUIRE(gi_rt_intersect(&rt, f.origin, dir, 0, FLT_MAX, &h));
         gi_vec3 x = gi_madd(f.origin, dir, h.t);
-        double expect = 0.5 / GI_PI * polygon_irradiance(poly, 4, x, gi_v3(0, 1, 0), 2.0);
+        double expect =
+            0.5 / GI_PI * gi_test_polygon_irradiance(gi_test_lamp, 4, x, gi_v3(0, 1, 0), 2.0);
         gi_quad_integrand fn = {fixed_pixel_fn, &c};
         gi_quad_opts o = {GI_QUAD_GM, GI_QUAD_AXIS_MARGINAL, GI_QHEAP_BINARY, 1e-7, 0, 2000000};
         gi_quad_result r;
