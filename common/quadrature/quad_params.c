@@ -16,7 +16,7 @@ void gi_quad_params_default(gi_quad_params *p)
     p->heap = GI_QHEAP_BUCKETED;
     p->threshold = 0.0;
     p->tolerance = 0.0;
-    p->max_evals = 2000000;
+    p->max_evals = 4000000;
     p->initial[0] = p->initial[1] = 1; /* parse picks them from the image size */
     p->initial_path = 1;
     p->round_tasks = 16;
@@ -50,6 +50,10 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
     gi_quad_params_default(p);
     p->initial[0] = auto_initial(width);
     p->initial[1] = auto_initial(height);
+    /* 100 evaluations per pixel (a few bisections each past the initial
+     * regions' ~10), at least 4 million. */
+    double evals = 100.0 * width * height;
+    p->max_evals = evals > 4e6 ? (uint64_t)evals : 4000000;
     if (!params)
         return 0;
     static const char *const keys[] = {"dims", "rule", "axis", "heap", "threshold", "tolerance",
