@@ -18,8 +18,8 @@
  * than one pixel also counts its reconstruction error: the L1 norm over
  * pixels of its splat minus the splat of the next coarser reconstruction
  * of the same data (quad_interp.h), in integral units (pixel area 1/(W H)).
+ *
  * The engine owns a slab of fixed-size records (samples included), recycled
- * engine owns a slab of fixed-size records (samples included), recycled
  * through a free list (the thesis's object pool, sec. 5.3). */
 #ifndef GI_QUAD_REGION_H
 #define GI_QUAD_REGION_H

@@ -27,6 +27,7 @@
 
 #define GI_QUAD_MAX_DIMS 16
 #define GI_QUAD_MAX_CHANNELS 4
+/* 5^N samples per region: N = 7 would hold 78,125 points (1.9 MB of RGB). */
 #define GI_QUAD_BOOLE_MAX_DIMS 6
 /* Interpolant nodes per image axis: 5 (Boole's grid) or 2 (Genz-Malik). */
 #define GI_QUAD_MAX_NODES 5
