@@ -19,3 +19,9 @@ echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minu
 sh bench/detp_memory.sh "$BIN" 5000000 50000000
 echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
 sh bench/farm_overhead.sh "$BIN" 5
+echo "== quad_genz: adaptive cubature on Genz's test families (evaluations for 1e-3 and 1e-6)"
+"$BIN/bench/quad_genz" 6 2e7
+echo "== quad_heap: bucketed vs binary vs pairing heap (median of 9 alternating rounds)"
+"$BIN/bench/quad_heap" 2000000 9
+echo "== quad_vs_pt: quadrature vs path tracer at equal time on the Cornell box (references cached in out/bench)"
+"$BIN/bench/quad_vs_pt" scenes/cornell-box/scene.json out/bench 16384 3

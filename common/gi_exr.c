@@ -134,6 +134,25 @@ static int exr_fail(gi_error *err, const char *path, const char *step, exr_resul
 
 /* ---- writing ---------------------------------------------------------- */
 
+/* OpenEXRCore 3.1.5's ZIP compressor falls back to storing a chunk raw only
+ * when deflate makes it larger; when deflate gives exactly as many bytes as
+ * the raw chunk, it keeps the deflated ones, and readers (this library's
+ * and OpenEXR's) take a chunk as long as its raw size for raw data: the
+ * pixels read back as garbage (it happened to a quadrature image). This
+ * wrapper stores such a chunk raw. */
+static exr_result_t compress_with_raw_fallback(exr_encode_pipeline_t *enc)
+{
+    exr_result_t (*base)(exr_encode_pipeline_t *) = *(exr_result_t(**)(
+        exr_encode_pipeline_t *))enc->encoding_user_data;
+    exr_result_t r = base(enc);
+    if (r == EXR_ERR_SUCCESS && enc->compressed_bytes >= enc->packed_bytes &&
+        enc->compressed_buffer != enc->packed_buffer) {
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+        enc->compressed_bytes = enc->packed_bytes;
+    }
+    return r;
+}
+
 static int exr_write_chunks(exr_context_t ctx, const gi_image *img, const char *path,
                             const exr_io *io, gi_error *err)
 {
@@ -145,6 +164,7 @@ static int exr_write_chunks(exr_context_t ctx, const gi_image *img, const char *
         return exr_fail(err, path, "scanlines per chunk", r ? r : EXR_ERR_UNKNOWN, io, 0);
 
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    exr_result_t (*base_compress)(exr_encode_pipeline_t *) = NULL;
     int have_enc = 0, rc = 0;
     for (int y = 0; y < img->height; y += lines) {
         exr_chunk_info_t ci;
@@ -187,7 +207,12 @@ static int exr_write_chunks(exr_context_t ctx, const gi_image *img, const char *
                 rc = exr_fail(err, path, "encoder setup", r, io, 0);
                 break;
             }
+            if (enc.compress_fn) {
+                base_compress = enc.compress_fn;
+                enc.compress_fn = compress_with_raw_fallback;
+            }
         }
+        enc.encoding_user_data = &base_compress;
         r = exr_encoding_run(ctx, part, &enc);
         if (r != EXR_ERR_SUCCESS) {
             rc = exr_fail(err, path, "encoding rows", r, io, 0);

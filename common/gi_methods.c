@@ -4,10 +4,12 @@
 #include "gi_method.h"
 #include "detp/detp.h"
 #include "pt/pt.h"
+#include "quadrature/quadrature.h"
 
 static const gi_method *const all_methods[] = {
     &gi_method_pt,
     &gi_method_detp,
+    &gi_method_quadrature,
     NULL,
 };
 

@@ -100,11 +100,30 @@ static inline int gi_rt_occluded(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tnea
 /* A ray origin moved off the surface at p (geometric normal ng) towards the
  * side `dir` leaves through, by an amount relative to p's magnitude, so the
  * new ray does not hit the surface it starts on. */
+static inline float gi_rt_offset_scale(gi_vec3 p)
+{
+    return 2e-5f * gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
+}
+
 static inline gi_vec3 gi_rt_offset(gi_vec3 p, gi_vec3 ng_unit, gi_vec3 dir)
 {
-    float m = gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
-    float eps = 2e-5f * m;
+    float eps = gi_rt_offset_scale(p);
     return gi_madd(p, ng_unit, gi_dot(ng_unit, dir) >= 0.0f ? eps : -eps);
+}
+
+/* A shadow segment from surface point p (facing geometric normal ng_f) to a
+ * point on an emitter at distance dist along unit wi, whose normal makes
+ * |cos| = 1 / inv_cos_l with wi. The origin is moved e off p's surface;
+ * that brings the emitter's plane up to e / |cos_l| closer, so the segment
+ * stops that much (plus a margin) short of the emitter point. Returns 0 if
+ * nothing is left of it (the points nearly touch). */
+static inline int gi_rt_shadow_segment(gi_vec3 p, gi_vec3 ng_f, gi_vec3 light_p, float dist,
+                                       float inv_cos_l, gi_vec3 *org, float *tfar)
+{
+    float e = gi_rt_offset_scale(p);
+    *org = gi_madd(p, ng_f, e);
+    *tfar = dist - e * inv_cos_l - 2.0f * gi_rt_offset_scale(light_p);
+    return *tfar > 0.0f;
 }
 
 #endif

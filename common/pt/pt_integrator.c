@@ -6,11 +6,6 @@
 #include "gi_light.h"
 #include "pt.h"
 
-static inline float offset_scale(gi_vec3 p)
-{
-    return 2e-5f * gi_maxf(1.0f, gi_maxf(fabsf(p.x), gi_maxf(fabsf(p.y), fabsf(p.z))));
-}
-
 /* Next-event estimation: a point on an emitter, and the shadow ray that
  * decides whether its (weighted) radiance counts. Written for few divisions
  * and square roots: this runs once per vertex. Returns 0 if the sample
@@ -38,15 +33,9 @@ static int sample_light(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 ng_f, const g
         return 0;
     float inv_cos_l = 1.0f / fabsf(cos_l);
     float pdf_light = ls.pdf_area * dist2 * inv_cos_l; /* per solid angle */
-    /* The shadow ray leaves from p moved e off the surface; that brings the
-     * light's plane up to e / |cos_l| closer, so it stops that much (plus a
-     * margin) short of the light point. */
-    float e = offset_scale(p);
-    sh->org = gi_madd(p, ng_f, e);
-    sh->dir = wi;
-    sh->tfar = dist - e * inv_cos_l - 2.0f * offset_scale(ls.p);
-    if (sh->tfar <= 0.0f)
+    if (!gi_rt_shadow_segment(p, ng_f, ls.p, dist, inv_cos_l, &sh->org, &sh->tfar))
         return 0;
+    sh->dir = wi;
     gi_vec3 fl = gi_mul(gi_bsdf_eval(bsdf, wi), lm->emission);
     if (tr->params->strategy != GI_PT_MIS) {
         sh->contrib = gi_scale(fl, cos_s / pdf_light);

@@ -1,6 +1,7 @@
 /* Helpers shared by unit tests that need scenes. */
 #include "test_helpers.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -30,4 +31,31 @@ int gi_test_load_scene_text(const char *name, const char *text, gi_scene *out, g
 int gi_test_load_scene_file(const char *path, gi_scene *out, gi_error *err)
 {
     return load_from(gi_test_srcdir(), path, out, err);
+}
+
+const gi_vec3 gi_test_lamp[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
+
+int gi_test_load_lambert_scene(gi_scene *out, gi_error *err)
+{
+    const char *text =
+        "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+        "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
+        " \"objects\": ["
+        "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
+        "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
+        "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
+    return gi_test_load_scene_text("lambert.json", text, out, err);
+}
+
+double gi_test_polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 n, double L)
+{
+    double sum = 0;
+    for (int i = 0; i < k; i++) {
+        gi_vec3 a = gi_normalize(gi_sub(poly[i], x));
+        gi_vec3 b = gi_normalize(gi_sub(poly[(i + 1) % k], x));
+        double theta = acos(fmax(-1.0, fmin(1.0, gi_dot(a, b))));
+        gi_vec3 g = gi_normalize(gi_cross(a, b));
+        sum += theta * gi_dot(n, g);
+    }
+    return 0.5 * L * fabs(sum);
 }

@@ -14,6 +14,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "gi_buf.h"
 #include "gi_fs.h"
@@ -315,6 +316,84 @@ GI_TEST(exr_roundtrip_extra_channels_special_values)
     gi_image_free(&back);
     gi_image_free(&img);
     free(p);
+}
+
+/* zlib size (level 6, what gi_exr uses) of a ZIP chunk: OpenEXR reorders
+ * the bytes (even then odd) and delta-codes them before deflating. */
+static unsigned long zip_chunk_size(const unsigned char *packed, size_t n)
+{
+    unsigned char *s = malloc(n), *t1 = s, *t2 = s + (n + 1) / 2;
+    for (size_t i = 0; i < n; i++)
+        *(i % 2 ? t2++ : t1++) = packed[i];
+    int p = s[0];
+    for (size_t i = 1; i < n; i++) {
+        int d = (int)s[i] - p + (128 + 256);
+        p = s[i];
+        s[i] = (unsigned char)d;
+    }
+    uLongf out = compressBound(n);
+    unsigned char *c = malloc(out);
+    if (compress2(c, &out, s, n, 6) != Z_OK)
+        out = 0;
+    free(s);
+    free(c);
+    return out;
+}
+
+/* A chunk whose deflated size is exactly its raw size must be stored raw:
+ * OpenEXRCore 3.1.5 keeps the deflated bytes (it falls back only when they
+ * are larger), and readers take a chunk as long as its raw size for raw
+ * data, so it read back as garbage (a quadrature image did). */
+GI_TEST(exr_roundtrip_chunk_that_deflates_to_its_own_size)
+{
+    enum { W = 64, LINES = 16, BYTES = W * LINES * 4 };
+    unsigned char packed[BYTES];
+    int found = 0;
+    /* The first r bytes random, the rest zero: the deflated size grows with
+     * r; look for an r where it equals BYTES exactly. */
+    for (uint64_t seed = 1; seed < 64 && !found; seed++) {
+        uint64_t x = seed * 0x9E3779B97F4A7C15ull;
+        for (size_t i = 0; i < BYTES; i++) {
+            x = x * 6364136223846793005ull + 1442695040888963407ull;
+            packed[i] = (unsigned char)(x >> 56);
+            if (i % 4 == 3)
+                packed[i] &= 0xBF; /* no NaN or infinity */
+        }
+        size_t lo = 0, hi = BYTES;
+        unsigned char trial[BYTES];
+        while (lo < hi && !found) {
+            size_t r = (lo + hi) / 2;
+            memcpy(trial, packed, r);
+            memset(trial + r, 0, BYTES - r);
+            unsigned long z = zip_chunk_size(trial, BYTES);
+            if (z == BYTES) {
+                memcpy(packed, trial, BYTES);
+                found = 1;
+            } else if (z < BYTES) {
+                lo = r + 1;
+            } else {
+                hi = r;
+            }
+        }
+    }
+    GI_REQUIRE(found);
+    gi_error err;
+    gi_image a, b;
+    static const char *const names[] = {"Y"};
+    GI_REQUIRE_OK(gi_image_init(&a, W, 2 * LINES, 1, names, &err));
+    /* Chunk 0 deflates well (a ramp); chunk 1 deflates to its own size. */
+    for (int i = 0; i < W * LINES; i++)
+        a.pixels[i] = (float)(i % W) / W;
+    memcpy(a.pixels + W * LINES, packed, BYTES);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/exact.exr", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_exr_write(path, &a, &err));
+    GI_REQUIRE_OK(gi_exr_read(path, &b, &err));
+    GI_REQUIRE(b.width == W && b.height == 2 * LINES && b.channels == 1);
+    GI_CHECK_MSG(memcmp(a.pixels, b.pixels, sizeof(float) * W * 2 * LINES) == 0,
+                 "the chunk came back changed");
+    gi_image_free(&a);
+    gi_image_free(&b);
 }
 
 GI_TEST(exr_shapes_1x1_nonsquare_multichunk)

@@ -6,39 +6,15 @@
 #include "pt/pt.h"
 #include "test_helpers.h"
 
-/* Irradiance at x (normal n) from a Lambertian polygon of radiance L:
- * Lambert's formula E = L/2 sum_i theta_i (n . gamma_i) (e.g. Arvo 1995). */
-static double polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 n, double L)
-{
-    double sum = 0;
-    for (int i = 0; i < k; i++) {
-        gi_vec3 a = gi_normalize(gi_sub(poly[i], x));
-        gi_vec3 b = gi_normalize(gi_sub(poly[(i + 1) % k], x));
-        double theta = acos(fmax(-1.0, fmin(1.0, gi_dot(a, b))));
-        gi_vec3 g = gi_normalize(gi_cross(a, b));
-        sum += theta * gi_dot(n, g);
-    }
-    return 0.5 * L * fabs(sum);
-}
-
-/* A unit square emitter (radiance 2) facing down at height 1, over a large
- * diffuse floor (rho 0.5). */
-static const char *const lambert_scene =
-    "{\"materials\": {\"floor\": {\"diffuse\": [0.5, 0.5, 0.5]},"
-    "                 \"lamp\": {\"diffuse\": [0, 0, 0], \"emission\": [2, 2, 2]}},"
-    " \"objects\": ["
-    "  {\"name\": \"lamp\", \"material\": \"lamp\", \"polygons\": {\"vertices\":"
-    "   [[-0.5, 1, -0.5], [0.5, 1, -0.5], [0.5, 1, 0.5], [-0.5, 1, 0.5]], \"faces\": [[0, 1, 2, 3]]}},"
-    "  {\"name\": \"floor\", \"material\": \"floor\", \"quad\": {\"size\": [40, 40]}}]}";
-
 GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
 {
     gi_error err;
     gi_scene s;
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert.json", lambert_scene, &s, &err));
+    /* A unit square emitter (radiance 2) facing down at height 1, over a
+     * large diffuse floor (rho 0.5). */
+    GI_REQUIRE_OK(gi_test_load_lambert_scene(&s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
-    gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
     gi_vec3 points[] = {{0, 0, 0}, {0.3f, 0, 0.2f}, {0.5f, 0, 0.5f}, {1.0f, 0, 0}, {2.0f, 0, -1.5f}};
     gi_pt_strategy strategies[] = {GI_PT_MIS, GI_PT_LIGHT, GI_PT_BSDF};
     for (int si = 0; si < 3; si++) {
@@ -52,7 +28,7 @@ GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
         size_t npoints = si == 2 ? 3 : sizeof points / sizeof points[0];
         for (size_t i = 0; i < npoints; i++) {
             gi_vec3 x = points[i];
-            double E = polygon_irradiance(poly, 4, x, gi_v3(0, 1, 0), 2.0);
+            double E = gi_test_polygon_irradiance(gi_test_lamp, 4, x, gi_v3(0, 1, 0), 2.0);
             double expect = 0.5 * E / GI_PI; /* L = rho E / pi */
             int n = si == 2 ? 400000 : 100000;
             double sum = 0;
@@ -147,10 +123,9 @@ GI_TEST(test_irradiance_matches_lambert_polygon_formula)
      * strategy, against Lambert's formula; with all bounces it is larger. */
     gi_error err;
     gi_scene s;
-    GI_REQUIRE_OK(gi_test_load_scene_text("lambert_e.json", lambert_scene, &s, &err));
+    GI_REQUIRE_OK(gi_test_load_lambert_scene(&s, &err));
     gi_rt rt;
     GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
-    gi_vec3 poly[4] = {{-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}};
     gi_vec3 points[] = {{0, 0, 0}, {0.4f, 0, -0.3f}, {1.2f, 0, 0.5f}};
     gi_pt_strategy strategies[] = {GI_PT_MIS, GI_PT_LIGHT, GI_PT_BSDF};
     for (int si = 0; si < 3; si++)
@@ -160,7 +135,7 @@ GI_TEST(test_irradiance_matches_lambert_polygon_formula)
             p.max_bounces = 1;
             p.strategy = strategies[si];
             gi_pt_tracer tr = {&rt, &s, &p, NULL};
-            double E = polygon_irradiance(poly, 4, points[i], gi_v3(0, 1, 0), 2.0);
+            double E = gi_test_polygon_irradiance(gi_test_lamp, 4, points[i], gi_v3(0, 1, 0), 2.0);
             int n = si == 2 ? 300000 : 60000;
             double sum = 0;
             for (int k = 0; k < n; k++) {

@@ -1,0 +1,465 @@
+/* quad_coord: the coordinator side of the quadrature method - the global
+ * heap of open regions, the image accumulator, the rounds (plan, merge,
+ * finish), checkpoints, and the report. Never calls Embree. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "gi_job.h"
+#include "gi_log.h"
+#include "gi_outputs.h"
+#include "quad_accum.h"
+#include "quad_farm.h"
+#include "quad_hybrid.h"
+
+enum { PHASE_REFINE, PHASE_MC, PHASE_DONE };
+
+/* Regions per task at most (round 0 and Monte Carlo tasks): keeps a task
+ * payload far below the protocol's 256 MiB. */
+#define MAX_TASK_REGIONS 65536u
+
+typedef struct quad_state {
+    gi_quad_rule rule;
+    double *image; /* width x height x 3: the current estimate, pixel values */
+    /* Open regions: summaries in a slab, their slots in the heap. */
+    gi_quad_summary *leaf;
+    uint32_t nleaf, leaf_cap;
+    uint32_t *leaf_free;
+    uint32_t nfree;
+    uint8_t *leaf_live;
+    gi_qheap *heap;
+    /* Sums over every region (open and closed). */
+    double total[GI_QUAD_CHANNELS];    /* estimates */
+    double mc_total[GI_QUAD_CHANNELS]; /* Monte Carlo residuals added to the image */
+    double closed_err;              /* error estimates of the closed ones */
+    uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
+    uint64_t open_final; /* regions open when the refinement stopped */
+    double err_final;    /* and the sum of every region's error estimate then */
+    uint32_t round;  /* the round whose tasks are out (0: the initial regions) */
+    int phase;
+    double threshold_abs;
+    double splat_rel; /* |sum of pixels x area - sum of estimates| / sum, before Monte Carlo */
+    double seconds;   /* coordinator wall time before this process took over */
+    double t0;
+} quad_state;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static quad_state *state_new(gi_job *job, gi_error *err)
+{
+    const gi_quad_params *p = job->params;
+    quad_state *st = gi_xcalloc(1, sizeof *st);
+    job->state = st;
+    if (gi_quad_job_rule(p, &st->rule, err))
+        return NULL;
+    st->image = gi_try_calloc((size_t)job->width * (size_t)job->height,
+                              GI_QUAD_CHANNELS * sizeof(double), err, "quadrature image");
+    if (!st->image)
+        return NULL;
+    st->heap = gi_qheap_create(p->heap);
+    st->t0 = now();
+    return st;
+}
+
+static void add_leaf(quad_state *st, const gi_quad_summary *s)
+{
+    uint32_t slot;
+    if (st->nfree > 0) {
+        slot = st->leaf_free[--st->nfree];
+    } else {
+        if (st->nleaf == st->leaf_cap) {
+            st->leaf_cap = st->leaf_cap ? 2 * st->leaf_cap : 256;
+            st->leaf = gi_xrealloc(st->leaf, st->leaf_cap * sizeof *st->leaf);
+            st->leaf_live = gi_xrealloc(st->leaf_live, st->leaf_cap);
+            st->leaf_free = gi_xrealloc(st->leaf_free, st->leaf_cap * sizeof *st->leaf_free);
+        }
+        slot = st->nleaf++;
+    }
+    st->leaf[slot] = *s;
+    st->leaf_live[slot] = 1;
+    gi_qheap_push(st->heap, s->err, s->id, slot);
+}
+
+/* Takes the first region out of the heap into *out. */
+static int pop_leaf(quad_state *st, gi_quad_summary *out)
+{
+    double key;
+    uint64_t tie;
+    uint32_t slot;
+    if (!gi_qheap_pop(st->heap, &key, &tie, &slot))
+        return 0;
+    *out = st->leaf[slot];
+    st->leaf_live[slot] = 0;
+    st->leaf_free[st->nfree++] = slot;
+    return 1;
+}
+
+static double l1(const double *v)
+{
+    return fabs(v[0]) + fabs(v[1]) + fabs(v[2]);
+}
+
+/* Sum of the error estimates of every region. */
+static double total_error(const quad_state *st)
+{
+    double e = st->closed_err;
+    for (uint32_t i = 0; i < st->nleaf; i++)
+        if (st->leaf_live[i])
+            e += st->leaf[i].err_raw;
+    return e;
+}
+
+static void add_task(gi_task_queue *q, const gi_quad_task_in *t, const gi_quad_rule *rule,
+                     double cost)
+{
+    gi_task *task = gi_task_queue_add(q, t->kind, cost);
+    gi_quad_task_encode(&task->payload, t, rule);
+}
+
+/* Round 0: the initial regions (initial[0] x initial[1] image tiles, each
+ * path axis cut in initial_path), dealt out in order. */
+int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    const gi_quad_params *p = job->params;
+    quad_state *st = state_new(job, err);
+    if (!st)
+        return -1;
+    int n = p->dims;
+    uint64_t splits[GI_QUAD_MAX_DIMS], count = 1;
+    for (int d = 0; d < n; d++) {
+        splits[d] = d < 2 ? (uint64_t)p->initial[d] : (uint64_t)p->initial_path;
+        count *= splits[d];
+    }
+    uint64_t per = (count + p->round_tasks - 1) / p->round_tasks;
+    if (per > MAX_TASK_REGIONS)
+        per = MAX_TASK_REGIONS;
+    gi_quad_task_in t = {GI_QUAD_TASK_REFINE, 0, 0.0, 0, 0, NULL, NULL};
+    t.is_new = gi_xcalloc(per, 1);
+    t.regions = gi_xcalloc(per, sizeof *t.regions);
+    memset(t.is_new, 1, per);
+    for (uint64_t i = 0; i < count; i++) {
+        gi_quad_summary *s = &t.regions[t.count++];
+        memset(s, 0, sizeof *s);
+        uint64_t rest = i;
+        for (int d = n - 1; d >= 0; d--) {
+            uint64_t k = rest % splits[d];
+            rest /= splits[d];
+            s->lo[d] = (double)k / (double)splits[d];
+            s->hi[d] = (double)(k + 1) / (double)splits[d];
+        }
+        s->id = gi_quad_box_id(s->lo, s->hi, n);
+        s->axis = -1;
+        if (t.count == per || i + 1 == count) {
+            add_task(q, &t, &st->rule, (double)t.count * (double)st->rule.points);
+            t.count = 0;
+        }
+    }
+    gi_quad_task_in_free(&t);
+    return 0;
+}
+
+/* The next refinement round: the regions with the largest errors (above
+ * the threshold), dealt out round-robin by rank to round_tasks tasks, each
+ * with a bisection budget cut to what is left of max_evals. Returns the
+ * number of tasks added (0: the budget cannot pay for one bisection). */
+static int plan_refine_round(gi_job *job, quad_state *st, gi_task_queue *q)
+{
+    const gi_quad_params *p = job->params;
+    uint64_t left = st->evals < p->max_evals ? p->max_evals - st->evals : 0;
+    uint64_t want = (uint64_t)p->round_tasks * (uint64_t)p->task_regions;
+    uint64_t pts = st->rule.points, split_cost = 2 * st->rule.child_new;
+    gi_quad_summary *picked = gi_xcalloc(want, sizeof *picked);
+    uint64_t k = 0;
+    double key;
+    uint64_t tie;
+    uint32_t slot;
+    while (k < want && gi_qheap_peek(st->heap, &key, &tie, &slot) && key >= st->threshold_abs)
+        pop_leaf(st, &picked[k++]);
+    uint64_t ntasks = k < (uint64_t)p->round_tasks ? k : (uint64_t)p->round_tasks;
+    uint64_t per_task = ntasks ? left / ntasks : 0;
+    gi_quad_task_in t = {GI_QUAD_TASK_REFINE, st->round, st->threshold_abs, 0, 0, NULL, NULL};
+    t.is_new = gi_xcalloc(p->task_regions, 1);
+    t.regions = gi_xcalloc(p->task_regions, sizeof *t.regions);
+    int added = 0;
+    for (uint64_t j = 0; j < ntasks; j++) {
+        uint64_t regions = (k - j + ntasks - 1) / ntasks;
+        uint64_t reeval = regions * pts;
+        uint64_t budget = per_task > reeval ? (per_task - reeval) / split_cost : 0;
+        if (budget > (uint64_t)p->task_splits)
+            budget = (uint64_t)p->task_splits;
+        t.count = 0;
+        for (uint64_t r = j; r < k; r += ntasks) {
+            if (budget == 0) {
+                add_leaf(st, &picked[r]); /* not this round: back to the heap */
+                continue;
+            }
+            t.regions[t.count++] = picked[r];
+        }
+        if (budget == 0)
+            continue;
+        t.max_splits = budget;
+        add_task(q, &t, &st->rule, (double)(reeval + budget * split_cost));
+        added++;
+    }
+    gi_quad_task_in_free(&t);
+    free(picked);
+    return added;
+}
+
+/* The Monte Carlo round: every region still open, about the same number of
+ * samples per task. */
+static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
+{
+    const gi_quad_params *p = job->params;
+    size_t n = gi_qheap_size(st->heap);
+    gi_quad_summary *all = gi_xcalloc(n ? n : 1, sizeof *all);
+    uint64_t samples = 0;
+    for (size_t i = 0; i < n; i++) {
+        pop_leaf(st, &all[i]);
+        samples += gi_quad_hybrid_samples(&all[i], job->width, job->height, p->mc_spp);
+    }
+    uint64_t per = samples / (uint64_t)p->round_tasks + 1, acc = 0;
+    gi_quad_task_in t = {GI_QUAD_TASK_MC, 0, 0.0, 0, 0, NULL, all};
+    size_t first = 0;
+    int added = 0;
+    for (size_t i = 0; i < n; i++) {
+        acc += gi_quad_hybrid_samples(&all[i], job->width, job->height, p->mc_spp);
+        if (acc >= per || i + 1 - first == MAX_TASK_REGIONS || i + 1 == n) {
+            t.regions = all + first;
+            t.count = (uint32_t)(i + 1 - first);
+            add_task(q, &t, &st->rule, (double)acc);
+            added++;
+            first = i + 1;
+            acc = 0;
+        }
+    }
+    free(all);
+    return added;
+}
+
+int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
+                  gi_error *err)
+{
+    quad_state *st = job->state;
+    gi_quad_result r;
+    if (gi_quad_result_decode(result, &st->rule, &r, err))
+        return gi_error_prefix(err, "task %llu", (unsigned long long)task->id);
+    if (gi_quad_accum_apply(&r.delta, job->width, job->height, GI_QUAD_CHANNELS, st->image,
+                            err)) {
+        gi_quad_result_free(&r);
+        return gi_error_prefix(err, "task %llu", (unsigned long long)task->id);
+    }
+    st->evals += r.evals;
+    st->reevals += r.reevals;
+    st->splits += r.splits;
+    st->closed += r.closed;
+    st->mc_samples += r.mc_samples;
+    st->nonfinite += r.nonfinite;
+    st->closed_err += r.closed_err;
+    for (int c = 0; c < GI_QUAD_CHANNELS; c++) {
+        st->total[c] += r.dtotal[c];
+        st->mc_total[c] += r.mc_total[c];
+    }
+    for (uint32_t i = 0; i < r.open_count; i++)
+        add_leaf(st, &r.open[i]);
+    gi_quad_result_free(&r);
+    return 0;
+}
+
+/* Sum of pixel values x pixel area, less the Monte Carlo residuals, against
+ * the sum of region estimates. */
+static double splat_check(const gi_job *job, const quad_state *st)
+{
+    size_t n = (size_t)job->width * job->height;
+    double sum[GI_QUAD_CHANNELS] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < GI_QUAD_CHANNELS; c++)
+            sum[c] += st->image[GI_QUAD_CHANNELS * i + c];
+    double area = 1.0 / (double)n, diff = 0;
+    for (int c = 0; c < GI_QUAD_CHANNELS; c++)
+        diff += fabs(sum[c] * area - st->mc_total[c] - st->total[c]);
+    double t = l1(st->total);
+    return t > 0 ? diff / t : diff;
+}
+
+static int write_outputs(gi_job *job, quad_state *st, gi_error *err)
+{
+    const gi_quad_params *p = job->params;
+    gi_image img;
+    static const char *const names[] = {"R", "G", "B"};
+    if (gi_image_init(&img, job->width, job->height, 3, names, err))
+        return -1;
+    size_t n = (size_t)job->width * job->height * GI_QUAD_CHANNELS;
+    for (size_t i = 0; i < n; i++)
+        img.pixels[i] = (float)st->image[i];
+    int rc = gi_write_image_outputs(job, &img, err);
+    gi_image_free(&img);
+    if (rc)
+        return -1;
+    double seconds = st->seconds + (now() - st->t0), err_est = st->err_final;
+    uint64_t open = st->open_final;
+    gi_info("%s: %llu evaluations (%llu re-evaluated), %llu regions, error estimate %.3g "
+            "(relative %.3g), %.2f s",
+            job->name, (unsigned long long)st->evals, (unsigned long long)st->reevals,
+            (unsigned long long)(open + st->closed), err_est,
+            l1(st->total) > 0 ? err_est / l1(st->total) : 0.0, seconds);
+    cJSON *doc = cJSON_CreateObject();
+    static const char *const rules[] = {"boole", "genz-malik"};
+    static const char *const heaps[] = {"bucketed", "binary", "pairing"};
+    cJSON_AddStringToObject(doc, "method", "quadrature");
+    cJSON_AddNumberToObject(doc, "dims", p->dims);
+    cJSON_AddStringToObject(doc, "rule", rules[p->rule]);
+    cJSON_AddStringToObject(doc, "heap", heaps[p->heap]);
+    cJSON_AddNumberToObject(doc, "evaluations", (double)st->evals);
+    cJSON_AddNumberToObject(doc, "reevaluations", (double)st->reevals);
+    cJSON_AddNumberToObject(doc, "bisections", (double)st->splits);
+    cJSON_AddNumberToObject(doc, "regions", (double)(open + st->closed));
+    cJSON_AddNumberToObject(doc, "regions_open", (double)open);
+    cJSON_AddNumberToObject(doc, "regions_closed", (double)st->closed);
+    cJSON_AddNumberToObject(doc, "rounds", st->round + 1);
+    cJSON_AddNumberToObject(doc, "threshold", st->threshold_abs);
+    cJSON_AddNumberToObject(doc, "error_estimate", err_est);
+    cJSON_AddNumberToObject(doc, "relative_error_estimate",
+                            l1(st->total) > 0 ? err_est / l1(st->total) : 0.0);
+    cJSON *est = cJSON_AddArrayToObject(doc, "integral");
+    for (int c = 0; c < GI_QUAD_CHANNELS; c++)
+        cJSON_AddItemToArray(est, cJSON_CreateNumber(st->total[c]));
+    cJSON_AddNumberToObject(doc, "splat_conservation", st->splat_rel);
+    cJSON_AddNumberToObject(doc, "mc_samples", (double)st->mc_samples);
+    cJSON_AddNumberToObject(doc, "nonfinite_samples", (double)st->nonfinite);
+    cJSON_AddNumberToObject(doc, "seconds", seconds);
+    rc = gi_write_json_output(job, "report", doc, err);
+    cJSON_Delete(doc);
+    return rc;
+}
+
+int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    const gi_quad_params *p = job->params;
+    quad_state *st = job->state;
+    if (st->phase == PHASE_REFINE) {
+        if (st->round == 0)
+            /* Thesis Algorithm 1's THRESHOLD, relative to the image
+             * integral the initial regions estimate. */
+            st->threshold_abs = p->threshold * l1(st->total);
+        double key;
+        uint64_t tie;
+        uint32_t slot;
+        int go = gi_qheap_peek(st->heap, &key, &tie, &slot) && key >= st->threshold_abs &&
+                 st->evals < p->max_evals &&
+                 !(p->tolerance > 0 && total_error(st) <= p->tolerance * l1(st->total));
+        if (go) {
+            st->round++;
+            if (plan_refine_round(job, st, fq) > 0)
+                return 0;
+            st->round--;
+        }
+        st->splat_rel = splat_check(job, st);
+        st->open_final = gi_qheap_size(st->heap);
+        st->err_final = total_error(st);
+        st->phase = PHASE_DONE;
+        if (p->hybrid && gi_qheap_size(st->heap) > 0) {
+            st->phase = PHASE_MC;
+            plan_mc_round(job, st, fq);
+            return 0;
+        }
+    } else if (st->phase == PHASE_MC) {
+        st->phase = PHASE_DONE;
+    }
+    return write_outputs(job, st, err);
+}
+
+/* ---- checkpoints ---- */
+
+#define QUAD_STATE_VERSION 1u
+
+int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err)
+{
+    const quad_state *st = job->state;
+    gi_buf_put_u32(out, QUAD_STATE_VERSION);
+    gi_buf_put_u32(out, st->round);
+    gi_buf_put_u32(out, (uint32_t)st->phase);
+    gi_buf_put_f64(out, st->threshold_abs);
+    gi_buf_put_f64(out, st->splat_rel);
+    gi_buf_put_f64(out, st->seconds + (now() - st->t0));
+    gi_buf_put_f64s(out, st->total, GI_QUAD_CHANNELS);
+    gi_buf_put_f64s(out, st->mc_total, GI_QUAD_CHANNELS);
+    gi_buf_put_f64(out, st->closed_err);
+    gi_buf_put_u64(out, st->open_final);
+    gi_buf_put_f64(out, st->err_final);
+    gi_buf_put_u64(out, st->evals);
+    gi_buf_put_u64(out, st->reevals);
+    gi_buf_put_u64(out, st->splits);
+    gi_buf_put_u64(out, st->closed);
+    gi_buf_put_u64(out, st->mc_samples);
+    gi_buf_put_u64(out, st->nonfinite);
+    gi_buf_put_f64s(out, st->image, (size_t)job->width * job->height * GI_QUAD_CHANNELS);
+    /* Open regions in slot order; the heap's total order makes the restored
+     * heap pop them in the same sequence. */
+    gi_buf_put_u32(out, (uint32_t)gi_qheap_size(st->heap));
+    for (uint32_t i = 0; i < st->nleaf; i++)
+        if (st->leaf_live[i])
+            gi_quad_summary_put(out, &st->leaf[i], &st->rule);
+    return 0;
+}
+
+int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
+{
+    quad_state *st = state_new(job, err);
+    if (!st)
+        return -1;
+    uint32_t version = gi_get_u32(in);
+    st->round = gi_get_u32(in);
+    st->phase = (int)gi_get_u32(in);
+    st->threshold_abs = gi_get_f64(in);
+    st->splat_rel = gi_get_f64(in);
+    st->seconds = gi_get_f64(in);
+    gi_get_f64s(in, st->total, GI_QUAD_CHANNELS);
+    gi_get_f64s(in, st->mc_total, GI_QUAD_CHANNELS);
+    st->closed_err = gi_get_f64(in);
+    st->open_final = gi_get_u64(in);
+    st->err_final = gi_get_f64(in);
+    st->evals = gi_get_u64(in);
+    st->reevals = gi_get_u64(in);
+    st->splits = gi_get_u64(in);
+    st->closed = gi_get_u64(in);
+    st->mc_samples = gi_get_u64(in);
+    st->nonfinite = gi_get_u64(in);
+    if (in->failed || version != QUAD_STATE_VERSION || st->phase < PHASE_REFINE ||
+        st->phase > PHASE_DONE || !(st->threshold_abs >= 0))
+        return gi_fail(err, GI_EPROTO, "quadrature checkpoint: bad header");
+    if (gi_get_f64s(in, st->image, (size_t)job->width * job->height * GI_QUAD_CHANNELS))
+        return gi_fail(err, GI_EPROTO, "quadrature checkpoint: truncated image");
+    uint32_t n = gi_get_u32(in);
+    if (in->failed || (uint64_t)n * gi_quad_summary_bytes(&st->rule) > in->left)
+        return gi_fail(err, GI_EPROTO, "quadrature checkpoint: bad region count");
+    for (uint32_t i = 0; i < n; i++) {
+        gi_quad_summary s;
+        if (gi_quad_summary_get(in, &st->rule, &s, err))
+            return gi_error_prefix(err, "quadrature checkpoint");
+        add_leaf(st, &s);
+    }
+    return 0;
+}
+
+void gi_quad_release(gi_job *job)
+{
+    quad_state *st = job->state;
+    if (st) {
+        gi_quad_rule_free(&st->rule);
+        free(st->image);
+        free(st->leaf);
+        free(st->leaf_free);
+        free(st->leaf_live);
+        gi_qheap_free(st->heap);
+        free(st);
+    }
+    free(job->params);
+    job->state = job->params = NULL;
+}

@@ -1,0 +1,73 @@
+/* quad_farm: what the coordinator (quad_coord.c) and the workers
+ * (quad_task.c) exchange: task payloads and results, explicitly serialized.
+ *
+ * Refinement task (GI_QUAD_TASK_REFINE): u32 round, f64 threshold (absolute,
+ * 0 in round 0), u64 bisection budget, u32 count, then per region u8 new
+ * (1: round 0, not yet in the image) and its summary (quad_region.h).
+ * Monte Carlo task (GI_QUAD_TASK_MC): u32 count and the summaries.
+ *
+ * Result: u64 evaluations, u64 of them re-evaluations of the task's
+ * regions, u64 bisections, u64 regions closed, u64 Monte Carlo samples, u64
+ * non-finite samples zeroed, f64 sum of the closed regions' errors, C f64
+ * change of the sum of region estimates, C f64 integral of the Monte Carlo
+ * residuals added, the image delta (quad_accum.h),
+ * u32 count and the summaries of the regions left open. */
+#ifndef GI_QUAD_FARM_H
+#define GI_QUAD_FARM_H
+
+#include "gi_task.h"
+#include "quad_region.h"
+#include "quadrature.h"
+
+#define GI_QUAD_TASK_REFINE 1u
+#define GI_QUAD_TASK_MC 2u
+#define GI_QUAD_CHANNELS 3
+
+typedef struct gi_quad_task_in {
+    uint32_t kind;
+    uint32_t round;
+    double threshold;
+    uint64_t max_splits;
+    uint32_t count;
+    uint8_t *is_new;
+    gi_quad_summary *regions;
+} gi_quad_task_in;
+
+typedef struct gi_quad_result {
+    uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
+    double closed_err;
+    double dtotal[GI_QUAD_CHANNELS];
+    double mc_total[GI_QUAD_CHANNELS];
+    gi_reader delta; /* the image delta, not yet checked */
+    uint32_t open_count;
+    gi_quad_summary *open;
+} gi_quad_result;
+
+/* Task payloads. */
+void gi_quad_task_encode(gi_buf *b, const gi_quad_task_in *t, const gi_quad_rule *rule);
+int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task_in *out,
+                        gi_error *err);
+void gi_quad_task_in_free(gi_quad_task_in *t);
+
+/* Results: the fixed fields and open summaries are checked; the delta is
+ * left for gi_quad_accum_apply. */
+int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
+                          gi_error *err);
+void gi_quad_result_free(gi_quad_result *r);
+
+/* The coordinator side (quad_coord.c). */
+int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err);
+int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
+                  gi_error *err);
+int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err);
+int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err);
+int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err);
+void gi_quad_release(gi_job *job);
+
+/* The worker side of both task kinds. */
+int gi_quad_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
+
+/* The rule the job's parameters ask for, with RGB channels. */
+int gi_quad_job_rule(const gi_quad_params *p, gi_quad_rule *rule, gi_error *err);
+
+#endif

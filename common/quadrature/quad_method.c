@@ -1,0 +1,30 @@
+/* quad_method: the quadrature renderer's entry points (see quadrature.h). */
+#include "gi_job.h"
+#include "quad_farm.h"
+
+static int quad_parse(gi_job *job, const cJSON *params, gi_jv *v)
+{
+    gi_quad_params *p = gi_xcalloc(1, sizeof *p);
+    job->params = p;
+    return gi_quad_params_parse(p, params, job->width, job->height, v);
+}
+
+static const char *const quad_outputs[] = {"exr", "png", "report", NULL};
+
+const gi_method gi_method_quadrature = {
+    .name = "quadrature",
+    .summary = "adaptive cubature over image x path space (deterministic; optional hybrid "
+               "Monte Carlo)",
+    .unit = "evaluations",
+    .output_kinds = quad_outputs,
+    .default_outputs = quad_outputs,
+    .parse = quad_parse,
+    .check_scene = NULL,
+    .plan = gi_quad_plan,
+    .run = gi_quad_run,
+    .merge = gi_quad_merge,
+    .finish = gi_quad_finish,
+    .save = gi_quad_save,
+    .load = gi_quad_load,
+    .release = gi_quad_release,
+};

@@ -1,0 +1,233 @@
+/* Unit tests: the quadrature method through the job state machine in one
+ * process (coordinator and a worker context side by side): checkpoints
+ * taken between rounds resume to the same bits, damaged results and tasks
+ * are refused, and the parameter block is validated. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_fs.h"
+#include "gi_jobrun.h"
+#include "gi_test.h"
+#include "gi_worker_ctx.h"
+#include "quadrature/quad_farm.h"
+
+static const char *job_text(int hybrid)
+{
+    static char buf[2048];
+    char src[1024];
+    if (!realpath(gi_test_srcdir(), src))
+        snprintf(src, sizeof src, "%s", gi_test_srcdir());
+    snprintf(buf, sizeof buf,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"quadrature\","
+             " \"seed\": 3, \"image\": {\"width\": 24, \"height\": 20},"
+             " \"quadrature\": {\"rule\": \"genz-malik\", \"max_evals\": 30000, \"round_tasks\": 3,"
+             " \"task_regions\": 2, \"task_splits\": 8, \"threshold\": 1e-6%s},"
+             " \"outputs\": {\"exr\": \"img.exr\"}}",
+             src, hybrid ? ", \"hybrid\": true, \"mc_spp\": 1" : "");
+    return buf;
+}
+
+/* Loads the job (coordinator side) from a file written in the test's
+ * scratch directory, with outputs going to out. */
+static int load_job(gi_job *job, int hybrid, const char *out, gi_error *err)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/quad-job.json", gi_test_tmpdir());
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return gi_fail(err, GI_EIO, "cannot write %s", path);
+    fputs(job_text(hybrid), f);
+    fclose(f);
+    if (gi_job_load(path, job, err))
+        return -1;
+    snprintf(path, sizeof path, "%s/%s", gi_test_tmpdir(), out);
+    job->out_dir = gi_xstrdup(path);
+    return gi_mkdirs(path, err);
+}
+
+/* Runs leased tasks until done or `stop` tasks were completed. */
+static int drive(gi_jobrun *jr, gi_worker_ctx *ctx, int stop, gi_error *err)
+{
+    int done = 0;
+    const gi_task *t;
+    while (!gi_jobrun_done(jr) && done < stop && (t = gi_jobrun_lease(jr))) {
+        gi_buf res;
+        gi_buf_init(&res);
+        if (gi_worker_run_task(ctx, t, &res, err)) {
+            gi_buf_free(&res);
+            return -1;
+        }
+        if (gi_jobrun_complete(jr, t->id, t->attempt, &res, &ctx->stats)) {
+            gi_buf_free(&res);
+            *err = jr->error;
+            return -1;
+        }
+        gi_buf_free(&res);
+        done++;
+    }
+    return 0;
+}
+
+static int read_file(const char *dir, gi_buf *out)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s/img.exr", gi_test_tmpdir(), dir);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return -1;
+    char b[4096];
+    size_t n;
+    while ((n = fread(b, 1, sizeof b, f)) > 0)
+        gi_buf_put(out, b, n);
+    fclose(f);
+    return 0;
+}
+
+GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
+{
+    for (int hybrid = 0; hybrid < 2; hybrid++) {
+        gi_error err;
+        gi_job job;
+        GI_REQUIRE_OK(load_job(&job, hybrid, "ref", &err));
+        gi_worker_ctx ctx;
+        GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
+                                         job.assets, &err));
+        gi_jobrun jr;
+        GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+        GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+        GI_REQUIRE(jr.finished);
+        uint64_t tasks = jr.task_count;
+        GI_CHECK_MSG(tasks > 12, "only %llu tasks", (unsigned long long)tasks);
+        gi_jobrun_free(&jr);
+        gi_job_free(&job);
+        gi_buf ref;
+        gi_buf_init(&ref);
+        GI_REQUIRE(read_file("ref", &ref) == 0);
+
+        /* Stop after k tasks (inside round 0, between rounds, in the Monte
+         * Carlo round), checkpoint, drop everything, restore, finish. */
+        int stops[] = {1, 4, 9, (int)tasks / 2, (int)tasks - 1};
+        for (size_t s = 0; s < sizeof stops / sizeof stops[0]; s++) {
+            char out[64];
+            snprintf(out, sizeof out, "ck%d-%zu", hybrid, s);
+            GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
+            GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+            GI_REQUIRE_OK(drive(&jr, &ctx, stops[s], &err));
+            gi_buf ck;
+            gi_buf_init(&ck);
+            GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
+            gi_jobrun_free(&jr);
+            gi_job_free(&job);
+
+            GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
+            GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+            GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+            GI_CHECK(jr.finished && jr.task_count == tasks);
+            gi_jobrun_free(&jr);
+            gi_job_free(&job);
+            gi_buf img;
+            gi_buf_init(&img);
+            GI_REQUIRE(read_file(out, &img) == 0);
+            GI_CHECK_MSG(img.len == ref.len && memcmp(img.data, ref.data, ref.len) == 0,
+                         "hybrid %d: stop after %d tasks: the image differs", hybrid, stops[s]);
+            gi_buf_free(&img);
+            gi_buf_free(&ck);
+        }
+        gi_buf_free(&ref);
+        gi_worker_ctx_free(&ctx);
+    }
+}
+
+GI_TEST(test_quad_damaged_results_and_tasks_are_refused)
+{
+    gi_error err;
+    gi_job job;
+    GI_REQUIRE_OK(load_job(&job, 0, "damaged", &err));
+    gi_worker_ctx ctx;
+    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
+                                     job.assets, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t != NULL);
+    gi_buf res;
+    gi_buf_init(&res);
+    GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &res, &err));
+    /* Every truncation, and a flipped byte in the header, fails cleanly. */
+    gi_task_queue fq;
+    gi_task_queue_init(&fq, 1000);
+    for (size_t cut = 0; cut < res.len; cut += 1 + res.len / 97) {
+        gi_buf part;
+        gi_buf_init(&part);
+        gi_buf_put(&part, res.data, cut);
+        GI_CHECK(job.method->merge(&job, t, &part, &fq, &err) == -1 && err.code == GI_EPROTO);
+        gi_buf_free(&part);
+    }
+    gi_buf bad;
+    gi_buf_init(&bad);
+    gi_buf_put(&bad, res.data, res.len);
+    gi_buf_put_u8(&bad, 0);
+    GI_CHECK(job.method->merge(&job, t, &bad, &fq, &err) == -1);
+    gi_buf_reset(&bad);
+    gi_buf_put(&bad, res.data, res.len);
+    bad.data[8 * 7 + 3] ^= 0x7f; /* the change of estimates becomes huge or NaN */
+    memset(bad.data + 8 * 6, 0xff, 8); /* closed error: NaN */
+    GI_CHECK(job.method->merge(&job, t, &bad, &fq, &err) == -1);
+    GI_CHECK(fq.count == 0);
+    /* A task payload cut short is refused by the worker. */
+    gi_task cut = *t;
+    gi_buf_init(&cut.payload);
+    gi_buf_put(&cut.payload, t->payload.data, t->payload.len - 5);
+    gi_buf out;
+    gi_buf_init(&out);
+    GI_CHECK(gi_worker_run_task(&ctx, &cut, &out, &err) == -1 && err.code == GI_EPROTO);
+    gi_buf_free(&cut.payload);
+    gi_buf_free(&out);
+    gi_buf_free(&bad);
+    gi_buf_free(&res);
+    gi_task_queue_free(&fq);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_worker_ctx_free(&ctx);
+}
+
+static int parse_block(const char *block, gi_error *err)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"s.json\", \"method\": \"quadrature\", \"quadrature\": %s}", block);
+    gi_job job;
+    int rc = gi_job_parse(text, strlen(text), "q.json", &job, err);
+    gi_job_free(&job);
+    return rc;
+}
+
+GI_TEST(test_quad_parameters_are_validated)
+{
+    gi_error err;
+    GI_CHECK_OK(parse_block("{}", &err));
+    GI_CHECK_OK(parse_block("{\"dims\": 6, \"rule\": \"genz-malik\", \"heap\": \"pairing\","
+                            " \"initial\": [8, 2], \"initial_path\": 2, \"hybrid\": true,"
+                            " \"mc_spp\": 4, \"max_bounces\": 3, \"rr_depth\": 1,"
+                            " \"axis\": \"centre\", \"tolerance\": 1e-3, \"threshold\": 1e-7}",
+                            &err));
+    const char *bad[][2] = {
+        {"{\"dims\": 5}", "quadrature.dims: 5 is odd"},
+        {"{\"dims\": 2}", "quadrature.dims: 2 is out of range"},
+        {"{\"dims\": 8}", "too many for the Boole rule"},
+        {"{\"rule\": \"gauss\"}", "quadrature.rule"},
+        {"{\"initial\": [3, 4]}", "quadrature.initial[0]: 3 is not a power of two"},
+        {"{\"initial\": [4]}", "quadrature.initial: expected [x, y]"},
+        {"{\"initial_path\": 16, \"dims\": 8, \"rule\": \"genz-malik\"}", "initial regions"},
+        {"{\"mc_spp\": 4}", "quadrature.mc_spp: only with \"hybrid\": true"},
+        {"{\"threshold\": -1}", "quadrature.threshold"},
+        {"{\"speed\": 1}", "speed: unknown key"},
+        {"{\"max_evals\": 0}", "quadrature.max_evals"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        GI_CHECK_MSG(parse_block(bad[i][0], &err) == -1 && err.code == GI_EINVAL &&
+                         strstr(err.msg, bad[i][1]) && strstr(err.msg, "q.json"),
+                     "%s: \"%s\" does not say \"%s\"", bad[i][0], err.msg, bad[i][1]);
+    }
+}
