@@ -3,9 +3,11 @@
 
 #include "gi_method.h"
 #include "pt/pt.h"
+#include "radiosity/rad.h"
 
 static const gi_method *const all_methods[] = {
     &gi_method_pt,
+    &gi_method_radiosity,
     NULL,
 };
 
