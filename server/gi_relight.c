@@ -20,8 +20,8 @@
 
 static void relight_usage(FILE *out)
 {
-    fprintf(out, "usage: gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--workers N]\n"
-                 "                  [--threads N] [--progress MODE]\n");
+    fprintf(out, "usage: gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--workers N] "
+                 "[--threads N] [--progress MODE]\n");
 }
 
 typedef struct relight_args {

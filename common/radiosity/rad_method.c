@@ -53,7 +53,8 @@ typedef struct rad_state {
     double build_seconds, prepare_seconds;
     float *E, *B; /* count x n x 3 */
     gi_rad_solve_info *solve;
-    gi_image *images; /* count, when images are wanted */
+    gi_image *images; /* image_count (= emission sets), when images are wanted */
+    uint32_t image_count;
     char (*blob)[GI_HASH_HEX];
 } rad_state;
 
@@ -235,9 +236,8 @@ static void state_free(rad_state *st)
     free(st->E);
     free(st->B);
     free(st->solve);
-    if (st->images && st->em)
-        for (uint32_t i = 0; i < st->em->count; i++)
-            gi_image_free(&st->images[i]);
+    for (uint32_t i = 0; i < st->image_count; i++)
+        gi_image_free(&st->images[i]);
     free(st->images);
     free(st->blob);
     free(st);
@@ -384,6 +384,7 @@ static int publish(gi_job *job, rad_state *st, gi_error *err)
 static int alloc_images(gi_job *job, rad_state *st, gi_error *err)
 {
     st->images = gi_xcalloc(st->em->count, sizeof *st->images);
+    st->image_count = st->em->count;
     for (uint32_t i = 0; i < st->em->count; i++)
         if (gi_image_init(&st->images[i], job->width, job->height, 3, NULL, err))
             return -1;
