@@ -8,3 +8,24 @@ SRC=$(cd "$(dirname "$0")/.." && pwd)
 cd "$SRC"
 echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
 "$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9
+
+echo "== rad_relight: time per RGB relight, the thesis's Table 4.7 cases (radiosity)"
+"$BIN/bench/rad_relight" 15 1-9
+echo "== rad_build: factorization build (gi render, 2 workers) for n = 13824 and 55296, k = 864"
+work=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench.XXXXXX")
+"$BIN/bench/rad_scene" "$work/room.json" 4 2 0.25
+for levels in 3 4; do
+    cat >"$work/build$levels.json" <<JOB
+{"scene": "room.json", "method": "radiosity",
+ "radiosity": {"patches": 216, "levels": $levels, "patch_level": 1, "rays": 1024},
+ "outputs": {"factorization": "room$levels.fact", "report": "room$levels.json"}}
+JOB
+    "$BIN/gi" render "$work/build$levels.json" --workers 2 --out "$work" --progress none
+    grep -A2 '"timings_ms"' "$work/room$levels.json"
+done
+rm -rf "$work"
+echo "== rad_factorizations: Table 4.2 (radiosity error vs the dense solve), two scenes"
+"$BIN/bench/rad_factorizations" room 1024 70
+"$BIN/bench/rad_factorizations" scenes/cornell-box/scene.json 1024 70
+echo "== rad_moving: moving object, Algorithm 6 + double SMW"
+"$BIN/bench/rad_moving" 1024 70

@@ -15,9 +15,9 @@ int gi_rad_aca(gi_rad_vector_fn row, gi_rad_vector_fn col, void *user, uint32_t 
     double *Us = gi_try_malloc((size_t)k * n * sizeof *Us, err, "ACA");
     double *Vs = gi_try_malloc((size_t)k * n * sizeof *Vs, err, "ACA");
     double *r = gi_try_malloc((size_t)n * sizeof *r, err, "ACA");
-    uint8_t *used = gi_try_calloc(n, 1, err, "ACA");
+    uint8_t *used = gi_try_calloc(n, 1, err, "ACA"), *used_col = gi_try_calloc(n, 1, err, "ACA");
     int rc = -1;
-    if (!Us || !Vs || !r || !used)
+    if (!Us || !Vs || !r || !used || !used_col)
         goto done;
     uint32_t rank = 0, i = 0, tried = 0;
     double norm2 = 0.0; /* ||sum u v^T||_F^2, updated per cross */
@@ -28,9 +28,25 @@ int gi_rad_aca(gi_rad_vector_fn row, gi_rad_vector_fn col, void *user, uint32_t 
             goto done;
         for (uint32_t l = 0; l < rank; l++)
             cblas_daxpy((int)n, -Us[(size_t)l * n + i], Vs + (size_t)l * n, 1, r, 1);
-        uint32_t j = (uint32_t)cblas_idamax((int)n, r, 1);
-        if (fabs(r[j]) < 1e-300) {
-            /* Row i is already approximated exactly: try the next unused row. */
+        /* The pivot: the largest residual entry outside the pivot columns
+         * so far (their residual columns vanish). */
+        uint32_t j = UINT32_MAX;
+        for (uint32_t q = 0; q < n; q++)
+            if (!used_col[q] && (j == UINT32_MAX || fabs(r[q]) > fabs(r[j])))
+                j = q;
+        double *v = Vs + (size_t)rank * n, *u = Us + (size_t)rank * n;
+        int degenerate = j == UINT32_MAX || fabs(r[j]) < 1e-300;
+        if (!degenerate) {
+            for (uint32_t q = 0; q < n; q++)
+                v[q] = r[q] / r[j];
+            if (col(user, j, u, err)) /* residual column j */
+                goto done;
+            for (uint32_t l = 0; l < rank; l++)
+                cblas_daxpy((int)n, -Vs[(size_t)l * n + j], Us + (size_t)l * n, 1, u, 1);
+            degenerate = cblas_dnrm2((int)n, u, 1) == 0.0;
+        }
+        if (degenerate) {
+            /* Nothing left in this row (or its column): try another row. */
             uint32_t next = 0;
             while (next < n && used[next])
                 next++;
@@ -39,20 +55,14 @@ int gi_rad_aca(gi_rad_vector_fn row, gi_rad_vector_fn col, void *user, uint32_t 
             i = next;
             continue;
         }
-        double *v = Vs + (size_t)rank * n, *u = Us + (size_t)rank * n;
-        for (uint32_t q = 0; q < n; q++)
-            v[q] = r[q] / r[j];
-        if (col(user, j, u, err)) /* residual column j */
-            goto done;
-        for (uint32_t l = 0; l < rank; l++)
-            cblas_daxpy((int)n, -Vs[(size_t)l * n + j], Us + (size_t)l * n, 1, u, 1);
+        used_col[j] = 1;
         double nu = cblas_dnrm2((int)n, u, 1), nv = cblas_dnrm2((int)n, v, 1);
         for (uint32_t l = 0; l < rank; l++)
             norm2 += 2.0 * cblas_ddot((int)n, u, 1, Us + (size_t)l * n, 1) *
                      cblas_ddot((int)n, v, 1, Vs + (size_t)l * n, 1);
         norm2 += nu * nu * nv * nv;
         rank++;
-        if (nu * nv <= tol * sqrt(norm2 > 0.0 ? norm2 : 0.0))
+        if (tol > 0.0 && nu * nv <= tol * sqrt(norm2 > 0.0 ? norm2 : 0.0))
             break;
         /* Next row: the largest entry of the new column among unused rows. */
         double best = -1.0;
@@ -77,6 +87,6 @@ int gi_rad_aca(gi_rad_vector_fn row, gi_rad_vector_fn col, void *user, uint32_t 
         }
     rc = 0;
 done:
-    free(Us), free(Vs), free(r), free(used);
+    free(Us), free(Vs), free(r), free(used), free(used_col);
     return rc;
 }

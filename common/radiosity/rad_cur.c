@@ -68,19 +68,6 @@ done:
     return rc;
 }
 
-typedef struct norm_index {
-    double norm;
-    uint32_t index;
-} norm_index;
-
-static int by_norm_desc(const void *a, const void *b)
-{
-    const norm_index *x = a, *y = b;
-    if (x->norm != y->norm)
-        return x->norm > y->norm ? -1 : 1;
-    return x->index < y->index ? -1 : x->index > y->index;
-}
-
 /* pinv of a k x k matrix via SVD, singular values below 1e-12 sigma_max
  * dropped. */
 static int pinv(const double *W, uint32_t k, double *out, gi_error *err)
@@ -113,16 +100,14 @@ int gi_rad_cur(const double *F, uint32_t n, uint32_t k, int sweeps, gi_rad_lowra
     double *C = gi_try_malloc((size_t)n * k * sizeof *C, err, "CUR");
     double *RT = gi_try_malloc((size_t)n * k * sizeof *RT, err, "CUR");
     double *W = gi_xmalloc((size_t)k * k * sizeof *W), *Wp = gi_xmalloc((size_t)k * k * sizeof *Wp);
-    norm_index *cols = gi_try_malloc((size_t)n * sizeof *cols, err, "CUR");
+    double *norms = gi_try_malloc((size_t)n * sizeof *norms, err, "CUR");
     int rc = -1;
-    if (!C || !RT || !cols)
+    if (!C || !RT || !norms)
         goto done;
     /* Start from the k columns of largest norm. */
     for (uint32_t j = 0; j < n; j++)
-        cols[j] = (norm_index){cblas_dnrm2((int)n, F + j, (int)n), j};
-    qsort(cols, n, sizeof *cols, by_norm_desc);
-    for (uint32_t i = 0; i < k; i++)
-        Jc[i] = cols[i].index;
+        norms[j] = cblas_dnrm2((int)n, F + j, (int)n);
+    gi_rad_top_k(norms, n, k, Jc);
     for (int s = 0; s <= sweeps; s++) {
         for (uint32_t e = 0; e < n; e++) /* C = F(:, Jc) */
             for (uint32_t i = 0; i < k; i++)
@@ -148,6 +133,6 @@ int gi_rad_cur(const double *F, uint32_t n, uint32_t k, int sweeps, gi_rad_lowra
     memcpy(lr->V, RT, (size_t)n * k * sizeof *RT);
     rc = 0;
 done:
-    free(Ir), free(Jc), free(C), free(RT), free(W), free(Wp), free(cols);
+    free(Ir), free(Jc), free(C), free(RT), free(W), free(Wp), free(norms);
     return rc;
 }

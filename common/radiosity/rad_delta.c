@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "rad_dynamic.h"
+#include "rad_ff.h"
 
 typedef struct box {
     gi_vec3 lo, hi;
@@ -53,12 +54,6 @@ static int ray_hits_box(const box *b, gi_vec3 org, gi_vec3 dir)
             return 0;
     }
     return 1;
-}
-
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
 }
 
 /* The element a ray lands on (front face), or UINT32_MAX. */
@@ -131,7 +126,7 @@ int gi_rad_delta(gi_rt *rt_i, const gi_scene *s_i, gi_rt *rt_f, const gi_scene *
         }
         stats->rays += st->rays;
         /* Row e: the nonzero changes, in column order. */
-        qsort(touched, nt, sizeof *touched, cmp_u32);
+        qsort(touched, nt, sizeof *touched, gi_rad_cmp_u32);
         for (uint32_t a = 0; a < nt; a++) {
             uint32_t c = touched[a];
             if (a > 0 && c == touched[a - 1])

@@ -1,5 +1,6 @@
 /* rad_dynamic: Algorithm 6 and the double SMW update. */
 #include "rad_dynamic.h"
+#include "rad_ff.h"
 
 #include <cblas.h>
 #include <lapacke.h>
@@ -13,31 +14,6 @@ void gi_rad_sparse_free(gi_rad_sparse *s)
     free(s->col);
     free(s->val);
     memset(s, 0, sizeof *s);
-}
-
-typedef struct ranked {
-    double norm2;
-    uint32_t index;
-} ranked;
-
-static int by_norm_desc(const void *a, const void *b)
-{
-    const ranked *x = a, *y = b;
-    if (x->norm2 != y->norm2)
-        return x->norm2 > y->norm2 ? -1 : 1;
-    return x->index < y->index ? -1 : x->index > y->index;
-}
-
-/* Indices of the k largest norms (2-norm; ties by index). */
-static void top_k(const double *norm2, uint32_t n, uint32_t k, uint32_t *out)
-{
-    ranked *r = gi_xmalloc((size_t)n * sizeof *r);
-    for (uint32_t i = 0; i < n; i++)
-        r[i] = (ranked){norm2[i], i};
-    qsort(r, n, sizeof *r, by_norm_desc);
-    for (uint32_t i = 0; i < k; i++)
-        out[i] = r[i].index;
-    free(r);
 }
 
 int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta,
@@ -57,7 +33,7 @@ int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta
     /* Lines 1-6: the k_delta columns of largest norm, whole. */
     for (uint64_t i = 0; i < dF->nnz; i++)
         norm2[dF->col[i]] += dF->val[i] * dF->val[i];
-    top_k(norm2, n, kd, pick);
+    gi_rad_top_k(norm2, n, kd, pick);
     for (uint32_t j = 0; j < n; j++)
         slot[j] = -1;
     for (uint32_t i = 0; i < kd; i++) {
@@ -76,7 +52,7 @@ int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta
             }
         }
     /* Lines 8-13: the k_delta rows of largest norm of the residual. */
-    top_k(norm2, n, kd, pick);
+    gi_rad_top_k(norm2, n, kd, pick);
     for (uint32_t i = 0; i < kd; i++) {
         uint32_t e = pick[i];
         delta->U[(size_t)e * K + kd + i] = 1.0; /* U_dr(I(i), i) = 1 */
@@ -90,6 +66,71 @@ int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta
     free(pick);
     free(slot);
     return 0;
+}
+
+int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch,
+                        const uint32_t *patch_count, uint32_t k, gi_rad_sparse *out,
+                        gi_error *err)
+{
+    uint32_t n = dF->n;
+    memset(out, 0, sizeof *out);
+    out->n = n;
+    /* The elements of each patch, in order (columns of a row stay sorted). */
+    uint32_t *first = gi_xcalloc((size_t)k + 1, sizeof *first);
+    uint32_t *members = gi_try_malloc((size_t)n * sizeof *members, err, "coarse change");
+    double *du = gi_try_calloc(k, sizeof *du, err, "coarse change");
+    uint8_t *seen = gi_try_calloc(k, 1, err, "coarse change");
+    uint32_t *touched = gi_try_malloc((size_t)k * sizeof *touched, err, "coarse change");
+    out->row_ptr = gi_try_calloc((size_t)n + 1, sizeof *out->row_ptr, err, "coarse change");
+    int rc = -1;
+    if (!members || !du || !seen || !touched || !out->row_ptr)
+        goto done;
+    for (uint32_t e = 0; e < n; e++)
+        first[patch[e] + 1]++;
+    for (uint32_t p = 0; p < k; p++)
+        first[p + 1] += first[p];
+    uint32_t *fill = gi_xmalloc((size_t)k * sizeof *fill);
+    memcpy(fill, first, (size_t)k * sizeof *fill);
+    for (uint32_t e = 0; e < n; e++)
+        members[fill[patch[e]]++] = e;
+    free(fill);
+    uint64_t cap = 1024;
+    out->col = gi_xmalloc(cap * sizeof *out->col);
+    out->val = gi_xmalloc(cap * sizeof *out->val);
+    for (uint32_t e = 0; e < n; e++) {
+        uint32_t nt = 0;
+        for (uint64_t q = dF->row_ptr[e]; q < dF->row_ptr[e + 1]; q++) {
+            uint32_t p = patch[dF->col[q]];
+            if (!seen[p]) {
+                seen[p] = 1;
+                touched[nt++] = p;
+            }
+            du[p] += dF->val[q] / patch_count[p];
+        }
+        qsort(touched, nt, sizeof *touched, gi_rad_cmp_u32);
+        for (uint32_t t = 0; t < nt; t++) {
+            uint32_t p = touched[t];
+            if (du[p] != 0.0)
+                for (uint32_t i = first[p]; i < first[p + 1]; i++) {
+                    if (out->nnz == cap) {
+                        cap *= 2;
+                        out->col = gi_xrealloc(out->col, cap * sizeof *out->col);
+                        out->val = gi_xrealloc(out->val, cap * sizeof *out->val);
+                    }
+                    out->col[out->nnz] = members[i];
+                    out->val[out->nnz++] = du[p];
+                }
+            du[p] = 0.0;
+            seen[p] = 0;
+        }
+        out->row_ptr[e + 1] = out->nnz;
+    }
+    rc = 0;
+done:
+    free(first), free(members), free(du), free(seen), free(touched);
+    if (rc)
+        gi_rad_sparse_free(out);
+    return rc;
 }
 
 /* out = inverse of (I - A) for a k x k A, in place of A. */

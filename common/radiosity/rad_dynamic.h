@@ -54,6 +54,17 @@ int gi_rad_delta(gi_rt *rt_i, const gi_scene *s_i, gi_rt *rt_f, const gi_scene *
                  const gi_rad_mesh *m, const gi_rad_strata *st, uint64_t seed, uint32_t object,
                  gi_rad_sparse *dF, gi_rad_delta_stats *stats, gi_error *err);
 
+/* The change at the coarse mesh's resolution: the 2MF/2MCE factor of F_F
+ * minus that of F_I (same patches), dU(e, p) = sum over e' in p of
+ * dF(e, e') / c_p, as the n x n matrix dU V^T (every column of a patch
+ * equal). This is the thesis's Delta F~ from two 2MF factorizations
+ * (Figs. 4.10-4.11), where changes concentrate in few rows and columns;
+ * element-level dF from sampled rays is spread thin (every changed ray
+ * moves 1/rays between two single elements). */
+int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch,
+                        const uint32_t *patch_count, uint32_t k, gi_rad_sparse *out,
+                        gi_error *err);
+
 typedef struct gi_rad_alg6_stats {
     uint64_t nnz;      /* of dF */
     uint64_t captured; /* nonzeros inside the selected columns and rows */

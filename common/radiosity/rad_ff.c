@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int cmp_u32(const void *a, const void *b)
+int gi_rad_cmp_u32(const void *a, const void *b)
 {
     uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
     return x < y ? -1 : x > y;
@@ -54,7 +54,7 @@ int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
                 touched[nnz++] = node;
             half[2 * node + (j & 1)]++;
         }
-        qsort(touched, nnz, sizeof *touched, cmp_u32);
+        qsort(touched, nnz, sizeof *touched, gi_rad_cmp_u32);
         uint64_t d2 = 0;
         for (uint32_t i = 0; i < nnz; i++) {
             int64_t d = (int64_t)half[2 * touched[i]] - half[2 * touched[i] + 1];
@@ -109,4 +109,38 @@ int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1,
         stats->h2 += h2;
     }
     return gi_reader_finish(&r, err);
+}
+
+typedef struct dense_sink {
+    uint16_t *counts;
+    size_t stride;
+} dense_sink;
+
+static void dense_put(void *user, uint32_t e, uint32_t node, uint32_t hits)
+{
+    dense_sink *d = user;
+    d->counts[(size_t)e * d->stride + node] = (uint16_t)hits;
+}
+
+int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
+                    const gi_rad_strata *st, const gi_rad_ff_opts *o, uint16_t *counts,
+                    size_t stride, gi_rad_ff_stats *stats, gi_error *err)
+{
+    uint32_t nodes = gi_rad_mesh_nodes(m, o->level), block = 256;
+    dense_sink d = {counts, stride};
+    memset(counts, 0, (size_t)m->element_count * stride * sizeof *counts);
+    memset(stats, 0, sizeof *stats);
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = 0;
+    for (uint32_t e0 = 0; e0 < m->element_count && rc == 0; e0 += block) {
+        uint32_t e1 = m->element_count - e0 < block ? m->element_count : e0 + block;
+        gi_buf_reset(&b);
+        rc = gi_rad_ff_rows(rt, s, m, st, o, e0, e1, &b, err);
+        if (rc == 0)
+            rc = gi_rad_ff_decode(b.data, b.len, e0, e1, nodes, st->rays, dense_put, &d, stats,
+                                  err);
+    }
+    gi_buf_free(&b);
+    return rc;
 }

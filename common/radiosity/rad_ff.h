@@ -52,4 +52,13 @@ int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1,
                      uint32_t nodes, uint32_t rays, gi_rad_ff_hit_fn hit, void *user,
                      gi_rad_ff_stats *stats, gi_error *err);
 
+/* qsort comparison of uint32_t values. */
+int gi_rad_cmp_u32(const void *a, const void *b);
+
+/* In one process: the rows of every element as a dense count matrix
+ * (counts[e * stride + node], zeroed first), for tests and benchmarks. */
+int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
+                    const gi_rad_strata *st, const gi_rad_ff_opts *o, uint16_t *counts,
+                    size_t stride, gi_rad_ff_stats *stats, gi_error *err);
+
 #endif

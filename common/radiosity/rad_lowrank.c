@@ -174,6 +174,30 @@ double gi_rad_lowrank_distance(const gi_rad_lowrank *lr, const double *F)
     return sqrt(sum);
 }
 
+typedef struct ranked {
+    double value;
+    uint32_t index;
+} ranked;
+
+static int by_value_desc(const void *a, const void *b)
+{
+    const ranked *x = a, *y = b;
+    if (x->value != y->value)
+        return x->value > y->value ? -1 : 1;
+    return x->index < y->index ? -1 : x->index > y->index;
+}
+
+void gi_rad_top_k(const double *values, uint32_t n, uint32_t k, uint32_t *out)
+{
+    ranked *r = gi_xmalloc((size_t)n * sizeof *r);
+    for (uint32_t i = 0; i < n; i++)
+        r[i] = (ranked){values[i], i};
+    qsort(r, n, sizeof *r, by_value_desc);
+    for (uint32_t i = 0; i < k && i < n; i++)
+        out[i] = r[i].index;
+    free(r);
+}
+
 int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E,
                        uint32_t m, double *B, gi_error *err)
 {

@@ -46,6 +46,10 @@ int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const do
 /* ||F - U V^T||_F for a dense n x n F (thesis Table 4.3). */
 double gi_rad_lowrank_distance(const gi_rad_lowrank *lr, const double *F);
 
+/* Indices of the k largest of values[0..n) in decreasing order (ties: the
+ * smaller index first). */
+void gi_rad_top_k(const double *values, uint32_t n, uint32_t k, uint32_t *out);
+
 /* The dense reference: (I - R F) B = E for m right-hand sides (LAPACK
  * dgesv, O(n^3): for n up to a few thousand). */
 int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E,

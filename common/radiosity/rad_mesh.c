@@ -25,9 +25,10 @@ int gi_rad_mesh_build(gi_rad_mesh *m, const gi_scene *s, double patch_area, uint
         if (!(a > 0.0) || !isfinite(a))
             continue; /* degenerate: no elements (rays never hit it) */
         uint32_t d = 0;
-        /* The tolerance keeps triangles that are exactly patch_area (up to
-         * rounding) from being split once more. */
-        while (patch_area > 0.0 && a > patch_area * (1.0 + 1e-9)) {
+        /* The tolerance keeps triangles that are patch_area up to the
+         * rounding of their single-precision vertices from being split
+         * once more. */
+        while (patch_area > 0.0 && a > patch_area * (1.0 + 1e-5)) {
             a *= 0.25;
             if (++d > GI_RAD_MAX_ROOT_DEPTH) {
                 gi_rad_mesh_free(m);

@@ -10,7 +10,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_job.h"
 #include "gi_log.h"
@@ -23,6 +22,7 @@
 #include "rad_mesh.h"
 #include "rad_patches.h"
 #include "rad_rays.h"
+#include "rad_vertices.h"
 
 #define RAD_TASK_FF 1
 #define RAD_TASK_TILE 2
@@ -57,13 +57,6 @@ typedef struct rad_state {
     uint32_t image_count;
     char (*blob)[GI_HASH_HEX];
 } rad_state;
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 double gi_rad_patch_area(const gi_scene *s, uint32_t patches)
 {
@@ -275,16 +268,30 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
     /* One BLAS thread: LAPACK's results then do not depend on the core
      * count of the coordinator (the pool uses the cores anyway). */
     openblas_set_num_threads(1);
-    double t0 = now_seconds();
+    double t0 = gi_rad_seconds();
     if (p->relight_factor) {
         st->info = *p->relight_info;
         st->md = p->relight_model;
         st->f = p->relight_factor;
         st->em = p->relight_emissions;
-        if (st->md->n != st->mesh.element_count)
+        /* The images interpolate per element of this scene's mesh: it must
+         * be the mesh the factorization was built on (same elements, same
+         * vertices where they are). */
+        gi_rad_vertices v;
+        memset(&v, 0, sizeof v);
+        if (st->md->n == st->mesh.element_count &&
+            gi_rad_vertices_build(&v, &st->mesh, &job->scene, err))
+            return -1;
+        int same = st->md->n == st->mesh.element_count && v.count == st->md->vertices.count &&
+                   memcmp(v.positions, st->md->vertices.positions,
+                          (size_t)v.count * sizeof *v.positions) == 0 &&
+                   memcmp(v.corner, st->md->vertices.corner,
+                          3 * (size_t)st->md->n * sizeof *v.corner) == 0;
+        gi_rad_vertices_free(&v);
+        if (!same)
             return gi_fail(err, GI_EINVAL,
-                           "%s: the factorization has %u elements but the scene meshes into %u "
-                           "(was it built from this job and scene?)",
+                           "%s: the factorization was not built on this scene's mesh (%u "
+                           "elements there, %u here): was the scene or the job changed?",
                            job->file, st->md->n, st->mesh.element_count);
     } else {
         gi_rad_patches pt;
@@ -321,11 +328,11 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
         if (rc || gi_rad_model_build(&st->model, &st->mesh, &job->scene, err))
             return -1;
         gi_rad_model_reflectance(&st->model, st->factor.rho);
-        st->build_seconds = now_seconds() - t0;
-        t0 = now_seconds();
+        st->build_seconds = gi_rad_seconds() - t0;
+        t0 = gi_rad_seconds();
         if (gi_rad_factor_prepare(&st->factor, err))
             return gi_error_prefix(err, "%s", job->file);
-        st->prepare_seconds = now_seconds() - t0;
+        st->prepare_seconds = gi_rad_seconds() - t0;
         snprintf(st->info.method, sizeof st->info.method, "%s",
                  p->factorization == GI_RAD_2MF ? "2mf" : "2mce");
         st->info.levels = st->mesh.levels;

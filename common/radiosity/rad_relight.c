@@ -10,7 +10,7 @@
 #include "gi_fs.h"
 #include "gi_ply.h"
 
-static double now_seconds(void)
+double gi_rad_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -41,12 +41,12 @@ int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
         gi_rad_emission_vector(em, i, md, e);
         gi_rad_solve_info *in = &info[i];
         memset(in, 0, sizeof *in);
-        double t0 = now_seconds();
+        double t0 = gi_rad_seconds();
         int rc = o->solver == GI_RAD_NEUMANN
                      ? gi_rad_factor_neumann(f, e, B + i * n3, o->tolerance, o->max_iterations,
                                              o->threads, &in->iterations, &in->residual, err)
                      : gi_rad_factor_relight(f, e, B + i * n3, 1, o->threads, err);
-        in->seconds = now_seconds() - t0;
+        in->seconds = gi_rad_seconds() - t0;
         if (rc) {
             free(e);
             return gi_error_prefix(err, "emission set \"%s\"", em->items[i].name);

@@ -433,6 +433,38 @@ GI_TEST(test_rad_delta_recasts_few_rays_and_is_exact)
         }
     }
     GI_CHECK(same);
+    /* At 2MF resolution: U_I V^T + coarse change = U_F V^T, entry by entry. */
+    gi_rad_patches pt;
+    gi_rad_2mf_patches(&m, 0, &pt);
+    gi_rad_factor f[2];
+    for (int s = 0; s < 2; s++) {
+        uint16_t *c0 = calloc((size_t)n * pt.k, sizeof *c0);
+        for (uint32_t e = 0; e < n; e++)
+            for (uint32_t j = 0; j < n; j++)
+                c0[(size_t)e * pt.k + j / 4] += (uint16_t)h[s][(size_t)e * n + j];
+        GI_REQUIRE_OK(gi_rad_factor_from_counts(&f[s], &m, c0, pt.k, rays, &pt, &err));
+        free(c0);
+    }
+    gi_rad_sparse dc;
+    GI_REQUIRE_OK(gi_rad_delta_coarse(&dF, f[0].patch, f[0].patch_count, f[0].k, &dc, &err));
+    double worst = 0.0;
+    for (uint32_t e = 0; e < n; e++) {
+        uint64_t q = dc.row_ptr[e];
+        for (uint32_t j = 0; j < n; j++) {
+            uint32_t p = f[0].patch[j];
+            double ui = f[0].hits[(size_t)e * f[0].k_pad + p] * f[0].w[p];
+            double uf = f[1].hits[(size_t)e * f[1].k_pad + p] * f[1].w[p];
+            double v = 0.0;
+            if (q < dc.row_ptr[e + 1] && dc.col[q] == j)
+                v = dc.val[q++];
+            worst = fabs(ui + v - uf) > worst ? fabs(ui + v - uf) : worst;
+        }
+    }
+    GI_CHECK_MSG(worst < 1e-12, "coarse change off by %g", worst);
+    gi_rad_sparse_free(&dc);
+    gi_rad_factor_free(&f[0]);
+    gi_rad_factor_free(&f[1]);
+    gi_rad_patches_free(&pt);
     free(h[0]);
     free(h[1]);
     gi_rad_sparse_free(&dF);
