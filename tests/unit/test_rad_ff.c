@@ -19,15 +19,9 @@
 /* Counts at `level` for every element: n x nodes. */
 typedef struct counts {
     uint32_t nodes;
-    uint32_t *h;
+    uint16_t *h;
     gi_rad_ff_stats st;
 } counts;
-
-static void put(void *user, uint32_t e, uint32_t node, uint32_t hits)
-{
-    counts *c = user;
-    c->h[(size_t)e * c->nodes + node] = hits;
-}
 
 static int cast_all(const gi_scene *s, const gi_rad_mesh *m, uint32_t rays, uint32_t level,
                     counts *c, gi_error *err)
@@ -41,16 +35,9 @@ static int cast_all(const gi_scene *s, const gi_rad_mesh *m, uint32_t rays, uint
         return -1;
     }
     c->nodes = gi_rad_mesh_nodes(m, level);
-    c->h = calloc((size_t)m->element_count * c->nodes, sizeof *c->h);
-    memset(&c->st, 0, sizeof c->st);
-    gi_buf b;
-    gi_buf_init(&b);
+    c->h = malloc((size_t)m->element_count * c->nodes * sizeof *c->h);
     gi_rad_ff_opts o = {7, level};
-    int rc = gi_rad_ff_rows(&rt, s, m, &st, &o, 0, m->element_count, &b, err);
-    if (rc == 0)
-        rc = gi_rad_ff_decode(b.data, b.len, 0, m->element_count, c->nodes, rays, put, c, &c->st,
-                              err);
-    gi_buf_free(&b);
+    int rc = gi_rad_ff_dense(&rt, s, m, &st, &o, c->h, c->nodes, &c->st, err);
     gi_rad_strata_free(&st);
     gi_rt_free(&rt);
     return rc;
@@ -220,14 +207,11 @@ GI_TEST(test_rad_white_furnace)
     counts c = {0};
     GI_REQUIRE_OK(cast_all(&s, &m, DEFAULT_RAYS, 0, &c, &err));
     uint32_t n = m.element_count, k = m.root_count;
-    uint16_t *h16 = calloc((size_t)n * k, sizeof *h16);
-    for (size_t i = 0; i < (size_t)n * k; i++)
-        h16[i] = (uint16_t)c.h[i];
     gi_rad_patches pt;
     gi_rad_2mf_patches(&m, 0, &pt);
     gi_rad_factor f;
     gi_rad_model md;
-    GI_REQUIRE_OK(gi_rad_factor_from_counts(&f, &m, h16, k, DEFAULT_RAYS, &pt, &err));
+    GI_REQUIRE_OK(gi_rad_factor_from_counts(&f, &m, c.h, k, DEFAULT_RAYS, &pt, &err));
     GI_REQUIRE_OK(gi_rad_model_build(&md, &m, &s, &err));
     gi_rad_model_reflectance(&md, f.rho);
     GI_REQUIRE_OK(gi_rad_factor_prepare(&f, &err));
@@ -254,7 +238,6 @@ GI_TEST(test_rad_white_furnace)
     gi_rad_model_free(&md);
     gi_rad_factor_free(&f);
     gi_rad_patches_free(&pt);
-    free(h16);
     free(c.h);
     gi_rad_mesh_free(&m);
     gi_scene_free(&s);

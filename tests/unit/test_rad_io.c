@@ -6,6 +6,7 @@
 #include "gi_crc32c.h"
 #include "gi_test.h"
 #include "radiosity/rad.h"
+#include "radiosity/rad_ff.h"
 #include "radiosity/rad_file.h"
 #include "radiosity/rad_patches.h"
 
@@ -234,5 +235,51 @@ GI_TEST(test_rad_emissions_refuse_bad_input)
                          strstr(err.msg, cases[i].what) && !strchr(err.msg, '\n'),
                      "case %zu: rc %d: %s", i, rc, err.msg);
         gi_rad_emissions_free(&em);
+    }
+}
+
+static void nothing(void *user, uint32_t e, uint32_t node, uint32_t hits) {}
+
+/* A form-factor row as a worker sends it (rad_ff.h). */
+static void put_row(gi_buf *b, uint32_t nnz, uint32_t escaped, uint32_t backface,
+                    const uint32_t *pairs)
+{
+    gi_buf_put_u32(b, nnz);
+    gi_buf_put_u32(b, escaped);
+    gi_buf_put_u32(b, backface);
+    gi_buf_put_u64(b, 0);
+    for (uint32_t i = 0; i < 2 * nnz; i++)
+        gi_buf_put_u32(b, pairs[i]);
+}
+
+GI_TEST(test_rad_form_factor_rows_are_checked_on_merge)
+{
+    static const struct {
+        uint32_t nnz, escaped, backface, pairs[6];
+        int ok;
+    } rows[] = {
+        {2, 1, 1, {0, 10, 3, 4}, 1},   /* 10 + 4 + 1 + 1 = 16 rays */
+        {2, 0, 0, {0, 10, 3, 4}, 0},   /* accounts for 14 */
+        {2, 1, 1, {3, 10, 0, 4}, 0},   /* nodes out of order */
+        {2, 1, 1, {0, 10, 9, 4}, 0},   /* node 9 of 8 */
+        {2, 10, 1, {0, 0, 3, 5}, 0},   /* a zero count */
+        {3, 0, 0, {0, 17, 1, 0, 2, 0}, 0},
+    };
+    for (size_t i = 0; i < GI_ARRAY_LEN(rows); i++) {
+        gi_buf b;
+        gi_buf_init(&b);
+        put_row(&b, rows[i].nnz, rows[i].escaped, rows[i].backface, rows[i].pairs);
+        gi_error err;
+        gi_error_clear(&err);
+        gi_rad_ff_stats st = {0};
+        int rc = gi_rad_ff_decode(b.data, b.len, 5, 6, 8, 16, nothing, NULL, &st, &err);
+        GI_CHECK_MSG(rows[i].ok ? rc == 0 : rc == -1 && err.code == GI_EPROTO, "row %zu: %s", i,
+                     err.msg);
+        /* Trailing bytes are refused too. */
+        if (rows[i].ok) {
+            gi_buf_put_u8(&b, 0);
+            GI_CHECK(gi_rad_ff_decode(b.data, b.len, 5, 6, 8, 16, nothing, NULL, &st, &err) == -1);
+        }
+        gi_buf_free(&b);
     }
 }

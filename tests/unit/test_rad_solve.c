@@ -62,12 +62,6 @@ typedef struct built {
     gi_rad_model md;
 } built;
 
-static void put16(void *user, uint32_t e, uint32_t node, uint32_t hits)
-{
-    uint16_t **pp = user;
-    pp[1][(size_t)e * (uintptr_t)pp[0] + node] = (uint16_t)hits;
-}
-
 static int build_cornell(built *b, uint32_t patches, uint32_t levels, uint32_t rays,
                          gi_error *err)
 {
@@ -80,15 +74,10 @@ static int build_cornell(built *b, uint32_t patches, uint32_t levels, uint32_t r
     if (gi_rt_create(&rt, &b->s, err) || gi_rad_strata_init(&st, rays, err))
         return -1;
     uint32_t n = b->m.element_count, k = b->m.root_count;
-    uint16_t *h = calloc((size_t)n * k, sizeof *h);
-    gi_buf out;
-    gi_buf_init(&out);
+    uint16_t *h = malloc((size_t)n * k * sizeof *h);
     gi_rad_ff_opts o = {1, 0};
-    gi_rad_ff_stats fs = {0};
-    void *ctx[2] = {(void *)(uintptr_t)k, h};
-    int rc = gi_rad_ff_rows(&rt, &b->s, &b->m, &st, &o, 0, n, &out, err);
-    if (rc == 0)
-        rc = gi_rad_ff_decode(out.data, out.len, 0, n, k, rays, put16, ctx, &fs, err);
+    gi_rad_ff_stats fs;
+    int rc = gi_rad_ff_dense(&rt, &b->s, &b->m, &st, &o, h, k, &fs, err);
     gi_rad_patches pt;
     gi_rad_2mf_patches(&b->m, 0, &pt);
     if (rc == 0)
@@ -100,7 +89,6 @@ static int build_cornell(built *b, uint32_t patches, uint32_t levels, uint32_t r
         rc = gi_rad_factor_prepare(&b->f, err);
     }
     gi_rad_patches_free(&pt);
-    gi_buf_free(&out);
     free(h);
     gi_rad_strata_free(&st);
     gi_rt_free(&rt);
@@ -379,12 +367,6 @@ static const char *room_with_panel =
     "  {\"name\": \"panel\", \"material\": \"p\", \"mobile\": true,"
     "   \"box\": {\"size\": [0.4, 0.4, 0.4]}, \"transform\": [{\"translate\": [%g, -0.6, 0.1]}]}]}";
 
-static void put32(void *user, uint32_t e, uint32_t node, uint32_t hits)
-{
-    void **ctx = user;
-    ((int32_t *)ctx[1])[(size_t)e * (uintptr_t)ctx[0] + node] = (int32_t)hits;
-}
-
 GI_TEST(test_rad_delta_recasts_few_rays_and_is_exact)
 {
     gi_error err;
@@ -407,25 +389,20 @@ GI_TEST(test_rad_delta_recasts_few_rays_and_is_exact)
     GI_REQUIRE_OK(gi_rad_delta(&ri, &si, &rf, &sf, &m, &st, 5, 1, &dF, &ds, &err));
     GI_CHECK(ds.recast < ds.rays / 2 && ds.changed > 0 && dF.nnz > 0);
     /* Full element-level F in both states: F_F - F_I must equal dF. */
-    int32_t *h[2];
+    uint16_t *h[2];
     gi_rt *rt[2] = {&ri, &rf};
     gi_scene *sc[2] = {&si, &sf};
     for (int s = 0; s < 2; s++) {
-        h[s] = calloc((size_t)n * n, sizeof *h[s]);
-        gi_buf out;
-        gi_buf_init(&out);
+        h[s] = malloc((size_t)n * n * sizeof *h[s]);
         gi_rad_ff_opts o = {5, m.levels};
-        gi_rad_ff_stats fs = {0};
-        void *ctx[2] = {(void *)(uintptr_t)n, h[s]};
-        GI_REQUIRE_OK(gi_rad_ff_rows(rt[s], sc[s], &m, &st, &o, 0, n, &out, &err));
-        GI_REQUIRE_OK(gi_rad_ff_decode(out.data, out.len, 0, n, n, rays, put32, ctx, &fs, &err));
-        gi_buf_free(&out);
+        gi_rad_ff_stats fs;
+        GI_REQUIRE_OK(gi_rad_ff_dense(rt[s], sc[s], &m, &st, &o, h[s], n, &fs, &err));
     }
     int same = 1;
     for (uint32_t e = 0; e < n; e++) {
         uint64_t q = dF.row_ptr[e];
         for (uint32_t j = 0; j < n; j++) {
-            int32_t d = h[1][(size_t)e * n + j] - h[0][(size_t)e * n + j];
+            int32_t d = (int32_t)h[1][(size_t)e * n + j] - h[0][(size_t)e * n + j];
             double v = 0.0;
             if (q < dF.row_ptr[e + 1] && dF.col[q] == j)
                 v = dF.val[q++];
@@ -441,7 +418,7 @@ GI_TEST(test_rad_delta_recasts_few_rays_and_is_exact)
         uint16_t *c0 = calloc((size_t)n * pt.k, sizeof *c0);
         for (uint32_t e = 0; e < n; e++)
             for (uint32_t j = 0; j < n; j++)
-                c0[(size_t)e * pt.k + j / 4] += (uint16_t)h[s][(size_t)e * n + j];
+                c0[(size_t)e * pt.k + j / 4] += h[s][(size_t)e * n + j];
         GI_REQUIRE_OK(gi_rad_factor_from_counts(&f[s], &m, c0, pt.k, rays, &pt, &err));
         free(c0);
     }
