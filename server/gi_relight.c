@@ -86,20 +86,6 @@ static int parse_args(int argc, char **argv, relight_args *a)
     return 0;
 }
 
-static int parse_job(const char *path, gi_job *job, gi_error *err)
-{
-    gi_buf text;
-    gi_buf_init(&text);
-    if (gi_read_file(path, GI_JOB_MAX_BYTES, &text, err)) {
-        gi_buf_free(&text);
-        memset(job, 0, sizeof *job);
-        return -1;
-    }
-    int rc = gi_job_parse((const char *)text.data, text.len, path, job, err);
-    gi_buf_free(&text);
-    return rc;
-}
-
 static double now_ms(void) { return gi_now() * 1e3; }
 
 /* PLY per emission set and the report, without images. */
@@ -144,7 +130,7 @@ static int relight(const relight_args *a, gi_error *err)
     gi_job job;
     int images = a->images;
     /* Without images the scene is not needed: the job is only parsed. */
-    if (images ? gi_job_load(a->job, &job, err) : parse_job(a->job, &job, err)) {
+    if (images ? gi_job_load(a->job, &job, err) : gi_job_read(a->job, &job, err)) {
         gi_job_free(&job);
         return -1;
     }

@@ -1,13 +1,13 @@
 # Radiosity white furnace, end to end: in a closed box whose walls all
 # reflect 0.5 and emit 1.0, radiosity (in radiance units) is
-# E / (1 - rho) = 2.0 everywhere, within 1%: in the camera image (every
-# pixel) and in the 2MCE factorization's solution.
+# E / (1 - rho) = 2.0 everywhere, within 1%: in every pixel of the camera
+# image, with 2MF and with 2MCE.
 . "$(dirname "$0")/lib.sh"
 cat >"$TMP/furnace.json" <<SCENE
 {
-  "camera": {"position": [0.1, -0.2, 0.15], "look_at": [1, 0.3, -0.4], "fov_y": 100},
+  "camera": {"position": [-0.3, 0.1, 0.2], "look_at": [0.9, -0.2, 0.5], "fov_y": 110},
   "materials": {"wall": {"diffuse": [0.5, 0.5, 0.5], "emission": [1, 1, 1]}},
-  "objects": [{"name": "box", "material": "wall", "box": {"size": [2, 2, 2], "inward": true}}]
+  "objects": [{"name": "room", "material": "wall", "box": {"size": [3, 1, 2], "inward": true}}]
 }
 SCENE
 for kind in 2mf 2mce; do
