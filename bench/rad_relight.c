@@ -6,8 +6,9 @@
  * Scene: the generated room with 4 x 4 quads per wall and two cubes (216
  * equal level-0 patches, rad_scenes.h), L levels below them (n = 216 4^L)
  * and 2MF patches at level l (k = 216 4^l). Form factors from 64 rays per
- * element (the time of a relight does not depend on the values; 64 keeps
- * the set-up short). One relight = V^T E (per-patch sums), the three
+ * element (the time of a relight does not depend on the values, only on
+ * whether the counts pack into 8 bits - with 64 rays they always do, with
+ * the default 1024 almost always; 64 keeps the set-up short). One relight = V^T E (per-patch sums), the three
  * k x k products M_c t_c (cblas_sgemv), one pass of the 16-bit factor for
  * the three colours (rad_kernel.h), and B = E + R Y: everything between an
  * emission vector and its radiosity. Emission vectors: moving-projector
@@ -155,7 +156,8 @@ int main(int argc, char **argv)
     prepared *p = calloc((size_t)nc, sizeof *p);
     for (int c = 0; c < nc; c++) {
         prepare(first - 1 + c, &s, &p[c]);
-        fprintf(stderr, "case %d ready (%.1f s)\n", first + c, p[c].setup_s);
+        fprintf(stderr, "case %d ready (%.1f s, counts %s)\n", first + c, p[c].setup_s,
+                p[c].f.hits8 ? "8-bit" : "16-bit");
     }
     openblas_set_num_threads(1);
     double *t1 = malloc((size_t)nc * rounds * sizeof *t1), *t2 = malloc((size_t)nc * rounds * sizeof *t2);
@@ -194,7 +196,9 @@ int main(int argc, char **argv)
         free(p[c].E);
         free(p[c].B);
     }
-    printf("(medians of %d rounds; U stored as 16-bit hit counts; OpenBLAS threads 1)\n", rounds);
+    printf("(medians of %d rounds; OpenBLAS threads 1; U read as 8-bit counts where they fit, "
+           "see rad_kernel.h)\n",
+           rounds);
     free(p), free(t1), free(t2), free(tb);
     gi_scene_free(&s);
     return 0;

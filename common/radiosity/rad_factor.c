@@ -57,7 +57,62 @@ void gi_rad_factor_free(gi_rad_factor *f)
     free(f->patch_count);
     free(f->rho);
     free(f->M);
+    free(f->hits8);
+    free(f->over_row);
+    free(f->over_col);
+    free(f->over_val);
     memset(f, 0, sizeof *f);
+}
+
+static void unpack(gi_rad_factor *f)
+{
+    free(f->hits8);
+    free(f->over_row);
+    free(f->over_col);
+    free(f->over_val);
+    f->hits8 = NULL;
+    f->over_row = f->over_col = NULL;
+    f->over_val = NULL;
+    f->over_count = 0;
+}
+
+int gi_rad_factor_pack(gi_rad_factor *f, gi_error *err)
+{
+    unpack(f);
+    size_t cells = (size_t)f->n * f->k_pad, over = 0;
+    for (size_t i = 0; i < cells; i++)
+        over += f->hits[i] > 255;
+    if (over > (size_t)f->n * f->k / 64)
+        return 0; /* the lists would cost more than the 8 bits save */
+    f->hits8 = gi_try_malloc(cells, err, "packed factor");
+    f->over_row = gi_try_malloc(((size_t)f->n + 1) * sizeof *f->over_row, err, "packed factor");
+    f->over_col = gi_try_malloc((over ? over : 1) * sizeof *f->over_col, err, "packed factor");
+    f->over_val = gi_try_malloc((over ? over : 1) * sizeof *f->over_val, err, "packed factor");
+    if (!f->hits8 || !f->over_row || !f->over_col || !f->over_val) {
+        unpack(f);
+        return -1;
+    }
+    uint32_t o = 0;
+    for (uint32_t e = 0; e < f->n; e++) {
+        f->over_row[e] = o;
+        for (uint32_t p = 0; p < f->k_pad; p++) {
+            uint16_t h = f->hits[(size_t)e * f->k_pad + p];
+            f->hits8[(size_t)e * f->k_pad + p] = (uint8_t)(h > 255 ? 255 : h);
+            if (h > 255) {
+                f->over_col[o] = p;
+                f->over_val[o++] = (uint16_t)(h - 255);
+            }
+        }
+    }
+    f->over_row[f->n] = o;
+    f->over_count = o;
+    return 0;
+}
+
+void gi_rad_factor_counts(const gi_rad_factor *f, gi_rad_counts *u)
+{
+    *u = (gi_rad_counts){f->n, f->k_pad, f->hits, f->hits8, f->over_row, f->over_col,
+                         f->over_val};
 }
 
 int gi_rad_factor_prepare(gi_rad_factor *f, gi_error *err)
@@ -113,7 +168,7 @@ int gi_rad_factor_prepare(gi_rad_factor *f, gi_error *err)
     }
     free(A);
     free(ipiv);
-    return 0;
+    return gi_rad_factor_pack(f, err);
 }
 
 void gi_rad_factor_vt(const gi_rad_factor *f, const float *x, double *t)
@@ -148,7 +203,9 @@ int gi_rad_factor_relight(const gi_rad_factor *f, const float *E, float *B, uint
             for (uint32_t p = 0; p < k; p++)
                 s[(size_t)c * kp + p] = (float)(s[(size_t)c * kp + p] * f->w[p]);
         }
-        gi_rad_apply3(f->hits, n, kp, s, B, threads); /* B = U s */
+        gi_rad_counts u;
+        gi_rad_factor_counts(f, &u);
+        gi_rad_apply3(&u, s, B, threads); /* B = U s */
         for (size_t i = 0; i < 3 * (size_t)n; i++)
             B[i] = E[i] + f->rho[i] * B[i];
         free(t), free(tf), free(s);
@@ -220,7 +277,9 @@ int gi_rad_factor_neumann(const gi_rad_factor *f, const float *E, float *B, doub
         for (int c = 0; c < 3; c++)
             for (uint32_t p = 0; p < f->k; p++)
                 s[(size_t)c * kp + p] = (float)(t[(size_t)c * kp + p] * f->w[p]);
-        gi_rad_apply3(f->hits, n, kp, s, y, threads);
+        gi_rad_counts u;
+        gi_rad_factor_counts(f, &u);
+        gi_rad_apply3(&u, s, y, threads);
         double d2 = 0.0, b2 = 0.0;
         for (size_t i = 0; i < 3 * (size_t)n; i++) {
             float next = E[i] + f->rho[i] * y[i]; /* eq. 3.30 */

@@ -34,6 +34,12 @@ typedef struct gi_rad_factor {
     uint32_t *patch_count; /* k: c_p, elements per patch */
     float *rho;            /* n x 3: reflectance per element and colour */
     float *M;              /* 3 x k x k, row-major: M_c (eq. 3.33); NULL until prepared */
+    /* The same counts packed for relighting (gi_rad_factor_pack): 8 bits,
+     * 255 where larger, the excess in per-row lists. NULL if not packed. */
+    uint8_t *hits8;
+    uint32_t *over_row, *over_col;
+    uint16_t *over_val;
+    uint32_t over_count;
 } gi_rad_factor;
 
 /* Allocates a factor with zeroed hits (the caller fills hits, patch, rho;
@@ -44,8 +50,16 @@ int gi_rad_factor_alloc(gi_rad_factor *f, uint32_t n, uint32_t k, uint32_t rays,
 int gi_rad_factor_finish(gi_rad_factor *f, gi_error *err);
 void gi_rad_factor_free(gi_rad_factor *f);
 
+/* Packs the counts into 8 bits (halving what a relight reads) unless more
+ * than 1/64 of them exceed 255; repacks after the counts change. */
+int gi_rad_factor_pack(gi_rad_factor *f, gi_error *err);
+/* The counts as the kernel reads them (packed if packed). */
+struct gi_rad_counts;
+void gi_rad_factor_counts(const gi_rad_factor *f, struct gi_rad_counts *u);
+
 /* M_c = (I_k - V^T R_c U)^-1 for the three colours (LAPACK dgetrf/dgetri
- * in double). Fails (GI_EINVAL) if some I_k - V^T R_c U is singular. */
+ * in double), then packs the counts. Fails (GI_EINVAL) if some
+ * I_k - V^T R_c U is singular. */
 int gi_rad_factor_prepare(gi_rad_factor *f, gi_error *err);
 
 /* Eq. 3.33 for `count` emissions at once: E and B are count x n x 3

@@ -209,7 +209,7 @@ static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info
     gi_rad_model_reflectance(md, f->rho);
     if (r->failed || r->left)
         return bad(err, name, "trailing or missing bytes");
-    return 0;
+    return gi_rad_factor_pack(f, err);
 }
 
 int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name,

@@ -13,7 +13,6 @@
 
 #include "gi_job.h"
 #include "gi_log.h"
-#include "gi_outputs.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
 #include "rad.h"
@@ -197,7 +196,7 @@ static int rad_check_scene(gi_job *job, gi_error *err)
     if (gi_rad_mesh_build(&m, s, gi_rad_patch_area(s, p->patches), p->levels, err))
         return gi_error_prefix(err, "%s", job->file);
     uint64_t nodes = gi_rad_mesh_nodes(&m, tracked_level(p));
-    uint32_t roots = m.root_count;
+    uint32_t roots = m.root_count, n = m.element_count;
     gi_rad_mesh_free(&m);
     if (p->factorization == GI_RAD_2MF && nodes > GI_RAD_MAX_PATCHES)
         return gi_fail(err, GI_EINVAL,
@@ -207,6 +206,13 @@ static int rad_check_scene(gi_job *job, gi_error *err)
     if (p->factorization == GI_RAD_2MCE && roots > GI_RAD_MAX_PATCHES)
         return gi_fail(err, GI_EINVAL, "%s: radiosity: %u level-0 patches (limit %u)", job->file,
                        roots, GI_RAD_MAX_PATCHES);
+    /* The coordinator holds n x (nodes at the tracked level) 16-bit counts. */
+    if ((uint64_t)n * nodes > ((uint64_t)1 << 31))
+        return gi_fail(err, GI_EINVAL,
+                       "%s: radiosity: %u elements x %llu tracked patches is more than 2^31 "
+                       "form-factor counts (fewer patches, levels or a lower %s)",
+                       job->file, n, (unsigned long long)nodes,
+                       p->factorization == GI_RAD_2MF ? "patch_level" : "max_level");
     return 0;
 }
 
@@ -308,6 +314,8 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
                 rc = gi_rad_2mce_select(&c, &st->mesh, p->threshold, &pt, err);
             } else {
                 uint32_t target = p->target_patches ? p->target_patches : 2 * st->mesh.root_count;
+                if (target > GI_RAD_MAX_PATCHES)
+                    target = GI_RAD_MAX_PATCHES;
                 rc = gi_rad_2mce_tune(&c, &st->mesh, target, &st->threshold, &pt, err);
             }
             gi_rad_2mce_free(&c);

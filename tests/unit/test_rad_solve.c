@@ -19,39 +19,62 @@
 #include "radiosity/rad_patches.h"
 #include "test_helpers.h"
 
-GI_TEST(test_rad_kernel_paths_agree_bit_for_bit_and_with_blas)
+GI_TEST(test_rad_kernel_paths_agree_bit_for_bit_and_with_double)
 {
-    uint32_t n = 1500, k = 37, kp = gi_rad_kpad(k);
-    uint16_t *h = calloc((size_t)n * kp, sizeof *h);
+    gi_error err;
+    uint32_t n = 1500, k = 37;
+    gi_rad_factor f;
+    GI_REQUIRE_OK(gi_rad_factor_alloc(&f, n, k, 4096, &err));
+    uint32_t kp = f.k_pad;
     float *s = calloc(3 * (size_t)kp, sizeof *s);
-    float *y1 = malloc(3 * (size_t)n * sizeof *y1), *y2 = malloc(3 * (size_t)n * sizeof *y2);
-    float *y3 = malloc(3 * (size_t)n * sizeof *y3);
+    float *y[6];
+    for (int i = 0; i < 6; i++)
+        y[i] = malloc(3 * (size_t)n * sizeof *y[i]);
     gi_rng r;
     gi_rng_init(&r, 1, 2, 3);
     for (uint32_t e = 0; e < n; e++)
-        for (uint32_t p = 0; p < k; p++)
-            h[(size_t)e * kp + p] = (uint16_t)gi_rng_below(&r, 1025);
+        for (uint32_t p = 0; p < k; p++) /* mostly small counts, a few large */
+            f.hits[(size_t)e * kp + p] = (uint16_t)(gi_rng_below(&r, 100) == 0 ? 256 + gi_rng_below(&r, 3000)
+                                                                                : gi_rng_below(&r, 40));
     for (int c = 0; c < 3; c++)
         for (uint32_t p = 0; p < k; p++)
             s[(size_t)c * kp + p] = gi_rng_float(&r) * 1e-3f;
-    gi_rad_apply3_portable(h, kp, s, y1, 0, n);
-    int have_avx2 = gi_rad_apply3_avx2(h, kp, s, y2, 0, n);
-    if (have_avx2)
-        GI_CHECK(memcmp(y1, y2, 3 * (size_t)n * sizeof *y1) == 0);
-    gi_rad_apply3(h, n, kp, s, y3, 3); /* threads split rows: same bits */
-    GI_CHECK(memcmp(y1, y3, 3 * (size_t)n * sizeof *y1) == 0);
-    /* Against a double-precision product. */
-    double worst = 0.0;
-    for (uint32_t e = 0; e < n; e++)
-        for (int c = 0; c < 3; c++) {
-            double ref = 0.0;
-            for (uint32_t p = 0; p < k; p++)
-                ref += (double)h[(size_t)e * kp + p] * s[(size_t)c * kp + p];
-            double d = fabs(ref - y1[3 * (size_t)e + c]) / (fabs(ref) + 1e-30);
-            worst = d > worst ? d : worst;
-        }
-    GI_CHECK_MSG(worst < 1e-5, "relative error %g", worst);
-    free(h), free(s), free(y1), free(y2), free(y3);
+    gi_rad_counts u16, u8;
+    gi_rad_factor_counts(&f, &u16);
+    GI_REQUIRE_OK(gi_rad_factor_pack(&f, &err));
+    GI_REQUIRE(f.hits8 != NULL && f.over_count > 0);
+    gi_rad_factor_counts(&f, &u8);
+    u16.h8 = NULL;
+    const gi_rad_counts *us[2] = {&u16, &u8};
+    for (int w = 0; w < 2; w++) {
+        float **yy = y + 3 * w;
+        gi_rad_apply3_portable(us[w], s, yy[0], 0, n);
+        if (gi_rad_apply3_avx2(us[w], s, yy[1], 0, n))
+            GI_CHECK_MSG(memcmp(yy[0], yy[1], 3 * (size_t)n * sizeof(float)) == 0, "%s: AVX2 differs",
+                         w ? "8-bit" : "16-bit");
+        gi_rad_apply3(us[w], s, yy[2], 3); /* threads split rows: same bits */
+        GI_CHECK(memcmp(yy[0], yy[2], 3 * (size_t)n * sizeof(float)) == 0);
+        /* Against a double-precision product. */
+        double worst = 0.0;
+        for (uint32_t e = 0; e < n; e++)
+            for (int c = 0; c < 3; c++) {
+                double ref = 0.0;
+                for (uint32_t p = 0; p < k; p++)
+                    ref += (double)f.hits[(size_t)e * kp + p] * s[(size_t)c * kp + p];
+                double d = fabs(ref - yy[0][3 * (size_t)e + c]) / (fabs(ref) + 1e-30);
+                worst = d > worst ? d : worst;
+            }
+        GI_CHECK_MSG(worst < 1e-5, "relative error %g", worst);
+    }
+    /* Too many large counts: packing is declined. */
+    for (size_t i = 0; i < (size_t)n * kp; i += 7)
+        f.hits[i] = 1000;
+    GI_REQUIRE_OK(gi_rad_factor_pack(&f, &err));
+    GI_CHECK(f.hits8 == NULL);
+    for (int i = 0; i < 6; i++)
+        free(y[i]);
+    free(s);
+    gi_rad_factor_free(&f);
 }
 
 /* The Cornell box job's factorization, built in process. */
