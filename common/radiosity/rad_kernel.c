@@ -152,7 +152,8 @@ void gi_rad_apply3(const gi_rad_counts *u, const float *s, float *y, int threads
 {
     if (threads > MAX_THREADS)
         threads = MAX_THREADS;
-    if (threads <= 1 || u->n < 1024) {
+    /* Below a few MB of counts a thread costs more than it saves. */
+    if (threads <= 1 || (uint64_t)u->n * u->k_pad < ((uint64_t)1 << 22)) {
         apply_job j = {u, s, y, 0, u->n};
         apply_thread(&j);
         return;
