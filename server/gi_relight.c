@@ -88,41 +88,9 @@ static int parse_args(int argc, char **argv, relight_args *a)
 
 static double now_ms(void) { return gi_now() * 1e3; }
 
-/* PLY per emission set and the report, without images. */
-static int write_outputs(const gi_job *job, const char *out_dir, const gi_rad_file_info *info,
-                         const gi_rad_model *md, const gi_rad_factor *f,
-                         const gi_rad_emissions *em, const float *E, const float *B,
-                         const gi_rad_solve_info *si, gi_error *err)
+static void print_written(void *user, const char *kind, const char *path)
 {
-    const char *ply = gi_job_output(job, "ply"), *rep = gi_job_output(job, "report");
-    size_t n3 = 3 * (size_t)f->n;
-    for (uint32_t i = 0; ply && i < em->count; i++) {
-        char *name = gi_rad_output_name(ply, em->items[i].name);
-        char *path = gi_path_join(out_dir, name);
-        int rc = gi_rad_ply_write(path, md, B + i * n3, job->exposure, err);
-        if (rc == 0)
-            printf("  ply  %s\n", path);
-        free(name);
-        free(path);
-        if (rc)
-            return -1;
-    }
-    if (rep) {
-        cJSON *doc = gi_rad_report_new(info, f);
-        cJSON_AddStringToObject(doc, "job", job->name);
-        gi_rad_report_add_solutions(doc, md, em, E, B, si);
-        char *name = gi_rad_output_name(rep, "relight");
-        char *path = gi_path_join(out_dir, name);
-        int rc = gi_rad_write_json(path, doc, err);
-        if (rc == 0)
-            printf("  report %s\n", path);
-        cJSON_Delete(doc);
-        free(name);
-        free(path);
-        if (rc)
-            return -1;
-    }
-    return 0;
+    printf("  %-4s %s\n", kind, path);
 }
 
 static int relight(const relight_args *a, gi_error *err)
@@ -222,7 +190,9 @@ static int relight(const relight_args *a, gi_error *err)
            a->threads, a->threads == 1 ? "" : "s", t_load);
     if (gi_mkdirs(a->out, err))
         goto done;
-    rc = write_outputs(&job, a->out, &info, &md, &f, &em, E, B, si, err);
+    rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
+                              job.name, job.exposure, &info, &md, &f, &em, E, B, si,
+                              print_written, NULL, err);
 done:
     free(fpath);
     free(E);

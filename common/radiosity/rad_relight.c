@@ -151,3 +151,39 @@ char *gi_rad_output_name(const char *file, const char *emission)
     snprintf(out, len, "%.*s-%s%s", (int)stem, file, emission, file + stem);
     return out;
 }
+
+int gi_rad_relight_write(const char *dir, const char *ply, const char *report,
+                         const char *job, double exposure, const gi_rad_file_info *info,
+                         const gi_rad_model *md, const gi_rad_factor *f,
+                         const gi_rad_emissions *em, const float *E, const float *B,
+                         const gi_rad_solve_info *si,
+                         void (*note)(void *user, const char *kind, const char *path),
+                         void *user, gi_error *err)
+{
+    size_t n3 = 3 * (size_t)f->n;
+    for (uint32_t i = 0; ply && i < em->count; i++) {
+        char *name = gi_rad_output_name(ply, em->items[i].name);
+        char *path = gi_path_join(dir, name);
+        int rc = gi_rad_ply_write(path, md, B + i * n3, exposure, err);
+        if (rc == 0 && note)
+            note(user, "ply", path);
+        free(name);
+        free(path);
+        if (rc)
+            return -1;
+    }
+    if (!report)
+        return 0;
+    cJSON *doc = gi_rad_report_new(info, f);
+    cJSON_AddStringToObject(doc, "job", job);
+    gi_rad_report_add_solutions(doc, md, em, E, B, si);
+    char *name = gi_rad_output_name(report, "relight");
+    char *path = gi_path_join(dir, name);
+    int rc = gi_rad_write_json(path, doc, err);
+    if (rc == 0 && note)
+        note(user, "report", path);
+    cJSON_Delete(doc);
+    free(name);
+    free(path);
+    return rc;
+}
