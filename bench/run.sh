@@ -9,6 +9,8 @@ cd "$SRC"
 echo "== pt_vs_embree: path tracer vs bare Embree on the same rays (one core)"
 "$BIN/bench/pt_vs_embree" scenes/cornell-box/scene.json 256 8 9
 
+echo "== rad_form_factors: ray-cast form factors against closed forms (radiosity)"
+"$BIN/bench/rad_form_factors"
 echo "== rad_relight: time per RGB relight, the thesis's Table 4.7 cases (radiosity)"
 "$BIN/bench/rad_relight" 15 1-9
 echo "== rad_build: factorization build (gi render, 2 workers) for n = 13824 and 55296, k = 864"
