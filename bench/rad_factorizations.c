@@ -205,7 +205,8 @@ int main(int argc, char **argv)
     for (int c = 0; c < 3; c++) {
         rho[c] = malloc(n * sizeof *rho[c]);
         for (uint32_t e = 0; e < n; e++)
-            rho[c][e] = gi_v3_get(s.materials[s.tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, c);
+            rho[c][e] =
+                gi_v3_get(s.materials[s.tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, c);
         b.rho[c] = rho[c];
         b.ref[c] = malloc((size_t)n * frames * sizeof *b.ref[c]);
         if (gi_rad_dense_solve(F, n, rho[c], E, frames, b.ref[c], &err))
@@ -221,7 +222,8 @@ int main(int argc, char **argv)
     if (gi_rad_svd_compute(&svd, F, n, &err))
         die(&err);
     double t_svd = now() - t0;
-    printf("\n| method | rank | error (4.4) | \\|F - UV^T\\|_F | seconds |\n|---|---|---|---|---|\n");
+    printf(
+        "\n| method | rank | error (4.4) | \\|F - UV^T\\|_F | seconds |\n|---|---|---|---|---|\n");
     for (uint32_t level = 1; level <= 2; level++) {
         uint32_t k = gi_rad_mesh_nodes(&m, level), kh = k / 2 + 2;
         gi_rad_patches pt;

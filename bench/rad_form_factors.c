@@ -75,8 +75,8 @@ int main(void)
     double t = log((1 + W * W) * (1 + H * H) / (1 + S)) +
                W * W * log(W * W * (1 + S) / ((1 + W * W) * S)) +
                H * H * log(H * H * (1 + S) / ((1 + H * H) * S));
-    double perp = (W * atan(1 / W) + H * atan(1 / H) - sqrt(S) * atan(1 / sqrt(S)) + 0.25 * t) /
-                  (M_PI * W);
+    double perp =
+        (W * atan(1 / W) + H * atan(1 / H) - sqrt(S) * atan(1 / sqrt(S)) + 0.25 * t) / (M_PI * W);
     printf("| rays per element | coaxial parallel squares, d = 1 (F = %.5f) | perpendicular, "
            "common edge (F = %.5f) |\n|---|---|---|\n",
            par, perp);

@@ -122,7 +122,8 @@ int main(int argc, char **argv)
         for (uint64_t q = dF.row_ptr[e]; q < dF.row_ptr[e + 1]; q++)
             cf[(size_t)e * n + dF.col[q]] =
                 (uint16_t)(ci[(size_t)e * n + dF.col[q]] + lrint(dF.val[q] * rays));
-    printf("room, cube (side 0.2) moved by (0.3, 0, 0.25): n = %u, k = %u, %u rays per element, %u frames\n",
+    printf("room, cube (side 0.2) moved by (0.3, 0, 0.25): n = %u, k = %u, %u rays per element, %u "
+           "frames\n",
            n, gi_rad_mesh_nodes(&m, 1), rays, frames);
     printf("change matrix: %llu of %llu cells (%.2f%%); rays re-cast %llu of %llu (%.1f%%), %llu "
            "changed; %.2f s (all rays of one state: %.2f s)\n",
@@ -143,7 +144,8 @@ int main(int argc, char **argv)
     for (int c = 0; c < 3; c++) {
         rho[c] = malloc(n * sizeof *rho[c]);
         for (uint32_t e = 0; e < n; e++)
-            rho[c][e] = gi_v3_get(si.materials[si.tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, c);
+            rho[c][e] =
+                gi_v3_get(si.materials[si.tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, c);
         exact[c] = malloc((size_t)n * frames * sizeof *exact[c]);
         resolve[c] = malloc((size_t)n * frames * sizeof *resolve[c]);
         B[c] = malloc((size_t)n * frames * sizeof *B[c]);

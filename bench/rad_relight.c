@@ -6,13 +6,14 @@
  * Scene: the generated room with 4 x 4 quads per wall and two cubes (216
  * equal level-0 patches, rad_scenes.h), L levels below them (n = 216 4^L)
  * and 2MF patches at level l (k = 216 4^l). Form factors from 64 rays per
- * element (the time of a relight does not depend on the values, only on
- * whether the counts pack into 8 bits - with 64 rays they always do, with
- * the default 1024 almost always; 64 keeps the set-up short). One relight = V^T E (per-patch sums), the three
- * k x k products M_c t_c (cblas_sgemv), one pass of the 16-bit factor for
- * the three colours (rad_kernel.h), and B = E + R Y: everything between an
- * emission vector and its radiosity. Emission vectors: moving-projector
- * frames, a different one each time.
+ * element: the time of a relight does not depend on the values, only on
+ * whether the counts pack into 8 bits (with 64 rays they always do, with
+ * the default 1024 almost always), and 64 keeps the set-up short. One
+ * relight = V^T E (per-patch sums), the three k x k products M_c t_c
+ * (cblas_sgemv), one pass over the factor's counts for the three colours
+ * (rad_kernel.h), and B = E + R Y: everything between an emission vector
+ * and its radiosity. Emission vectors: moving-projector frames, a
+ * different one each time.
  *
  * Each round times every (case, kernel threads) pair once, in turn, so
  * the machine's drift spreads over all of them; the table gives medians
@@ -38,9 +39,9 @@ static const struct {
     uint32_t n, k;
     double cpu_ms, gpu_ms; /* thesis Table 4.7: (a) CPU, (b + c) GPU total */
 } cases[9] = {
-    {3456, 216, 1.27, 0.73},      {3456, 864, 4.64, 1.10},      {13824, 216, 5.23, 2.62},
-    {3456, 3456, 14.53, 3.65},    {13824, 864, 20.14, 3.72},    {55296, 216, 22.70, 10.11},
-    {13824, 3456, 72.77, 13.40},  {55296, 864, 88.37, 14.62},   {221184, 216, 86.99, 42.84},
+    {3456, 216, 1.27, 0.73},     {3456, 864, 4.64, 1.10},    {13824, 216, 5.23, 2.62},
+    {3456, 3456, 14.53, 3.65},   {13824, 864, 20.14, 3.72},  {55296, 216, 22.70, 10.11},
+    {13824, 3456, 72.77, 13.40}, {55296, 864, 88.37, 14.62}, {221184, 216, 86.99, 42.84},
 };
 
 static double now(void)
@@ -93,8 +94,8 @@ static void prepare(int c, const gi_scene *s, prepared *p)
     if (gi_rad_mesh_build(&m, s, gi_rad_patch_area(s, 216), L, &err))
         die(&err);
     if (m.element_count != cases[c].n || gi_rad_mesh_nodes(&m, l) != cases[c].k) {
-        fprintf(stderr, "rad_relight: case %d: mesh has n = %u, k = %u\n", c + 1,
-                m.element_count, gi_rad_mesh_nodes(&m, l));
+        fprintf(stderr, "rad_relight: case %d: mesh has n = %u, k = %u\n", c + 1, m.element_count,
+                gi_rad_mesh_nodes(&m, l));
         exit(1);
     }
     gi_rt rt;
@@ -112,8 +113,8 @@ static void prepare(int c, const gi_scene *s, prepared *p)
         die(&err);
     for (uint32_t e = 0; e < n; e++)
         for (int ch = 0; ch < 3; ch++)
-            p->f.rho[3 * e + ch] =
-                gi_v3_get(s->materials[s->tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, ch);
+            p->f.rho[3 * e + ch] = gi_v3_get(
+                s->materials[s->tri_material[gi_rad_mesh_element_tri(&m, e)]].diffuse, ch);
     openblas_set_num_threads(2);
     if (gi_rad_factor_prepare(&p->f, &err))
         die(&err);
@@ -160,7 +161,8 @@ int main(int argc, char **argv)
                 p[c].f.hits8 ? "8-bit" : "16-bit");
     }
     openblas_set_num_threads(1);
-    double *t1 = malloc((size_t)nc * rounds * sizeof *t1), *t2 = malloc((size_t)nc * rounds * sizeof *t2);
+    double *t1 = malloc((size_t)nc * rounds * sizeof *t1),
+           *t2 = malloc((size_t)nc * rounds * sizeof *t2);
     double *tb = malloc((size_t)nc * rounds * sizeof *tb);
     for (int r = 0; r < rounds; r++)
         for (int c = 0; c < nc; c++) {
@@ -180,8 +182,9 @@ int main(int argc, char **argv)
                 tb[c * rounds + r] = -1;
             }
         }
-    printf("| case | n | k | thesis CPU (1 channel) | thesis GPU (1 channel) | ours, 1 thread (RGB) | "
-           "ours, 2 threads (RGB) | batched, per RGB relight |\n|---|---|---|---|---|---|---|---|\n");
+    printf(
+        "| case | n | k | thesis CPU (1 channel) | thesis GPU (1 channel) | ours, 1 thread (RGB) | "
+        "ours, 2 threads (RGB) | batched, per RGB relight |\n|---|---|---|---|---|---|---|---|\n");
     for (int c = 0; c < nc; c++) {
         int ci = first - 1 + c, nb = 0;
         double *b = malloc((size_t)rounds * sizeof *b);

@@ -15,8 +15,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: rad_scene OUT.json [grid] [cubes] [cube side]\n");
         return 2;
     }
-    gi_rad_room_opts o = {argc > 2 ? atoi(argv[2]) : 4, argc > 3 ? atoi(argv[3]) : 2,
-                          argc > 4 ? atof(argv[4]) : 0.25, {0, 0, 0}, 10.0};
+    gi_rad_room_opts o = {argc > 2 ? atoi(argv[2]) : 4,
+                          argc > 3 ? atoi(argv[3]) : 2,
+                          argc > 4 ? atof(argv[4]) : 0.25,
+                          {0, 0, 0},
+                          10.0};
     if (o.grid < 1 || o.grid > 64 || o.cubes < 0 || o.cubes > 2 || !(o.cube > 0 && o.cube < 0.3)) {
         fprintf(stderr, "rad_scene: grid in [1, 64], cubes in [0, 2], side in (0, 0.3)\n");
         return 2;

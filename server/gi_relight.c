@@ -24,8 +24,12 @@ static void relight_usage(FILE *out)
                  "[--threads N] [--progress MODE]\n");
 }
 
+/* Emissions files are small: names and colours. */
+#define EMISSIONS_MAX_BYTES (64u << 20)
+
 typedef struct relight_args {
-    const char *job, *emissions, *out, *progress;
+    const char *job, *emissions, *out;
+    gi_progress_mode progress;
     int images, workers, threads;
 } relight_args;
 
@@ -34,8 +38,8 @@ static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
     char *end;
     long v = strtol(s, &end, 10);
     if (!*s || *end || v < lo || v > hi) {
-        fprintf(stderr, "gi relight: %s must be an integer in [%d, %d], got \"%s\"\n", opt, lo,
-                hi, s);
+        fprintf(stderr, "gi relight: %s must be an integer in [%d, %d], got \"%s\"\n", opt, lo, hi,
+                s);
         return -1;
     }
     *out = (int)v;
@@ -46,7 +50,7 @@ static int parse_args(int argc, char **argv, relight_args *a)
 {
     memset(a, 0, sizeof *a);
     a->out = "out";
-    a->progress = "none";
+    a->progress = GI_PROGRESS_NONE;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     a->threads = cores > 0 ? (int)cores : 1;
     for (int i = 2; i < argc; i++) {
@@ -62,10 +66,14 @@ static int parse_args(int argc, char **argv, relight_args *a)
             const char *v = argv[++i];
             if (strcmp(arg, "--out") == 0)
                 a->out = v;
-            else if (strcmp(arg, "--progress") == 0)
-                a->progress = v;
-            else if (parse_int(arg, v, 1, 1024,
-                               strcmp(arg, "--workers") == 0 ? &a->workers : &a->threads))
+            else if (strcmp(arg, "--progress") == 0) {
+                if (gi_progress_mode_parse(v, &a->progress)) {
+                    fprintf(stderr,
+                            "gi relight: --progress must be auto, bar, lines, json or none\n");
+                    return -1;
+                }
+            } else if (parse_int(arg, v, 1, 1024,
+                                 strcmp(arg, "--workers") == 0 ? &a->workers : &a->threads))
                 return -1;
         } else if (arg[0] == '-' && arg[1]) {
             fprintf(stderr, "gi relight: unknown option %s\n", arg);
@@ -86,7 +94,10 @@ static int parse_args(int argc, char **argv, relight_args *a)
     return 0;
 }
 
-static double now_ms(void) { return gi_now() * 1e3; }
+static double now_ms(void)
+{
+    return gi_now() * 1e3;
+}
 
 static void print_written(void *user, const char *kind, const char *path)
 {
@@ -120,7 +131,8 @@ static int relight(const relight_args *a, gi_error *err)
     }
     const char *ffile = gi_job_output(&job, "factorization");
     if (!ffile) {
-        gi_fail(err, GI_EINVAL, "%s: the job writes no \"factorization\" output to relight", a->job);
+        gi_fail(err, GI_EINVAL, "%s: the job writes no \"factorization\" output to relight",
+                a->job);
         goto done;
     }
     fpath = gi_path_join(a->out, ffile);
@@ -130,7 +142,7 @@ static int relight(const relight_args *a, gi_error *err)
     double t_load = now_ms() - t0;
     gi_buf text;
     gi_buf_init(&text);
-    if (gi_read_file(a->emissions, 64u << 20, &text, err)) {
+    if (gi_read_file(a->emissions, EMISSIONS_MAX_BYTES, &text, err)) {
         gi_buf_free(&text);
         goto done;
     }
@@ -147,11 +159,7 @@ static int relight(const relight_args *a, gi_error *err)
         p->relight_model = &md;
         p->relight_factor = &f;
         p->relight_emissions = &em;
-        gi_local_opts opts = {a->workers, GI_PROGRESS_NONE};
-        if (gi_progress_mode_parse(a->progress, &opts.progress)) {
-            gi_fail(err, GI_EINVAL, "--progress must be auto, bar, lines, json or none");
-            goto done;
-        }
+        gi_local_opts opts = {a->workers, a->progress};
         if (gi_mkdirs(a->out, err))
             goto done;
         job.out_dir = gi_xstrdup(a->out);
@@ -191,8 +199,8 @@ static int relight(const relight_args *a, gi_error *err)
     if (gi_mkdirs(a->out, err))
         goto done;
     rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
-                              job.name, job.exposure, &info, &md, &f, &em, E, B, si,
-                              print_written, NULL, err);
+                              job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,
+                              NULL, err);
 done:
     free(fpath);
     free(E);

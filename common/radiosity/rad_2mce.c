@@ -5,8 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-int gi_rad_2mce_metrics(gi_rad_2mce *c, const gi_rad_mesh *m, const uint16_t *counts,
-                        size_t stride, uint32_t max_level, uint32_t rays, gi_error *err)
+int gi_rad_2mce_metrics(gi_rad_2mce *c, const gi_rad_mesh *m, const uint16_t *counts, size_t stride,
+                        uint32_t max_level, uint32_t rays, gi_error *err)
 {
     memset(c, 0, sizeof *c);
     if (max_level > m->levels)
@@ -37,8 +37,8 @@ int gi_rad_2mce_metrics(gi_rad_2mce *c, const gi_rad_mesh *m, const uint16_t *co
             const double *child = l + 1 == T ? hT : h + c->level_offset[l + 1];
             double *parent = h + c->level_offset[l];
             /* c_p / c_ch = 4, and the 1 / (n rays c_ch) factor comes after. */
-            double scale = 1.0 / ((double)m->element_count * rays *
-                                  (double)(1u << (2 * (m->levels - l - 1))));
+            double scale =
+                1.0 / ((double)m->element_count * rays * (double)(1u << (2 * (m->levels - l - 1))));
             for (uint32_t q = 0; q < gi_rad_mesh_nodes(m, l); q++) {
                 const double *ch = child + 4 * (size_t)q;
                 double hp = ch[0] + ch[1] + ch[2] + ch[3], sq = 0.0;
@@ -107,8 +107,8 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-int gi_rad_2mce_tune(const gi_rad_2mce *c, const gi_rad_mesh *m, uint32_t target,
-                     double *threshold, gi_rad_patches *out, gi_error *err)
+int gi_rad_2mce_tune(const gi_rad_2mce *c, const gi_rad_mesh *m, uint32_t target, double *threshold,
+                     gi_rad_patches *out, gi_error *err)
 {
     /* Candidate thresholds: -1 (split every node above max_level) and each
      * distinct metric value (split the nodes above it). The patch count

@@ -30,14 +30,14 @@
 typedef struct gi_rad_2mce {
     uint32_t max_level; /* maxnivel: the tracked level T */
     uint32_t roots;
-    double *metric; /* eval(p) per node at levels 0..T-1, level by level */
+    double *metric;         /* eval(p) per node at levels 0..T-1, level by level */
     uint32_t *level_offset; /* T + 1 entries */
 } gi_rad_2mce;
 
 /* Computes eval(p) for every node above max_level from the counts at
  * max_level (n x stride). */
-int gi_rad_2mce_metrics(gi_rad_2mce *c, const gi_rad_mesh *m, const uint16_t *counts,
-                        size_t stride, uint32_t max_level, uint32_t rays, gi_error *err);
+int gi_rad_2mce_metrics(gi_rad_2mce *c, const gi_rad_mesh *m, const uint16_t *counts, size_t stride,
+                        uint32_t max_level, uint32_t rays, gi_error *err);
 void gi_rad_2mce_free(gi_rad_2mce *c);
 
 /* HalloParches with a threshold (nodes with eval > threshold are split). */
@@ -45,7 +45,7 @@ int gi_rad_2mce_select(const gi_rad_2mce *c, const gi_rad_mesh *m, double thresh
                        gi_rad_patches *out, gi_error *err);
 /* The threshold whose patch count is closest to target (ties: fewer
  * patches), and its patches. */
-int gi_rad_2mce_tune(const gi_rad_2mce *c, const gi_rad_mesh *m, uint32_t target,
-                     double *threshold, gi_rad_patches *out, gi_error *err);
+int gi_rad_2mce_tune(const gi_rad_2mce *c, const gi_rad_mesh *m, uint32_t target, double *threshold,
+                     gi_rad_patches *out, gi_error *err);
 
 #endif

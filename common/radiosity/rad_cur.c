@@ -24,8 +24,8 @@ int gi_rad_maxvol(const double *A, uint32_t n, uint32_t k, double tol, int max_s
         goto done;
     /* Start: the pivot rows of LU with partial pivoting. */
     memcpy(LU, A, (size_t)n * k * sizeof *LU);
-    lapack_int info = LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)n, (lapack_int)k, LU,
-                                     (lapack_int)k, ipiv);
+    lapack_int info =
+        LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)n, (lapack_int)k, LU, (lapack_int)k, ipiv);
     if (info != 0) {
         gi_fail(err, GI_EINVAL, "maxvol: the %u x %u matrix has rank < %u", n, k, k);
         goto done;
@@ -46,8 +46,8 @@ int gi_rad_maxvol(const double *A, uint32_t n, uint32_t k, double tol, int max_s
         gi_fail(err, GI_EINVAL, "maxvol: singular starting submatrix");
         goto done;
     }
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)k, (int)k, 1.0, A,
-                (int)k, W, (int)k, 0.0, B, (int)k);
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)k, (int)k, 1.0, A, (int)k,
+                W, (int)k, 0.0, B, (int)k);
     for (int swap = 0; swap < max_swaps; swap++) {
         size_t best = (size_t)cblas_idamax((int)((size_t)n * k), B, 1);
         uint32_t i = (uint32_t)(best / k), j = (uint32_t)(best % k);
@@ -82,8 +82,8 @@ static int pinv(const double *W, uint32_t k, double *out, gi_error *err)
         for (uint32_t i = 0; i < k; i++)
             for (uint32_t j = 0; j < k; j++)
                 U[(size_t)i * k + j] *= S[j] > 1e-12 * S[0] ? 1.0 / S[j] : 0.0;
-        cblas_dgemm(CblasRowMajor, CblasTrans, CblasTrans, (int)k, (int)k, (int)k, 1.0, VT,
-                    (int)k, U, (int)k, 0.0, out, (int)k);
+        cblas_dgemm(CblasRowMajor, CblasTrans, CblasTrans, (int)k, (int)k, (int)k, 1.0, VT, (int)k,
+                    U, (int)k, 0.0, out, (int)k);
     }
     free(A), free(U), free(VT), free(S);
     if (info != 0)
@@ -128,8 +128,8 @@ int gi_rad_cur(const double *F, uint32_t n, uint32_t k, int sweeps, gi_rad_lowra
     if (pinv(W, k, Wp, err) || gi_rad_lowrank_alloc(lr, n, k, 1, err))
         goto done;
     /* U_k = C pinv(W), V_k = R^T. */
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)k, (int)k, 1.0, C,
-                (int)k, Wp, (int)k, 0.0, lr->U, (int)k);
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)k, (int)k, 1.0, C, (int)k,
+                Wp, (int)k, 0.0, lr->U, (int)k);
     memcpy(lr->V, RT, (size_t)n * k * sizeof *RT);
     rc = 0;
 done:

@@ -22,9 +22,9 @@ static box object_box(const gi_scene *s, uint32_t object)
     /* A margin: ray origins are offset off surfaces, and the boxes of flat
      * objects have no thickness. */
     gi_vec3 d = gi_sub(b.hi, b.lo);
-    float pad = 1e-4f * gi_maxf(1.0f, gi_max3(d)) + 1e-4f * gi_max3(gi_max_v3(
-                    gi_v3(fabsf(b.lo.x), fabsf(b.lo.y), fabsf(b.lo.z)),
-                    gi_v3(fabsf(b.hi.x), fabsf(b.hi.y), fabsf(b.hi.z))));
+    float pad = 1e-4f * gi_maxf(1.0f, gi_max3(d)) +
+                1e-4f * gi_max3(gi_max_v3(gi_v3(fabsf(b.lo.x), fabsf(b.lo.y), fabsf(b.lo.z)),
+                                          gi_v3(fabsf(b.hi.x), fabsf(b.hi.y), fabsf(b.hi.z))));
     b.lo = gi_sub(b.lo, gi_v3(pad, pad, pad));
     b.hi = gi_add(b.hi, gi_v3(pad, pad, pad));
     return b;
@@ -57,8 +57,7 @@ static int ray_hits_box(const box *b, gi_vec3 org, gi_vec3 dir)
 }
 
 /* The element a ray lands on (front face), or UINT32_MAX. */
-static uint32_t cast(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, gi_vec3 org,
-                     gi_vec3 dir)
+static uint32_t cast(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, gi_vec3 org, gi_vec3 dir)
 {
     gi_hit h;
     if (!gi_rt_intersect(rt, org, dir, 0.0f, FLT_MAX, &h) ||

@@ -68,9 +68,8 @@ int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta
     return 0;
 }
 
-int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch,
-                        const uint32_t *patch_count, uint32_t k, gi_rad_sparse *out,
-                        gi_error *err)
+int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch, const uint32_t *patch_count,
+                        uint32_t k, gi_rad_sparse *out, gi_error *err)
 {
     uint32_t n = dF->n;
     memset(out, 0, sizeof *out);
@@ -141,8 +140,8 @@ static int inverse_of_identity_minus(double *A, uint32_t k, gi_error *err)
     for (uint32_t i = 0; i < k; i++)
         A[(size_t)i * k + i] += 1.0;
     lapack_int *ipiv = gi_xmalloc((size_t)k * sizeof *ipiv);
-    lapack_int info = LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)k, (lapack_int)k, A,
-                                     (lapack_int)k, ipiv);
+    lapack_int info =
+        LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)k, (lapack_int)k, A, (lapack_int)k, ipiv);
     if (info == 0)
         info = LAPACKE_dgetri(LAPACK_ROW_MAJOR, (lapack_int)k, A, (lapack_int)k, ipiv);
     free(ipiv);
@@ -151,9 +150,8 @@ static int inverse_of_identity_minus(double *A, uint32_t k, gi_error *err)
     return 0;
 }
 
-int gi_rad_update_solve(const gi_rad_lowrank *init, const gi_rad_lowrank *delta,
-                        const double *rho, const double *E, uint32_t m, double *B,
-                        gi_error *err)
+int gi_rad_update_solve(const gi_rad_lowrank *init, const gi_rad_lowrank *delta, const double *rho,
+                        const double *E, uint32_t m, double *B, gi_error *err)
 {
     uint32_t n = init->n, k = init->k, kd = delta->k;
     if (delta->n != n || !delta->V)
@@ -194,10 +192,10 @@ int gi_rad_update_solve(const gi_rad_lowrank *init, const gi_rad_lowrank *delta,
     /* Z = -(U_d - Y (V_I^T U_d)) (I - W^T U_d)^-1          (eq. 3.41) */
     gi_rad_lowrank_vt(init, RUd, kd, P);
     memcpy(Q, RUd, (size_t)n * kd * sizeof *Q);
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)kd, (int)k, -1.0, Y,
-                (int)k, P, (int)kd, 1.0, Q, (int)kd);
-    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)kd, (int)kd, (int)n, 1.0, W,
-                (int)kd, RUd, (int)kd, 0.0, A2, (int)kd);
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)kd, (int)k, -1.0, Y, (int)k,
+                P, (int)kd, 1.0, Q, (int)kd);
+    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, (int)kd, (int)kd, (int)n, 1.0, W, (int)kd,
+                RUd, (int)kd, 0.0, A2, (int)kd);
     if (inverse_of_identity_minus(A2, kd, err))
         goto done;
     cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)kd, (int)kd, -1.0, Q,

@@ -42,9 +42,9 @@ typedef struct gi_rad_sparse {
 void gi_rad_sparse_free(gi_rad_sparse *s);
 
 typedef struct gi_rad_delta_stats {
-    uint64_t rays;       /* rays of all elements */
-    uint64_t recast;     /* rays cast again in both states */
-    uint64_t changed;    /* rays whose hit changed */
+    uint64_t rays;    /* rays of all elements */
+    uint64_t recast;  /* rays cast again in both states */
+    uint64_t changed; /* rays whose hit changed */
 } gi_rad_delta_stats;
 
 /* dF at element level between the scene in state I (rt_i over s_i) and in
@@ -61,9 +61,8 @@ int gi_rad_delta(gi_rt *rt_i, const gi_scene *s_i, gi_rt *rt_f, const gi_scene *
  * (Figs. 4.10-4.11), where changes concentrate in few rows and columns;
  * element-level dF from sampled rays is spread thin (every changed ray
  * moves 1/rays between two single elements). */
-int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch,
-                        const uint32_t *patch_count, uint32_t k, gi_rad_sparse *out,
-                        gi_error *err);
+int gi_rad_delta_coarse(const gi_rad_sparse *dF, const uint32_t *patch, const uint32_t *patch_count,
+                        uint32_t k, gi_rad_sparse *out, gi_error *err);
 
 typedef struct gi_rad_alg6_stats {
     uint64_t nnz;      /* of dF */
@@ -75,8 +74,7 @@ int gi_rad_alg6(const gi_rad_sparse *dF, uint32_t k_delta, gi_rad_lowrank *delta
                 gi_rad_alg6_stats *stats, gi_error *err);
 
 /* Eqs. 3.38-3.42 for one colour and m emission vectors (E, B: n x m). */
-int gi_rad_update_solve(const gi_rad_lowrank *init, const gi_rad_lowrank *delta,
-                        const double *rho, const double *E, uint32_t m, double *B,
-                        gi_error *err);
+int gi_rad_update_solve(const gi_rad_lowrank *init, const gi_rad_lowrank *delta, const double *rho,
+                        const double *E, uint32_t m, double *B, gi_error *err);
 
 #endif

@@ -63,8 +63,8 @@ int gi_rad_emissions_parse_json(gi_jv *v, const cJSON *list, const char *path,
         return gi_jv_fail(v, path, "expected an array of emission sets");
     int n = cJSON_GetArraySize(list);
     if (n < 1 || n > GI_RAD_MAX_EMISSIONS)
-        return gi_jv_fail(v, path, "expected 1 to %d emission sets, got %d",
-                          GI_RAD_MAX_EMISSIONS, n);
+        return gi_jv_fail(v, path, "expected 1 to %d emission sets, got %d", GI_RAD_MAX_EMISSIONS,
+                          n);
     out->items = gi_xcalloc((size_t)n, sizeof *out->items);
     static const char *const keys[] = {"name", "base", "materials", "objects", "scale", NULL};
     static const char *const bases[] = {"scene", "none", NULL};
@@ -99,15 +99,15 @@ int gi_rad_emissions_parse_json(gi_jv *v, const cJSON *list, const char *path,
         em->scale = (float)scale;
         if (parse_overrides(v, mats, gi_json_path(pm, sizeof pm, p, "materials"),
                             &em->material_count, &em->materials) ||
-            parse_overrides(v, objs, gi_json_path(pm, sizeof pm, p, "objects"),
-                            &em->object_count, &em->objects))
+            parse_overrides(v, objs, gi_json_path(pm, sizeof pm, p, "objects"), &em->object_count,
+                            &em->objects))
             return -1;
     }
     return 0;
 }
 
-int gi_rad_emissions_parse(const char *text, size_t len, const char *file,
-                           gi_rad_emissions *out, gi_error *err)
+int gi_rad_emissions_parse(const char *text, size_t len, const char *file, gi_rad_emissions *out,
+                           gi_error *err)
 {
     memset(out, 0, sizeof *out);
     cJSON *doc;
@@ -155,19 +155,21 @@ void gi_rad_emissions_scene(gi_rad_emissions *em)
     em->items[0].scale = 1.0f;
 }
 
-int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md,
-                           const char *file, gi_error *err)
+int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
+                           gi_error *err)
 {
     for (uint32_t i = 0; i < em->count; i++) {
         const gi_rad_emission *e = &em->items[i];
         for (uint32_t j = 0; j < e->material_count; j++)
             if (gi_rad_model_find_material(md, e->materials[j].name) < 0)
-                return gi_fail(err, GI_EINVAL, "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene",
-                               file, i, e->name, e->materials[j].name);
+                return gi_fail(err, GI_EINVAL,
+                               "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene", file,
+                               i, e->name, e->materials[j].name);
         for (uint32_t j = 0; j < e->object_count; j++)
             if (gi_rad_model_find_object(md, e->objects[j].name) < 0)
-                return gi_fail(err, GI_EINVAL, "%s: emissions[%u] (\"%s\"): no object \"%s\" in the scene",
-                               file, i, e->name, e->objects[j].name);
+                return gi_fail(err, GI_EINVAL,
+                               "%s: emissions[%u] (\"%s\"): no object \"%s\" in the scene", file, i,
+                               e->name, e->objects[j].name);
     }
     return 0;
 }

@@ -47,8 +47,8 @@ typedef struct gi_rad_emissions {
 
 /* An emissions file: a JSON object {"emissions": [...]}. Bad input fails
  * with GI_EINVAL and a message naming the file and field. */
-int gi_rad_emissions_parse(const char *text, size_t len, const char *file,
-                           gi_rad_emissions *out, gi_error *err);
+int gi_rad_emissions_parse(const char *text, size_t len, const char *file, gi_rad_emissions *out,
+                           gi_error *err);
 /* The list itself (a job's inline "emissions"); path names it in messages. */
 int gi_rad_emissions_parse_json(gi_jv *v, const cJSON *list, const char *path,
                                 gi_rad_emissions *out);
@@ -59,8 +59,8 @@ void gi_rad_emissions_scene(gi_rad_emissions *em);
 
 /* Checks that every material and object named exists in the model
  * (GI_EINVAL naming `file`, the set and the name). */
-int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md,
-                           const char *file, gi_error *err);
+int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
+                           gi_error *err);
 /* The emission vector of set i: n x 3 radiance per element. */
 void gi_rad_emission_vector(const gi_rad_emissions *em, uint32_t i, const gi_rad_model *md,
                             float *E);

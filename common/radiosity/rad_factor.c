@@ -9,13 +9,13 @@
 
 #include "rad_kernel.h"
 
-int gi_rad_factor_alloc(gi_rad_factor *f, uint32_t n, uint32_t k, uint32_t rays,
-                        gi_error *err)
+int gi_rad_factor_alloc(gi_rad_factor *f, uint32_t n, uint32_t k, uint32_t rays, gi_error *err)
 {
     memset(f, 0, sizeof *f);
     if (n == 0 || k == 0 || k > n || k > GI_RAD_MAX_PATCHES || rays == 0 || rays > 65535)
-        return gi_fail(err, GI_EINVAL, "radiosity factor: bad sizes n = %u, k = %u (at most %u patches)",
-                       n, k, GI_RAD_MAX_PATCHES);
+        return gi_fail(err, GI_EINVAL,
+                       "radiosity factor: bad sizes n = %u, k = %u (at most %u patches)", n, k,
+                       GI_RAD_MAX_PATCHES);
     f->n = n;
     f->k = k;
     f->k_pad = gi_rad_kpad(k);
@@ -111,8 +111,7 @@ int gi_rad_factor_pack(gi_rad_factor *f, gi_error *err)
 
 void gi_rad_factor_counts(const gi_rad_factor *f, gi_rad_counts *u)
 {
-    *u = (gi_rad_counts){f->n, f->k_pad, f->hits, f->hits8, f->over_row, f->over_col,
-                         f->over_val};
+    *u = (gi_rad_counts){f->n, f->k_pad, f->hits, f->hits8, f->over_row, f->over_col, f->over_val};
 }
 
 int gi_rad_factor_prepare(gi_rad_factor *f, gi_error *err)
@@ -148,8 +147,8 @@ int gi_rad_factor_prepare(gi_rad_factor *f, gi_error *err)
                 row[q] = -row[q] * f->w[q];
             row[p] += 1.0;
         }
-        lapack_int info = LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)k, (lapack_int)k, A,
-                                         (lapack_int)k, ipiv);
+        lapack_int info =
+            LAPACKE_dgetrf(LAPACK_ROW_MAJOR, (lapack_int)k, (lapack_int)k, A, (lapack_int)k, ipiv);
         if (info == 0)
             info = LAPACKE_dgetri(LAPACK_ROW_MAJOR, (lapack_int)k, A, (lapack_int)k, ipiv);
         if (info != 0) {
@@ -198,8 +197,8 @@ int gi_rad_factor_relight(const gi_rad_factor *f, const float *E, float *B, uint
         for (size_t i = 0; i < 3 * (size_t)kp; i++)
             tf[i] = (float)t[i];
         for (int c = 0; c < 3; c++) { /* s_c = M_c (V^T E_c), then U's weights */
-            cblas_sgemv(CblasRowMajor, CblasNoTrans, (int)k, (int)k, 1.0f, f->M + c * kk,
-                        (int)k, tf + (size_t)c * kp, 1, 0.0f, s + (size_t)c * kp, 1);
+            cblas_sgemv(CblasRowMajor, CblasNoTrans, (int)k, (int)k, 1.0f, f->M + c * kk, (int)k,
+                        tf + (size_t)c * kp, 1, 0.0f, s + (size_t)c * kp, 1);
             for (uint32_t p = 0; p < k; p++)
                 s[(size_t)c * kp + p] = (float)(s[(size_t)c * kp + p] * f->w[p]);
         }
@@ -249,7 +248,8 @@ int gi_rad_factor_relight(const gi_rad_factor *f, const float *E, float *B, uint
             for (uint32_t i = 0; i < count; i++)
                 for (int c = 0; c < 3; c++) {
                     size_t at = ((size_t)i * n + r0 + r) * 3 + c;
-                    B[at] = E[at] + f->rho[3 * (size_t)(r0 + r) + c] * Y[(size_t)r * cols + 3 * i + c];
+                    B[at] =
+                        E[at] + f->rho[3 * (size_t)(r0 + r) + c] * Y[(size_t)r * cols + 3 * i + c];
                 }
     }
     (void)threads;

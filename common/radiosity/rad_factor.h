@@ -44,8 +44,7 @@ typedef struct gi_rad_factor {
 
 /* Allocates a factor with zeroed hits (the caller fills hits, patch, rho;
  * then gi_rad_factor_finish computes patch_count and w). */
-int gi_rad_factor_alloc(gi_rad_factor *f, uint32_t n, uint32_t k, uint32_t rays,
-                        gi_error *err);
+int gi_rad_factor_alloc(gi_rad_factor *f, uint32_t n, uint32_t k, uint32_t rays, gi_error *err);
 /* Checks patch[] (every patch non-empty), sets patch_count and w. */
 int gi_rad_factor_finish(gi_rad_factor *f, gi_error *err);
 void gi_rad_factor_free(gi_rad_factor *f);

@@ -11,9 +11,8 @@ int gi_rad_cmp_u32(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
-                   const gi_rad_strata *st, const gi_rad_ff_opts *o, uint32_t e0, uint32_t e1,
-                   gi_buf *out, gi_error *err)
+int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, const gi_rad_strata *st,
+                   const gi_rad_ff_opts *o, uint32_t e0, uint32_t e1, gi_buf *out, gi_error *err)
 {
     if (e0 > e1 || e1 > m->element_count || o->level > m->levels)
         return gi_fail(err, GI_EPROTO, "radiosity: element block [%u, %u) out of range", e0, e1);
@@ -88,9 +87,9 @@ int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
     return 0;
 }
 
-int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1,
-                     uint32_t nodes, uint32_t rays, gi_rad_ff_hit_fn hit, void *user,
-                     gi_rad_ff_stats *stats, gi_error *err)
+int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1, uint32_t nodes,
+                     uint32_t rays, gi_rad_ff_hit_fn hit, void *user, gi_rad_ff_stats *stats,
+                     gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, data, len, "radiosity form-factor rows");
@@ -133,9 +132,9 @@ static void dense_put(void *user, uint32_t e, uint32_t node, uint32_t hits)
     d->counts[(size_t)e * d->stride + node] = (uint16_t)hits;
 }
 
-int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
-                    const gi_rad_strata *st, const gi_rad_ff_opts *o, uint16_t *counts,
-                    size_t stride, gi_rad_ff_stats *stats, gi_error *err)
+int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, const gi_rad_strata *st,
+                    const gi_rad_ff_opts *o, uint16_t *counts, size_t stride,
+                    gi_rad_ff_stats *stats, gi_error *err)
 {
     uint32_t nodes = gi_rad_mesh_nodes(m, o->level), block = 256;
     dense_sink d = {counts, stride};
@@ -149,8 +148,8 @@ int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
         gi_buf_reset(&b);
         rc = gi_rad_ff_rows(rt, s, m, st, o, e0, e1, &b, err);
         if (rc == 0)
-            rc = gi_rad_ff_decode(b.data, b.len, e0, e1, nodes, st->rays, dense_put, &d, stats,
-                                  err);
+            rc =
+                gi_rad_ff_decode(b.data, b.len, e0, e1, nodes, st->rays, dense_put, &d, stats, err);
     }
     gi_buf_free(&b);
     return rc;

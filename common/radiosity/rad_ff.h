@@ -33,9 +33,8 @@ typedef struct gi_rad_ff_opts {
 } gi_rad_ff_opts;
 
 /* Worker side: appends the rows of elements [e0, e1) to out. */
-int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
-                   const gi_rad_strata *st, const gi_rad_ff_opts *o, uint32_t e0, uint32_t e1,
-                   gi_buf *out, gi_error *err);
+int gi_rad_ff_rows(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, const gi_rad_strata *st,
+                   const gi_rad_ff_opts *o, uint32_t e0, uint32_t e1, gi_buf *out, gi_error *err);
 
 typedef struct gi_rad_ff_stats {
     uint64_t escaped, backface; /* rays lost */
@@ -48,17 +47,17 @@ typedef void (*gi_rad_ff_hit_fn)(void *user, uint32_t e, uint32_t node, uint32_t
 /* Coordinator side: checks and decodes the rows of [e0, e1) (nodes: the
  * tracked level's node count), calling hit() for every nonzero and adding
  * to *stats. Malformed input fails with GI_EPROTO. */
-int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1,
-                     uint32_t nodes, uint32_t rays, gi_rad_ff_hit_fn hit, void *user,
-                     gi_rad_ff_stats *stats, gi_error *err);
+int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1, uint32_t nodes,
+                     uint32_t rays, gi_rad_ff_hit_fn hit, void *user, gi_rad_ff_stats *stats,
+                     gi_error *err);
 
 /* qsort comparison of uint32_t values. */
 int gi_rad_cmp_u32(const void *a, const void *b);
 
 /* In one process: the rows of every element as a dense count matrix
  * (counts[e * stride + node], zeroed first), for tests and benchmarks. */
-int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
-                    const gi_rad_strata *st, const gi_rad_ff_opts *o, uint16_t *counts,
-                    size_t stride, gi_rad_ff_stats *stats, gi_error *err);
+int gi_rad_ff_dense(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, const gi_rad_strata *st,
+                    const gi_rad_ff_opts *o, uint16_t *counts, size_t stride,
+                    gi_rad_ff_stats *stats, gi_error *err);
 
 #endif

@@ -89,8 +89,8 @@ static int finite3(const float *v)
 
 /* The body, after the header checks; outputs are freed by the caller on
  * failure. */
-static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info,
-                          gi_rad_model *md, gi_rad_factor *f, gi_error *err)
+static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info, gi_rad_model *md,
+                          gi_rad_factor *f, gi_error *err)
 {
     char *method = gi_get_str(r, 7);
     if (!method)
@@ -212,9 +212,8 @@ static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info
     return gi_rad_factor_pack(f, err);
 }
 
-int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name,
-                       gi_rad_file_info *info, gi_rad_model *md, gi_rad_factor *f,
-                       gi_error *err)
+int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name, gi_rad_file_info *info,
+                       gi_rad_model *md, gi_rad_factor *f, gi_error *err)
 {
     memset(info, 0, sizeof *info);
     memset(md, 0, sizeof *md);
@@ -225,8 +224,8 @@ int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name,
     uint64_t plen = gi_le_get_u64(data + 16);
     uint32_t crc = gi_le_get_u32(data + 24);
     if (version != GI_RAD_FILE_VERSION)
-        return gi_fail(err, GI_EINVAL, "%s: factorization file version %u (this gi reads %u)",
-                       name, version, GI_RAD_FILE_VERSION);
+        return gi_fail(err, GI_EINVAL, "%s: factorization file version %u (this gi reads %u)", name,
+                       version, GI_RAD_FILE_VERSION);
     if (flags != 0)
         return bad(err, name, "unknown flags");
     if (plen != len - GI_RAD_FILE_HEADER)
@@ -243,8 +242,8 @@ int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name,
     return 0;
 }
 
-int gi_rad_file_read(const char *path, gi_rad_file_info *info, gi_rad_model *md,
-                     gi_rad_factor *f, gi_error *err)
+int gi_rad_file_read(const char *path, gi_rad_file_info *info, gi_rad_model *md, gi_rad_factor *f,
+                     gi_error *err)
 {
     gi_buf b;
     gi_buf_init(&b);

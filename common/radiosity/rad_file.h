@@ -49,10 +49,9 @@ int gi_rad_file_write(const char *path, const gi_rad_file_info *info, const gi_r
 
 /* Parses a whole file image; `name` is used in messages. On failure the
  * outputs are left empty. */
-int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name,
-                       gi_rad_file_info *info, gi_rad_model *md, gi_rad_factor *f,
-                       gi_error *err);
-int gi_rad_file_read(const char *path, gi_rad_file_info *info, gi_rad_model *md,
-                     gi_rad_factor *f, gi_error *err);
+int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name, gi_rad_file_info *info,
+                       gi_rad_model *md, gi_rad_factor *f, gi_error *err);
+int gi_rad_file_read(const char *path, gi_rad_file_info *info, gi_rad_model *md, gi_rad_factor *f,
+                     gi_error *err);
 
 #endif

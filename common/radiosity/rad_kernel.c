@@ -22,8 +22,7 @@ static inline float reduce16(const float *a)
 }
 
 /* The excess of the 8-bit counts, after the dense part. */
-static void add_excess(const gi_rad_counts *u, const float *s, float *y, uint32_t r0,
-                       uint32_t r1)
+static void add_excess(const gi_rad_counts *u, const float *s, float *y, uint32_t r0, uint32_t r1)
 {
     if (!u->h8)
         return;
@@ -60,22 +59,22 @@ void gi_rad_apply3_portable(const gi_rad_counts *u, const float *s, float *y, ui
 
 TARGET static inline float reduce_avx2(__m256 lo, __m256 hi)
 {
-    __m256 v = _mm256_add_ps(lo, hi);                                       /* l + l+8 */
+    __m256 v = _mm256_add_ps(lo, hi);                                               /* l + l+8 */
     __m128 v4 = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1)); /* + l+4 */
-    __m128 v2 = _mm_add_ps(v4, _mm_movehl_ps(v4, v4));                      /* + l+2 */
-    __m128 v1 = _mm_add_ss(v2, _mm_shuffle_ps(v2, v2, 1));                  /* + l+1 */
+    __m128 v2 = _mm_add_ps(v4, _mm_movehl_ps(v4, v4));                              /* + l+2 */
+    __m128 v1 = _mm_add_ss(v2, _mm_shuffle_ps(v2, v2, 1));                          /* + l+1 */
     return _mm_cvtss_f32(v1);
 }
 
 /* Three colours from columns p..p+15 (their counts in hl, hh). */
-#define FMA3(hl, hh)                                                                     \
-    do {                                                                                 \
-        a0l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s0 + p), a0l);                         \
-        a0h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s0 + p + 8), a0h);                     \
-        a1l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s1 + p), a1l);                         \
-        a1h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s1 + p + 8), a1h);                     \
-        a2l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s2 + p), a2l);                         \
-        a2h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s2 + p + 8), a2h);                     \
+#define FMA3(hl, hh)                                                                               \
+    do {                                                                                           \
+        a0l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s0 + p), a0l);                                   \
+        a0h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s0 + p + 8), a0h);                               \
+        a1l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s1 + p), a1l);                                   \
+        a1h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s1 + p + 8), a1h);                               \
+        a2l = _mm256_fmadd_ps(hl, _mm256_loadu_ps(s2 + p), a2l);                                   \
+        a2h = _mm256_fmadd_ps(hh, _mm256_loadu_ps(s2 + p + 8), a2h);                               \
     } while (0)
 
 TARGET static void apply3_avx2(const gi_rad_counts *u, const float *s, float *y, uint32_t r0,
@@ -118,8 +117,7 @@ TARGET static void apply3_avx2(const gi_rad_counts *u, const float *s, float *y,
 }
 #endif
 
-int gi_rad_apply3_avx2(const gi_rad_counts *u, const float *s, float *y, uint32_t r0,
-                       uint32_t r1)
+int gi_rad_apply3_avx2(const gi_rad_counts *u, const float *s, float *y, uint32_t r0, uint32_t r1)
 {
 #if defined(__x86_64__)
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {

@@ -44,7 +44,6 @@ void gi_rad_apply3(const gi_rad_counts *u, const float *s, float *y, int threads
 void gi_rad_apply3_portable(const gi_rad_counts *u, const float *s, float *y, uint32_t r0,
                             uint32_t r1);
 /* 0 if this CPU lacks AVX2 + FMA (then nothing is computed). */
-int gi_rad_apply3_avx2(const gi_rad_counts *u, const float *s, float *y, uint32_t r0,
-                       uint32_t r1);
+int gi_rad_apply3_avx2(const gi_rad_counts *u, const float *s, float *y, uint32_t r0, uint32_t r1);
 
 #endif

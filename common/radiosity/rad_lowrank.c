@@ -7,8 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-int gi_rad_lowrank_alloc(gi_rad_lowrank *lr, uint32_t n, uint32_t k, int dense_v,
-                         gi_error *err)
+int gi_rad_lowrank_alloc(gi_rad_lowrank *lr, uint32_t n, uint32_t k, int dense_v, gi_error *err)
 {
     memset(lr, 0, sizeof *lr);
     lr->n = n;
@@ -39,7 +38,8 @@ int gi_rad_lowrank_from_factor(gi_rad_lowrank *lr, const gi_rad_factor *f, gi_er
         return -1;
     for (uint32_t e = 0; e < f->n; e++) {
         for (uint32_t p = 0; p < f->k; p++)
-            lr->U[(size_t)e * f->k + p] = f->hits[(size_t)e * f->k_pad + p] * f->w[p]; /* eq. 3.53 */
+            lr->U[(size_t)e * f->k + p] =
+                f->hits[(size_t)e * f->k_pad + p] * f->w[p]; /* eq. 3.53 */
         lr->patch[e] = f->patch[e];
     }
     return 0;
@@ -68,8 +68,8 @@ void gi_rad_lowrank_v(const gi_rad_lowrank *lr, const double *T, uint32_t m, dou
         memcpy(X + (size_t)e * m, T + (size_t)lr->patch[e] * m, m * sizeof *X);
 }
 
-int gi_rad_lowrank_smw(const gi_rad_lowrank *lr, const double *rho, const double *E,
-                       uint32_t m, double *B, gi_error *err)
+int gi_rad_lowrank_smw(const gi_rad_lowrank *lr, const double *rho, const double *E, uint32_t m,
+                       double *B, gi_error *err)
 {
     uint32_t n = lr->n, k = lr->k;
     double *RU = gi_try_malloc((size_t)n * k * sizeof *RU, err, "SMW solve");
@@ -96,8 +96,8 @@ int gi_rad_lowrank_smw(const gi_rad_lowrank *lr, const double *rho, const double
         goto done;
     }
     memcpy(B, E, (size_t)n * m * sizeof *B); /* eq. 3.32 */
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)m, (int)k, 1.0, RU,
-                (int)k, T, (int)m, 1.0, B, (int)m);
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)n, (int)m, (int)k, 1.0, RU, (int)k,
+                T, (int)m, 1.0, B, (int)m);
     rc = 0;
 done:
     free(RU);
@@ -107,9 +107,8 @@ done:
     return rc;
 }
 
-int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const double *E,
-                           uint32_t m, double tol, int max_iter, double *B, int *iterations,
-                           gi_error *err)
+int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const double *E, uint32_t m,
+                           double tol, int max_iter, double *B, int *iterations, gi_error *err)
 {
     uint32_t n = lr->n, k = lr->k;
     double *T = gi_try_malloc((size_t)k * m * sizeof *T, err, "Neumann iteration");
@@ -145,8 +144,8 @@ int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const do
     if (iterations)
         *iterations = it;
     if (res > tol)
-        return gi_fail(err, GI_EINVAL, "Neumann iteration: residual %.3g after %d iterations",
-                       res, it);
+        return gi_fail(err, GI_EINVAL, "Neumann iteration: residual %.3g after %d iterations", res,
+                       it);
     return 0;
 }
 
@@ -198,8 +197,8 @@ void gi_rad_top_k(const double *values, uint32_t n, uint32_t k, uint32_t *out)
     free(r);
 }
 
-int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E,
-                       uint32_t m, double *B, gi_error *err)
+int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E, uint32_t m,
+                       double *B, gi_error *err)
 {
     double *A = gi_try_malloc((size_t)n * n * sizeof *A, err, "dense radiosity solve");
     lapack_int *ipiv = gi_try_malloc((size_t)n * sizeof *ipiv, err, "dense radiosity solve");

@@ -22,8 +22,7 @@ typedef struct gi_rad_lowrank {
     uint32_t *patch; /* n, when V is NULL */
 } gi_rad_lowrank;
 
-int gi_rad_lowrank_alloc(gi_rad_lowrank *lr, uint32_t n, uint32_t k, int dense_v,
-                         gi_error *err);
+int gi_rad_lowrank_alloc(gi_rad_lowrank *lr, uint32_t n, uint32_t k, int dense_v, gi_error *err);
 void gi_rad_lowrank_free(gi_rad_lowrank *lr);
 /* The 2MF/2MCE factor in double: U = hits w, V the selector. */
 int gi_rad_lowrank_from_factor(gi_rad_lowrank *lr, const gi_rad_factor *f, gi_error *err);
@@ -36,13 +35,12 @@ void gi_rad_lowrank_v(const gi_rad_lowrank *lr, const double *T, uint32_t m, dou
 /* One colour, m emission vectors (E, B: n x m; rho: n reflectances):
  *   B = E + R U (I_k - V^T R U)^-1 V^T E          (eq. 3.32)
  * Fails (GI_EINVAL) if I_k - V^T R U is singular. */
-int gi_rad_lowrank_smw(const gi_rad_lowrank *lr, const double *rho, const double *E,
-                       uint32_t m, double *B, gi_error *err);
+int gi_rad_lowrank_smw(const gi_rad_lowrank *lr, const double *rho, const double *E, uint32_t m,
+                       double *B, gi_error *err);
 /* B_{i+1} = E + R U (V^T B_i), B_0 = E (eq. 3.30), until the largest
  * relative residual over the m columns is <= tol. */
-int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const double *E,
-                           uint32_t m, double tol, int max_iter, double *B, int *iterations,
-                           gi_error *err);
+int gi_rad_lowrank_neumann(const gi_rad_lowrank *lr, const double *rho, const double *E, uint32_t m,
+                           double tol, int max_iter, double *B, int *iterations, gi_error *err);
 /* ||F - U V^T||_F for a dense n x n F (thesis Table 4.3). */
 double gi_rad_lowrank_distance(const gi_rad_lowrank *lr, const double *F);
 
@@ -52,8 +50,8 @@ void gi_rad_top_k(const double *values, uint32_t n, uint32_t k, uint32_t *out);
 
 /* The dense reference: (I - R F) B = E for m right-hand sides (LAPACK
  * dgesv, O(n^3): for n up to a few thousand). */
-int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E,
-                       uint32_t m, double *B, gi_error *err);
+int gi_rad_dense_solve(const double *F, uint32_t n, const double *rho, const double *E, uint32_t m,
+                       double *B, gi_error *err);
 
 /* Truncated SVD (thesis 3.2.2; LAPACK dgesdd): F = U S V^T once, then
  * F_k = (U_k S_k) V_k^T for any k (the thesis's Usvdk * Vsvdk'). */

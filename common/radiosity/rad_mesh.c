@@ -94,10 +94,26 @@ static void lattice_child(lattice *l, unsigned digit)
     lattice n;
     for (int k = 0; k < 3; k++) {
         switch (digit) {
-        case 0: n.c[0][k] = l->c[0][k]; n.c[1][k] = mid[0][k]; n.c[2][k] = mid[2][k]; break;
-        case 1: n.c[0][k] = mid[0][k]; n.c[1][k] = l->c[1][k]; n.c[2][k] = mid[1][k]; break;
-        case 2: n.c[0][k] = mid[2][k]; n.c[1][k] = mid[1][k]; n.c[2][k] = l->c[2][k]; break;
-        default: n.c[0][k] = mid[1][k]; n.c[1][k] = mid[2][k]; n.c[2][k] = mid[0][k]; break;
+        case 0:
+            n.c[0][k] = l->c[0][k];
+            n.c[1][k] = mid[0][k];
+            n.c[2][k] = mid[2][k];
+            break;
+        case 1:
+            n.c[0][k] = mid[0][k];
+            n.c[1][k] = l->c[1][k];
+            n.c[2][k] = mid[1][k];
+            break;
+        case 2:
+            n.c[0][k] = mid[2][k];
+            n.c[1][k] = mid[1][k];
+            n.c[2][k] = l->c[2][k];
+            break;
+        default:
+            n.c[0][k] = mid[1][k];
+            n.c[1][k] = mid[2][k];
+            n.c[2][k] = mid[0][k];
+            break;
         }
     }
     *l = n;

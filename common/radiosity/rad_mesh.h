@@ -28,15 +28,15 @@
 #include "gi_math.h"
 #include "gi_scene.h"
 
-#define GI_RAD_MAX_LEVELS 10      /* subdivision levels below the roots */
-#define GI_RAD_MAX_ROOT_DEPTH 14  /* splits of an input triangle into roots */
+#define GI_RAD_MAX_LEVELS 10     /* subdivision levels below the roots */
+#define GI_RAD_MAX_ROOT_DEPTH 14 /* splits of an input triangle into roots */
 #define GI_RAD_MAX_ELEMENTS (1u << 22)
 
 typedef struct gi_rad_mesh {
-    uint32_t levels;        /* L: from the roots (level 0) to the elements */
-    uint32_t root_count;    /* level-0 nodes */
-    uint32_t element_count; /* n = root_count * 4^L */
-    uint32_t tri_count;     /* input triangles (the scene's) */
+    uint32_t levels;          /* L: from the roots (level 0) to the elements */
+    uint32_t root_count;      /* level-0 nodes */
+    uint32_t element_count;   /* n = root_count * 4^L */
+    uint32_t tri_count;       /* input triangles (the scene's) */
     uint32_t *tri_first_root; /* tri_count + 1: roots of t are [first[t], first[t+1]) */
     uint8_t *tri_depth;       /* splits from input triangle t to its roots */
     uint32_t *root_tri;       /* input triangle of each root */
@@ -77,7 +77,6 @@ void gi_rad_mesh_element_corners(const gi_rad_mesh *m, const gi_scene *s, uint32
  * input triangle t (p = (1-u-v) a + u b + v c), and the point's barycentric
  * coordinates in that element (may be NULL). Returns UINT32_MAX if t has no
  * elements (degenerate). */
-uint32_t gi_rad_mesh_locate(const gi_rad_mesh *m, uint32_t t, float u, float v,
-                            float bary[3]);
+uint32_t gi_rad_mesh_locate(const gi_rad_mesh *m, uint32_t t, float u, float v, float bary[3]);
 
 #endif

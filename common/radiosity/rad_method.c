@@ -89,15 +89,15 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
         return 0;
     }
     static const char *const keys[] = {
-        "factorization", "patches", "levels", "patch_level", "max_level", "target_patches",
-        "threshold", "rays", "task_elements", "solver", "tolerance", "max_iterations",
-        "emissions", "image_spp", "tile", NULL};
+        "factorization", "patches",   "levels",        "patch_level", "max_level", "target_patches",
+        "threshold",     "rays",      "task_elements", "solver",      "tolerance", "max_iterations",
+        "emissions",     "image_spp", "tile",          NULL};
     static const char *const kinds[] = {"2mf", "2mce", NULL};
     static const char *const solvers[] = {"smw", "neumann", NULL};
     int kind = 0, solver = 0;
-    int64_t patches = p->patches, levels = p->levels, patch_level = -1, max_level = -1,
-            target = 0, rays = p->rays, task_elements = 0, max_it = p->solve.max_iterations,
-            spp = p->image_spp, tile = p->tile;
+    int64_t patches = p->patches, levels = p->levels, patch_level = -1, max_level = -1, target = 0,
+            rays = p->rays, task_elements = 0, max_it = p->solve.max_iterations, spp = p->image_spp,
+            tile = p->tile;
     double threshold = -1.0;
     const cJSON *emissions = NULL;
     if (gi_jv_keys(v, params, "radiosity", keys) ||
@@ -134,8 +134,9 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
     if (patch_level >= 0 && kind != GI_RAD_2MF)
         return gi_jv_fail(v, "radiosity.patch_level", "only for \"factorization\": \"2mf\"");
     if ((max_level >= 0 || target > 0 || threshold >= 0.0) && kind != GI_RAD_2MCE)
-        return gi_jv_fail(v, "radiosity", "max_level, target_patches and threshold are for "
-                                          "\"factorization\": \"2mce\"");
+        return gi_jv_fail(v, "radiosity",
+                          "max_level, target_patches and threshold are for "
+                          "\"factorization\": \"2mce\"");
     if (target > 0 && threshold >= 0.0)
         return gi_jv_fail(v, "radiosity.threshold", "give either target_patches or threshold");
     if (patch_level > (int64_t)p->levels)
@@ -256,8 +257,8 @@ static rad_state *state_new(gi_job *job, gi_error *err)
     st->tracked_level = tracked_level(p);
     st->tracked_nodes = gi_rad_mesh_nodes(&st->mesh, st->tracked_level);
     st->stride = (st->tracked_nodes + 7) & ~(size_t)7;
-    st->counts = gi_try_calloc((size_t)st->mesh.element_count * st->stride, sizeof *st->counts,
-                               err, "radiosity form-factor counts");
+    st->counts = gi_try_calloc((size_t)st->mesh.element_count * st->stride, sizeof *st->counts, err,
+                               "radiosity form-factor counts");
     if (!st->counts) {
         state_free(st);
         return NULL;
@@ -323,15 +324,16 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
                 return -1;
             if (pt.k > GI_RAD_MAX_PATCHES) {
                 gi_rad_patches_free(&pt);
-                return gi_fail(err, GI_EINVAL, "%s: 2mce chose more than %u patches: raise the "
-                                               "threshold or lower target_patches",
+                return gi_fail(err, GI_EINVAL,
+                               "%s: 2mce chose more than %u patches: raise the "
+                               "threshold or lower target_patches",
                                job->file, GI_RAD_MAX_PATCHES);
             }
         }
         for (uint32_t i = 0; i < pt.k; i++)
             st->level_histogram[pt.p[i].level]++;
-        int rc = gi_rad_factor_from_counts(&st->factor, &st->mesh, st->counts, st->stride,
-                                           p->rays, &pt, err);
+        int rc = gi_rad_factor_from_counts(&st->factor, &st->mesh, st->counts, st->stride, p->rays,
+                                           &pt, err);
         gi_rad_patches_free(&pt);
         if (rc || gi_rad_model_build(&st->model, &st->mesh, &job->scene, err))
             return -1;
@@ -436,8 +438,9 @@ static int rad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
             return -1;
         if (!images_wanted(job)) {
             st->phase = PHASE_DONE;
-            return gi_fail(err, GI_EINVAL, "%s: relight with images, but the job asks for no "
-                                           "\"exr\" or \"png\" output",
+            return gi_fail(err, GI_EINVAL,
+                           "%s: relight with images, but the job asks for no "
+                           "\"exr\" or \"png\" output",
                            job->file);
         }
         if (publish(job, st, err) || alloc_images(job, st, err))
@@ -456,13 +459,12 @@ static int rad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
         gi_buf_put_u32(&t->payload, e0);
         gi_buf_put_u32(&t->payload, e1);
     }
-    gi_info("%s: radiosity: %u elements in %u level-0 patches, %u rays each, %zu tasks",
-            job->name, n, st->mesh.root_count, p->rays, q->count);
+    gi_info("%s: radiosity: %u elements in %u level-0 patches, %u rays each, %zu tasks", job->name,
+            n, st->mesh.root_count, p->rays, q->count);
     return 0;
 }
 
-static int decode_block(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1,
-                        gi_error *err)
+static int decode_block(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1, gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "radiosity task");
@@ -855,8 +857,7 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
         shade_ctx sc = {&w->mesh, &ctx->job.scene, corner};
         ctx->stats.samples = (uint64_t)(tt.tile.x1 - tt.tile.x0) * (tt.tile.y1 - tt.tile.y0) *
                              (uint64_t)p->image_spp;
-        return gi_tile_render(&ctx->rt, &ctx->job, &tt.tile, p->image_spp, shade, &sc, result,
-                              err);
+        return gi_tile_render(&ctx->rt, &ctx->job, &tt.tile, p->image_spp, shade, &sc, result, err);
     }
     return gi_fail(err, GI_EPROTO, "radiosity: unknown task kind %u", t->kind);
 }

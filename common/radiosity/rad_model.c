@@ -4,8 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s,
-                       gi_error *err)
+int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s, gi_error *err)
 {
     memset(md, 0, sizeof *md);
     md->n = m->element_count;
@@ -25,8 +24,10 @@ int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s
     md->objects = gi_xcalloc(s->object_count ? s->object_count : 1, sizeof *md->objects);
     for (uint32_t i = 0; i < s->object_count; i++)
         md->objects[i] = gi_xstrdup(s->objects[i].name);
-    md->elem_material = gi_try_malloc((size_t)md->n * sizeof *md->elem_material, err, "radiosity model");
-    md->elem_object = gi_try_malloc((size_t)md->n * sizeof *md->elem_object, err, "radiosity model");
+    md->elem_material =
+        gi_try_malloc((size_t)md->n * sizeof *md->elem_material, err, "radiosity model");
+    md->elem_object =
+        gi_try_malloc((size_t)md->n * sizeof *md->elem_object, err, "radiosity model");
     md->area = gi_try_malloc((size_t)md->n * sizeof *md->area, err, "radiosity model");
     if (!md->elem_material || !md->elem_object || !md->area) {
         gi_rad_model_free(md);

@@ -29,8 +29,7 @@ typedef struct gi_rad_model {
     gi_rad_vertices vertices;
 } gi_rad_model;
 
-int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s,
-                       gi_error *err);
+int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s, gi_error *err);
 void gi_rad_model_free(gi_rad_model *md);
 
 /* Reflectances per element and colour (n x 3). */

@@ -33,8 +33,8 @@ int gi_rad_patches_finish(gi_rad_patches *pt, const gi_rad_mesh *m, gi_error *er
     uint32_t next = 0;
     for (uint32_t i = 0; i < pt->k; i++) {
         if (pt->p[i].first != next)
-            return gi_fail(err, GI_EINTERNAL, "radiosity: patches overlap or leave a gap at node %u",
-                           next);
+            return gi_fail(err, GI_EINTERNAL,
+                           "radiosity: patches overlap or leave a gap at node %u", next);
         next += pt->p[i].count;
     }
     if (next != gi_rad_mesh_nodes(m, pt->tracked_level))
@@ -54,8 +54,7 @@ void gi_rad_2mf_patches(const gi_rad_mesh *m, uint32_t level, gi_rad_patches *pt
 }
 
 int gi_rad_factor_from_counts(gi_rad_factor *f, const gi_rad_mesh *m, const uint16_t *counts,
-                              size_t stride, uint32_t rays, const gi_rad_patches *pt,
-                              gi_error *err)
+                              size_t stride, uint32_t rays, const gi_rad_patches *pt, gi_error *err)
 {
     uint32_t n = m->element_count, T = pt->tracked_level;
     if (gi_rad_factor_alloc(f, n, pt->k, rays, err))

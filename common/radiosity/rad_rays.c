@@ -25,7 +25,8 @@ int gi_rad_strata_init(gi_rad_strata *st, uint32_t rays, gi_error *err)
 {
     memset(st, 0, sizeof *st);
     if (!gi_rad_rays_valid(rays))
-        return gi_fail(err, GI_EINVAL, "rays per element must be a perfect square in [1, %u], got %u",
+        return gi_fail(err, GI_EINVAL,
+                       "rays per element must be a perfect square in [1, %u], got %u",
                        GI_RAD_MAX_RAYS, rays);
     uint32_t m = (uint32_t)lrint(sqrt((double)rays));
     st->m = m;
@@ -58,8 +59,8 @@ void gi_rad_strata_free(gi_rad_strata *st)
 }
 
 void gi_rad_element_rays_init(gi_rad_element_rays *er, const gi_rad_strata *st,
-                              const gi_rad_mesh *m, const gi_scene *s, uint64_t seed,
-                              uint32_t e, uint32_t *perm)
+                              const gi_rad_mesh *m, const gi_scene *s, uint64_t seed, uint32_t e,
+                              uint32_t *perm)
 {
     gi_vec3 c[3];
     gi_rad_mesh_element_corners(m, s, e, c);

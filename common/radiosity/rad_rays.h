@@ -50,10 +50,9 @@ typedef struct gi_rad_element_rays {
 
 /* Prepares element e's rays (positions from the scene as it is now). */
 void gi_rad_element_rays_init(gi_rad_element_rays *er, const gi_rad_strata *st,
-                              const gi_rad_mesh *m, const gi_scene *s, uint64_t seed,
-                              uint32_t e, uint32_t *perm);
+                              const gi_rad_mesh *m, const gi_scene *s, uint64_t seed, uint32_t e,
+                              uint32_t *perm);
 /* Ray j: origin (already offset off the surface) and unit direction. */
-void gi_rad_element_ray(const gi_rad_element_rays *er, uint32_t j, gi_vec3 *org,
-                        gi_vec3 *dir);
+void gi_rad_element_ray(const gi_rad_element_rays *er, uint32_t j, gi_vec3 *org, gi_vec3 *dir);
 
 #endif

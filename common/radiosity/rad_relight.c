@@ -126,8 +126,8 @@ void gi_rad_report_add_solutions(cJSON *doc, const gi_rad_model *md, const gi_ra
     cJSON *sols = cJSON_AddArrayToObject(doc, "emissions");
     size_t n3 = 3 * (size_t)md->n;
     for (uint32_t i = 0; i < em->count; i++)
-        cJSON_AddItemToArray(sols, gi_rad_solution_report(md, em->items[i].name, E + i * n3,
-                                                          B + i * n3, &info[i]));
+        cJSON_AddItemToArray(
+            sols, gi_rad_solution_report(md, em->items[i].name, E + i * n3, B + i * n3, &info[i]));
 }
 
 int gi_rad_write_json(const char *path, const cJSON *doc, gi_error *err)
@@ -152,13 +152,12 @@ char *gi_rad_output_name(const char *file, const char *emission)
     return out;
 }
 
-int gi_rad_relight_write(const char *dir, const char *ply, const char *report,
-                         const char *job, double exposure, const gi_rad_file_info *info,
-                         const gi_rad_model *md, const gi_rad_factor *f,
-                         const gi_rad_emissions *em, const float *E, const float *B,
-                         const gi_rad_solve_info *si,
-                         void (*note)(void *user, const char *kind, const char *path),
-                         void *user, gi_error *err)
+int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
+                         double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
+                         const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
+                         const float *B, const gi_rad_solve_info *si,
+                         void (*note)(void *user, const char *kind, const char *path), void *user,
+                         gi_error *err)
 {
     size_t n3 = 3 * (size_t)f->n;
     for (uint32_t i = 0; ply && i < em->count; i++) {

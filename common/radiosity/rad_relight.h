@@ -70,13 +70,12 @@ int gi_rad_write_json(const char *path, const cJSON *doc, gi_error *err);
  * (when report is not NULL; `job` names the job in it). note() (may be
  * NULL) hears of every file written. For `gi relight` and the farm's
  * relight API. */
-int gi_rad_relight_write(const char *dir, const char *ply, const char *report,
-                         const char *job, double exposure, const gi_rad_file_info *info,
-                         const gi_rad_model *md, const gi_rad_factor *f,
-                         const gi_rad_emissions *em, const float *E, const float *B,
-                         const gi_rad_solve_info *si,
-                         void (*note)(void *user, const char *kind, const char *path),
-                         void *user, gi_error *err);
+int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
+                         double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
+                         const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
+                         const float *B, const gi_rad_solve_info *si,
+                         void (*note)(void *user, const char *kind, const char *path), void *user,
+                         gi_error *err);
 
 /* "<stem>-<emission><ext>" for "<stem><ext>" (malloc'ed). */
 char *gi_rad_output_name(const char *file, const char *emission);

@@ -43,8 +43,7 @@ char *gi_rad_room_scene(const gi_rad_room_opts *o);
 int gi_rad_room_load(const gi_rad_room_opts *o, gi_scene *out, gi_error *err);
 
 /* frames x res^2 pixel rays; E is n x frames (element-major). */
-int gi_rad_projector_emissions(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m,
-                               uint32_t frames, uint32_t res, double fov_deg, double *E,
-                               gi_error *err);
+int gi_rad_projector_emissions(gi_rt *rt, const gi_scene *s, const gi_rad_mesh *m, uint32_t frames,
+                               uint32_t res, double fov_deg, double *E, gi_error *err);
 
 #endif

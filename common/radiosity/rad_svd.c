@@ -19,9 +19,9 @@ int gi_rad_svd_compute(gi_rad_svd *s, const double *F, uint32_t n, gi_error *err
         return -1;
     }
     memcpy(A, F, (size_t)n * n * sizeof *A);
-    lapack_int info = LAPACKE_dgesdd(LAPACK_ROW_MAJOR, 'S', (lapack_int)n, (lapack_int)n, A,
-                                     (lapack_int)n, s->S, s->U, (lapack_int)n, s->VT,
-                                     (lapack_int)n);
+    lapack_int info =
+        LAPACKE_dgesdd(LAPACK_ROW_MAJOR, 'S', (lapack_int)n, (lapack_int)n, A, (lapack_int)n, s->S,
+                       s->U, (lapack_int)n, s->VT, (lapack_int)n);
     free(A);
     if (info != 0) {
         gi_rad_svd_free(s);

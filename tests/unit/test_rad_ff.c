@@ -83,8 +83,10 @@ static double ff_perpendicular(double w, double h, double l)
 static const char *two_quads =
     "{\"materials\": {\"m\": {\"diffuse\": [0.5, 0.5, 0.5]}, \"e\": {\"emission\": [1, 1, 1]}},"
     " \"objects\": ["
-    "  {\"name\": \"a\", \"material\": \"e\", \"polygons\": {\"vertices\": %s, \"faces\": [[0, 1, 2, 3]]}},"
-    "  {\"name\": \"b\", \"material\": \"m\", \"polygons\": {\"vertices\": %s, \"faces\": [[0, 1, 2, 3]]}}"
+    "  {\"name\": \"a\", \"material\": \"e\", \"polygons\": {\"vertices\": %s, \"faces\": [[0, 1, "
+    "2, 3]]}},"
+    "  {\"name\": \"b\", \"material\": \"m\", \"polygons\": {\"vertices\": %s, \"faces\": [[0, 1, "
+    "2, 3]]}}"
     "]}";
 
 static double two_quad_ff(const char *name, const char *qa, const char *qb, double *err_est)

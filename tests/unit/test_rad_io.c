@@ -106,7 +106,8 @@ static void expect_bad(const uint8_t *data, size_t len, const char *what, int li
 /* Re-seals the payload's checksum after an edit. */
 static void reseal(gi_buf *b)
 {
-    gi_le_put_u32(b->data + 24, gi_crc32c(0, b->data + GI_RAD_FILE_HEADER, b->len - GI_RAD_FILE_HEADER));
+    gi_le_put_u32(b->data + 24,
+                  gi_crc32c(0, b->data + GI_RAD_FILE_HEADER, b->len - GI_RAD_FILE_HEADER));
 }
 
 GI_TEST(test_rad_factorization_file_refuses_damage)
@@ -180,12 +181,13 @@ GI_TEST(test_rad_emissions_apply_overrides_in_order)
     gi_rad_factor f;
     small(&md, &f, &err);
     gi_rad_emissions em;
-    GI_REQUIRE_OK(parse("{\"description\": \"x\", \"emissions\": ["
-                        " {\"name\": \"scene\"},"
-                        " {\"name\": \"warm\", \"materials\": {\"white\": [1, 0, 0]}},"
-                        " {\"name\": \"obj\", \"base\": \"none\", \"materials\": {\"white\": [1, 1, 1]},"
-                        "  \"objects\": {\"room\": [0, 2, 0]}, \"scale\": 0.5}]}",
-                        &em, &err));
+    GI_REQUIRE_OK(
+        parse("{\"description\": \"x\", \"emissions\": ["
+              " {\"name\": \"scene\"},"
+              " {\"name\": \"warm\", \"materials\": {\"white\": [1, 0, 0]}},"
+              " {\"name\": \"obj\", \"base\": \"none\", \"materials\": {\"white\": [1, 1, 1]},"
+              "  \"objects\": {\"room\": [0, 2, 0]}, \"scale\": 0.5}]}",
+              &em, &err));
     GI_REQUIRE(em.count == 3);
     GI_REQUIRE_OK(gi_rad_emissions_check(&em, &md, "em.json", &err));
     float E[18];
@@ -198,8 +200,8 @@ GI_TEST(test_rad_emissions_apply_overrides_in_order)
     GI_CHECK(E[0] == 0 && E[1] == 1 && E[2] == 0 && E[3 * 4] == 0);
     gi_rad_emissions_free(&em);
     /* Names that the scene lacks fail the check. */
-    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"a\", \"objects\": {\"sofa\": [1,1,1]}}]}",
-                        &em, &err));
+    GI_REQUIRE_OK(
+        parse("{\"emissions\": [{\"name\": \"a\", \"objects\": {\"sofa\": [1,1,1]}}]}", &em, &err));
     GI_CHECK(gi_rad_emissions_check(&em, &md, "em.json", &err) == -1 && strstr(err.msg, "sofa"));
     gi_rad_emissions_free(&em);
     gi_rad_model_free(&md);
@@ -222,8 +224,10 @@ GI_TEST(test_rad_emissions_refuse_bad_input)
         {"{\"emissions\": [{\"name\": \"a\", \"base\": \"dark\"}]}", "base"},
         {"{\"emissions\": [{\"name\": \"a\", \"scale\": -1}]}", "scale"},
         {"{\"emissions\": [{\"name\": \"a\", \"materials\": {\"m\": [1, 2]}}]}", "[r, g, b]"},
-        {"{\"emissions\": [{\"name\": \"a\", \"materials\": {\"m\": [1, -2, 0]}}]}", "materials.m[1]"},
-        {"{\"emissions\": [{\"name\": \"a\", \"objects\": {\"o\": [1, 1, 1], \"o\": [2, 2, 2]}}]}", "twice"},
+        {"{\"emissions\": [{\"name\": \"a\", \"materials\": {\"m\": [1, -2, 0]}}]}",
+         "materials.m[1]"},
+        {"{\"emissions\": [{\"name\": \"a\", \"objects\": {\"o\": [1, 1, 1], \"o\": [2, 2, 2]}}]}",
+         "twice"},
         {"{\"emissions\": [{\"name\": \"a\", \"objects\": [1]}]}", "objects"},
     };
     for (size_t i = 0; i < GI_ARRAY_LEN(cases); i++) {
@@ -258,11 +262,11 @@ GI_TEST(test_rad_form_factor_rows_are_checked_on_merge)
         uint32_t nnz, escaped, backface, pairs[6];
         int ok;
     } rows[] = {
-        {2, 1, 1, {0, 10, 3, 4}, 1},   /* 10 + 4 + 1 + 1 = 16 rays */
-        {2, 0, 0, {0, 10, 3, 4}, 0},   /* accounts for 14 */
-        {2, 1, 1, {3, 10, 0, 4}, 0},   /* nodes out of order */
-        {2, 1, 1, {0, 10, 9, 4}, 0},   /* node 9 of 8 */
-        {2, 10, 1, {0, 0, 3, 5}, 0},   /* a zero count */
+        {2, 1, 1, {0, 10, 3, 4}, 1}, /* 10 + 4 + 1 + 1 = 16 rays */
+        {2, 0, 0, {0, 10, 3, 4}, 0}, /* accounts for 14 */
+        {2, 1, 1, {3, 10, 0, 4}, 0}, /* nodes out of order */
+        {2, 1, 1, {0, 10, 9, 4}, 0}, /* node 9 of 8 */
+        {2, 10, 1, {0, 0, 3, 5}, 0}, /* a zero count */
         {3, 0, 0, {0, 17, 1, 0, 2, 0}, 0},
     };
     for (size_t i = 0; i < GI_ARRAY_LEN(rows); i++) {

@@ -15,8 +15,9 @@ static const char *job_text =
     " \"radiosity\": {%s},"
     " \"outputs\": {\"exr\": \"r.exr\", \"ply\": \"r.ply\", \"factorization\": \"r.fact\"}}";
 
-#define PARAMS "\"patches\": 40, \"levels\": 1, \"rays\": 64, \"task_elements\": 37, " \
-               "\"tile\": 8, \"image_spp\": 2"
+#define PARAMS                                                                                     \
+    "\"patches\": 40, \"levels\": 1, \"rays\": 64, \"task_elements\": 37, "                        \
+    "\"tile\": 8, \"image_spp\": 2"
 
 static int fetch_none(void *fctx, const char *hash, gi_error *err)
 {

@@ -31,8 +31,8 @@ GI_TEST(test_rad_mesh_is_compatible_and_locates_points)
     int sizes_ok = 1;
     for (uint32_t r = 0; r < m.root_count; r++) {
         uint32_t t = m.root_tri[r];
-        sizes_ok &= m.root_area[r] <= pa * (1 + 1e-9) &&
-                    (m.root_area[r] > pa / 4 || m.tri_depth[t] == 0);
+        sizes_ok &=
+            m.root_area[r] <= pa * (1 + 1e-9) && (m.root_area[r] > pa / 4 || m.tri_depth[t] == 0);
     }
     GI_CHECK(sizes_ok);
     /* Leaves of one tree have equal areas summing to the root's; every

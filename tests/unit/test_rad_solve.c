@@ -34,8 +34,9 @@ GI_TEST(test_rad_kernel_paths_agree_bit_for_bit_and_with_double)
     gi_rng_init(&r, 1, 2, 3);
     for (uint32_t e = 0; e < n; e++)
         for (uint32_t p = 0; p < k; p++) /* mostly small counts, a few large */
-            f.hits[(size_t)e * kp + p] = (uint16_t)(gi_rng_below(&r, 100) == 0 ? 256 + gi_rng_below(&r, 3000)
-                                                                                : gi_rng_below(&r, 40));
+            f.hits[(size_t)e * kp + p] =
+                (uint16_t)(gi_rng_below(&r, 100) == 0 ? 256 + gi_rng_below(&r, 3000)
+                                                      : gi_rng_below(&r, 40));
     for (int c = 0; c < 3; c++)
         for (uint32_t p = 0; p < k; p++)
             s[(size_t)c * kp + p] = gi_rng_float(&r) * 1e-3f;
@@ -92,8 +93,7 @@ typedef struct built {
     gi_rad_model md;
 } built;
 
-static int build_cornell(built *b, uint32_t patches, uint32_t levels, uint32_t rays,
-                         gi_error *err)
+static int build_cornell(built *b, uint32_t patches, uint32_t levels, uint32_t rays, gi_error *err)
 {
     memset(b, 0, sizeof *b);
     if (gi_test_load_scene_file("scenes/cornell-box/scene.json", &b->s, err) ||
@@ -194,7 +194,8 @@ GI_TEST(test_rad_neumann_and_smw_agree)
         GI_CHECK_MSG(sqrt(df / ss) < 1e-5, "colour %d: float vs double %g", c, sqrt(df / ss));
     }
     /* Batched relighting (one matrix product) gives the same solutions. */
-    float *E3 = malloc(3 * 3 * (size_t)n * sizeof *E3), *B3 = malloc(3 * 3 * (size_t)n * sizeof *B3);
+    float *E3 = malloc(3 * 3 * (size_t)n * sizeof *E3),
+          *B3 = malloc(3 * 3 * (size_t)n * sizeof *B3);
     for (int i = 0; i < 3; i++)
         for (size_t j = 0; j < 3 * (size_t)n; j++)
             E3[i * 3 * (size_t)n + j] = E[j] * (float)(i + 1);
@@ -221,8 +222,8 @@ static double *low_rank_matrix(uint32_t n, uint32_t r, uint64_t seed)
         U[i] = gi_rng_double(&g);
         V[i] = gi_rng_double(&g);
     }
-    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)n, (int)r, 1.0, U, (int)r,
-                V, (int)r, 0.0, F, (int)n);
+    cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, (int)n, (int)n, (int)r, 1.0, U, (int)r, V,
+                (int)r, 0.0, F, (int)n);
     free(U);
     free(V);
     return F;
@@ -332,8 +333,8 @@ GI_TEST(test_rad_algorithm6_and_double_smw_update_are_exact_when_nothing_is_drop
     double *D = calloc((size_t)n * n, sizeof *D);
     for (uint32_t e = 0; e < n; e++) {
         for (uint32_t j = 0; j < n; j++) {
-            int in = j == cols[0] || j == cols[1] || j == cols[2] ||
-                     (e == rows[0] && j % 3 == 0) || (e == rows[1] && j % 5 == 1);
+            int in = j == cols[0] || j == cols[1] || j == cols[2] || (e == rows[0] && j % 3 == 0) ||
+                     (e == rows[1] && j % 5 == 1);
             if (!in)
                 continue;
             double v = (gi_rng_double(&g) - 0.5) * 0.01;
@@ -393,7 +394,8 @@ GI_TEST(test_rad_algorithm6_and_double_smw_update_are_exact_when_nothing_is_drop
 static const char *room_with_panel =
     "{\"materials\": {\"w\": {\"diffuse\": [0.6, 0.6, 0.6], \"emission\": [1, 1, 1]},"
     "                 \"p\": {\"diffuse\": [0.5, 0.5, 0.5]}},"
-    " \"objects\": [{\"name\": \"room\", \"material\": \"w\", \"box\": {\"size\": [2, 2, 2], \"inward\": true}},"
+    " \"objects\": [{\"name\": \"room\", \"material\": \"w\", \"box\": {\"size\": [2, 2, 2], "
+    "\"inward\": true}},"
     "  {\"name\": \"panel\", \"material\": \"p\", \"mobile\": true,"
     "   \"box\": {\"size\": [0.4, 0.4, 0.4]}, \"transform\": [{\"translate\": [%g, -0.6, 0.1]}]}]}";
 
