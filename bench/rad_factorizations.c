@@ -22,10 +22,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_assets.h"
 #include "gi_rt.h"
+#include "rad_bench.h"
 #include "radiosity/rad.h"
 #include "radiosity/rad_2mce.h"
 #include "radiosity/rad_ff.h"
@@ -33,18 +33,7 @@
 #include "radiosity/rad_patches.h"
 #include "radiosity/rad_scenes.h"
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static void die(const gi_error *err)
-{
-    fprintf(stderr, "rad_factorizations: %s\n", err->msg);
-    exit(1);
-}
+static void die(const gi_error *err) { rad_bench_die("rad_factorizations", err); }
 
 typedef struct bench {
     uint32_t n, frames;

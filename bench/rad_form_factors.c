@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "gi_rt.h"
+#include "rad_bench.h"
 #include "radiosity/rad_ff.h"
 
 static const char *scene_text =
@@ -30,11 +31,7 @@ static int read_text(void *ctx, const char *name, gi_buf *out, gi_error *err)
     return 0;
 }
 
-static void die(const gi_error *err)
-{
-    fprintf(stderr, "rad_form_factors: %s\n", err->msg);
-    exit(1);
-}
+static void die(const gi_error *err) { rad_bench_die("rad_form_factors", err); }
 
 static double measure(const char *quad_b, uint32_t rays, uint64_t seed)
 {

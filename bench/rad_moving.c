@@ -26,9 +26,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_rt.h"
+#include "rad_bench.h"
 #include "radiosity/rad.h"
 #include "radiosity/rad_dynamic.h"
 #include "radiosity/rad_ff.h"
@@ -36,18 +36,7 @@
 #include "radiosity/rad_patches.h"
 #include "radiosity/rad_scenes.h"
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static void die(const gi_error *err)
-{
-    fprintf(stderr, "rad_moving: %s\n", err->msg);
-    exit(1);
-}
+static void die(const gi_error *err) { rad_bench_die("rad_moving", err); }
 
 /* Mean over the m columns of ||A - B|| / ||B|| with three colours stacked. */
 static double mean_error(double *const A[3], double *const B[3], uint32_t n, uint32_t m)

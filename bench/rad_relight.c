@@ -24,9 +24,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_rt.h"
+#include "rad_bench.h"
 #include "radiosity/rad.h"
 #include "radiosity/rad_ff.h"
 #include "radiosity/rad_patches.h"
@@ -44,18 +44,7 @@ static const struct {
     {13824, 3456, 72.77, 13.40}, {55296, 864, 88.37, 14.62}, {221184, 216, 86.99, 42.84},
 };
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static void die(const gi_error *err)
-{
-    fprintf(stderr, "rad_relight: %s\n", err->msg);
-    exit(1);
-}
+static void die(const gi_error *err) { rad_bench_die("rad_relight", err); }
 
 static uint32_t log4(uint32_t x)
 {
