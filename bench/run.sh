@@ -25,3 +25,26 @@ echo "== quad_heap: bucketed vs binary vs pairing heap (median of 9 alternating 
 "$BIN/bench/quad_heap" 2000000 9
 echo "== quad_vs_pt: quadrature vs path tracer at equal time on the Cornell box (references cached in out/bench)"
 "$BIN/bench/quad_vs_pt" scenes/cornell-box/scene.json out/bench 16384 3
+
+echo "== rad_form_factors: ray-cast form factors against closed forms (radiosity)"
+"$BIN/bench/rad_form_factors"
+echo "== rad_relight: time per RGB relight, the thesis's Table 4.7 cases (radiosity)"
+"$BIN/bench/rad_relight" 15 1-9
+echo "== rad_build: factorization build (gi render, 2 workers) for n = 13824 and 55296, k = 864"
+work=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench.XXXXXX")
+"$BIN/bench/rad_scene" "$work/room.json" 4 2 0.25
+for levels in 3 4; do
+    cat >"$work/build$levels.json" <<JOB
+{"scene": "room.json", "method": "radiosity",
+ "radiosity": {"patches": 216, "levels": $levels, "patch_level": 1, "rays": 1024},
+ "outputs": {"factorization": "room$levels.fact", "report": "room$levels.json"}}
+JOB
+    "$BIN/gi" render "$work/build$levels.json" --workers 2 --out "$work" --progress none
+    grep -A2 '"timings_ms"' "$work/room$levels.json"
+done
+rm -rf "$work"
+echo "== rad_factorizations: Table 4.2 (radiosity error vs the dense solve), two scenes"
+"$BIN/bench/rad_factorizations" room 1024 70
+"$BIN/bench/rad_factorizations" scenes/cornell-box/scene.json 1024 70
+echo "== rad_moving: moving object, Algorithm 6 + double SMW"
+"$BIN/bench/rad_moving" 1024 70

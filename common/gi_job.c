@@ -190,7 +190,7 @@ int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err)
     return 0;
 }
 
-int gi_job_load(const char *path, gi_job *job, gi_error *err)
+int gi_job_read(const char *path, gi_job *job, gi_error *err)
 {
     gi_buf text;
     gi_buf_init(&text);
@@ -201,14 +201,19 @@ int gi_job_load(const char *path, gi_job *job, gi_error *err)
     }
     int rc = gi_job_parse((const char *)text.data, text.len, path, job, err);
     gi_buf_free(&text);
-    if (rc)
+    return rc;
+}
+
+int gi_job_load(const char *path, gi_job *job, gi_error *err)
+{
+    if (gi_job_read(path, job, err))
         return -1;
     char *dir = gi_dirname(path);
     gi_dir_source ds;
     gi_dir_source_init(&ds, dir);
     free(dir);
     gi_asset_source src = gi_dir_source_as_source(&ds);
-    rc = gi_job_load_scene(job, &src, err);
+    int rc = gi_job_load_scene(job, &src, err);
     /* The job keeps what it read: the manifest and the bytes, so workers
      * get exactly these files whatever happens on disk meanwhile. */
     job->manifest = ds.manifest;

@@ -56,6 +56,9 @@ struct gi_job {
 int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi_error *err);
 void gi_job_free(gi_job *job);
 
+/* Reads and parses a job file, without its scene (`gi relight` needs only
+ * the job's parameters and output names). */
+int gi_job_read(const char *path, gi_job *job, gi_error *err);
 /* Reads a job file, parses it, and loads its scene from the job file's
  * directory (recording the manifest); then the method's scene checks. */
 int gi_job_load(const char *path, gi_job *job, gi_error *err);

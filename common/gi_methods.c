@@ -5,11 +5,13 @@
 #include "detp/detp.h"
 #include "pt/pt.h"
 #include "quadrature/quadrature.h"
+#include "radiosity/rad.h"
 
 static const gi_method *const all_methods[] = {
     &gi_method_pt,
     &gi_method_detp,
     &gi_method_quadrature,
+    &gi_method_radiosity,
     NULL,
 };
 

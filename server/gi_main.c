@@ -2,6 +2,7 @@
  *
  *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE]
  *   gi validate JOB.json
+ *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] ...
  *   gi methods
  *
  * Exit status: 0 success, 2 invalid input (job, scene, mesh, arguments),
@@ -18,6 +19,7 @@
 #include "gi_local.h"
 #include "gi_log.h"
 #include "gi_progress.h"
+#include "gi_relight.h"
 #include "gi_version.h"
 
 static void usage(FILE *out)
@@ -25,6 +27,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
             "       gi validate JOB.json\n"
+            "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--threads N]\n"
             "       gi methods\n"
             "       gi --version\n"
             "%s"
@@ -33,6 +36,8 @@ static void usage(FILE *out)
             "          (default: one per core) and writes its outputs into DIR (default: out)\n"
             "          MODE: auto (a bar on a terminal, lines otherwise), bar, lines, json, none\n"
             "validate  checks a job and its scene without rendering\n"
+            "relight   solves new emissions with a finished radiosity job's factorization\n"
+            "          (in DIR): PLY and report per emission set; --images renders the camera\n"
             "methods   lists the rendering methods\n"
             "\n"
             "submit    uploads a job's files to a farm and queues it; --wait follows it and\n"
@@ -185,6 +190,8 @@ int main(int argc, char **argv)
         return cmd_render(argc, argv);
     if (strcmp(cmd, "validate") == 0)
         return cmd_validate(argc, argv);
+    if (strcmp(cmd, "relight") == 0)
+        return gi_relight_main(argc, argv);
     if (strcmp(cmd, "methods") == 0)
         return cmd_methods();
     if (gi_client_is_command(cmd))

@@ -1,0 +1,188 @@
+/* rad_relight: solutions for emission sets, and their outputs. */
+#include "rad_relight.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "gi_fs.h"
+#include "gi_ply.h"
+
+double gi_rad_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void gi_rad_solve_opts_default(gi_rad_solve_opts *o)
+{
+    o->solver = GI_RAD_SMW;
+    o->tolerance = 1e-6;
+    o->max_iterations = 10000;
+    o->threads = 1;
+}
+
+int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
+                           const gi_rad_emissions *em, const gi_rad_solve_opts *o, float *E,
+                           float *B, gi_rad_solve_info *info, gi_error *err)
+{
+    if (md->n != f->n)
+        return gi_fail(err, GI_EINTERNAL, "radiosity: model and factor sizes differ");
+    if (gi_rad_emissions_check(em, md, "emissions", err))
+        return -1;
+    size_t n3 = 3 * (size_t)f->n;
+    float *e = gi_try_malloc(n3 * sizeof *e, err, "emission vector");
+    if (!e)
+        return -1;
+    for (uint32_t i = 0; i < em->count; i++) {
+        gi_rad_emission_vector(em, i, md, e);
+        gi_rad_solve_info *in = &info[i];
+        memset(in, 0, sizeof *in);
+        double t0 = gi_rad_seconds();
+        int rc = o->solver == GI_RAD_NEUMANN
+                     ? gi_rad_factor_neumann(f, e, B + i * n3, o->tolerance, o->max_iterations,
+                                             o->threads, &in->iterations, &in->residual, err)
+                     : gi_rad_factor_relight(f, e, B + i * n3, 1, o->threads, err);
+        in->seconds = gi_rad_seconds() - t0;
+        if (rc) {
+            free(e);
+            return gi_error_prefix(err, "emission set \"%s\"", em->items[i].name);
+        }
+        if (E)
+            memcpy(E + i * n3, e, n3 * sizeof *e);
+    }
+    free(e);
+    return 0;
+}
+
+int gi_rad_ply_write(const char *path, const gi_rad_model *md, const float *B, double exposure,
+                     gi_error *err)
+{
+    float *vv = gi_try_malloc(3 * (size_t)md->vertices.count * sizeof *vv, err, "PLY output");
+    if (!vv)
+        return -1;
+    int rc = gi_rad_vertex_values(&md->vertices, md->n, md->area, B, vv, err);
+    if (rc == 0)
+        rc = gi_ply_write(path, md->vertices.count, md->vertices.positions, vv, md->n,
+                          md->vertices.corner, exposure, err);
+    free(vv);
+    return rc;
+}
+
+static cJSON *rgb(const double v[3])
+{
+    double a[3] = {v[0], v[1], v[2]};
+    return cJSON_CreateDoubleArray(a, 3);
+}
+
+cJSON *gi_rad_solution_report(const gi_rad_model *md, const char *name, const float *E,
+                              const float *B, const gi_rad_solve_info *info)
+{
+    double flux[3] = {0, 0, 0}, mean[3] = {0, 0, 0}, max[3] = {0, 0, 0}, area = 0.0;
+    for (uint32_t e = 0; e < md->n; e++) {
+        area += md->area[e];
+        for (int c = 0; c < 3; c++) {
+            /* Radiance to flux: pi A L for a Lambertian emitter. */
+            flux[c] += M_PI * md->area[e] * E[3 * (size_t)e + c];
+            mean[c] += md->area[e] * B[3 * (size_t)e + c];
+            if (B[3 * (size_t)e + c] > max[c])
+                max[c] = B[3 * (size_t)e + c];
+        }
+    }
+    for (int c = 0; c < 3; c++)
+        mean[c] = area > 0 ? mean[c] / area : 0.0;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "name", name);
+    cJSON_AddItemToObject(o, "emitted_flux", rgb(flux));
+    cJSON_AddItemToObject(o, "mean_radiance", rgb(mean));
+    cJSON_AddItemToObject(o, "max_radiance", rgb(max));
+    cJSON_AddNumberToObject(o, "solve_ms", info->seconds * 1e3);
+    if (info->iterations) {
+        cJSON_AddNumberToObject(o, "iterations", info->iterations);
+        cJSON_AddNumberToObject(o, "residual", info->residual);
+    }
+    return o;
+}
+
+cJSON *gi_rad_report_new(const gi_rad_file_info *info, const gi_rad_factor *f)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "method", "radiosity");
+    cJSON_AddStringToObject(o, "factorization", info->method);
+    cJSON_AddNumberToObject(o, "elements", f->n);
+    cJSON_AddNumberToObject(o, "patches", f->k);
+    cJSON_AddNumberToObject(o, "level0_patches", info->roots);
+    cJSON_AddNumberToObject(o, "levels", info->levels);
+    cJSON_AddNumberToObject(o, "rays_per_element", f->rays);
+    return o;
+}
+
+void gi_rad_report_add_solutions(cJSON *doc, const gi_rad_model *md, const gi_rad_emissions *em,
+                                 const float *E, const float *B, const gi_rad_solve_info *info)
+{
+    cJSON *sols = cJSON_AddArrayToObject(doc, "emissions");
+    size_t n3 = 3 * (size_t)md->n;
+    for (uint32_t i = 0; i < em->count; i++)
+        cJSON_AddItemToArray(
+            sols, gi_rad_solution_report(md, em->items[i].name, E + i * n3, B + i * n3, &info[i]));
+}
+
+int gi_rad_write_json(const char *path, const cJSON *doc, gi_error *err)
+{
+    char *text = cJSON_Print(doc);
+    if (!text)
+        return gi_fail(err, GI_ENOMEM, "%s: cannot format the report", path);
+    size_t len = strlen(text);
+    text[len] = '\n'; /* replaces the NUL: the file ends with a newline */
+    int rc = gi_write_file_atomic(path, text, len + 1, err);
+    cJSON_free(text);
+    return rc;
+}
+
+char *gi_rad_output_name(const char *file, const char *emission)
+{
+    const char *dot = strrchr(file, '.');
+    size_t stem = dot && dot != file ? (size_t)(dot - file) : strlen(file);
+    size_t len = strlen(file) + strlen(emission) + 2;
+    char *out = gi_xmalloc(len);
+    snprintf(out, len, "%.*s-%s%s", (int)stem, file, emission, file + stem);
+    return out;
+}
+
+int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
+                         double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
+                         const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
+                         const float *B, const gi_rad_solve_info *si,
+                         void (*note)(void *user, const char *kind, const char *path), void *user,
+                         gi_error *err)
+{
+    size_t n3 = 3 * (size_t)f->n;
+    for (uint32_t i = 0; ply && i < em->count; i++) {
+        char *name = gi_rad_output_name(ply, em->items[i].name);
+        char *path = gi_path_join(dir, name);
+        int rc = gi_rad_ply_write(path, md, B + i * n3, exposure, err);
+        if (rc == 0 && note)
+            note(user, "ply", path);
+        free(name);
+        free(path);
+        if (rc)
+            return -1;
+    }
+    if (!report)
+        return 0;
+    cJSON *doc = gi_rad_report_new(info, f);
+    cJSON_AddStringToObject(doc, "job", job);
+    gi_rad_report_add_solutions(doc, md, em, E, B, si);
+    char *name = gi_rad_output_name(report, "relight");
+    char *path = gi_path_join(dir, name);
+    int rc = gi_rad_write_json(path, doc, err);
+    if (rc == 0 && note)
+        note(user, "report", path);
+    cJSON_Delete(doc);
+    free(name);
+    free(path);
+    return rc;
+}

@@ -1,0 +1,228 @@
+/* gi_relight: `gi relight JOB.json EMISSIONS.json` - new emissions for a
+ * finished radiosity job, from its factorization file, without form
+ * factors or the scene (common/radiosity/rad_relight.h does the work).
+ * With --images the camera images are rendered too, which needs the scene
+ * and a local pool (image tiles run on workers). */
+#include "gi_relight.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cblas.h>
+
+#include "gi_fs.h"
+#include "gi_job.h"
+#include "gi_local.h"
+#include "gi_progress.h"
+#include "radiosity/rad.h"
+
+static void relight_usage(FILE *out)
+{
+    fprintf(out, "usage: gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--workers N] "
+                 "[--threads N] [--progress MODE]\n");
+}
+
+/* Emissions files are small: names and colours. */
+#define EMISSIONS_MAX_BYTES (64u << 20)
+
+typedef struct relight_args {
+    const char *job, *emissions, *out;
+    gi_progress_mode progress;
+    int images, workers, threads;
+} relight_args;
+
+static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
+{
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (!*s || *end || v < lo || v > hi) {
+        fprintf(stderr, "gi relight: %s must be an integer in [%d, %d], got \"%s\"\n", opt, lo, hi,
+                s);
+        return -1;
+    }
+    *out = (int)v;
+    return 0;
+}
+
+static int parse_args(int argc, char **argv, relight_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->out = "out";
+    a->progress = GI_PROGRESS_NONE;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    a->threads = cores > 0 ? (int)cores : 1;
+    for (int i = 2; i < argc; i++) {
+        const char *arg = argv[i];
+        if (strcmp(arg, "--images") == 0) {
+            a->images = 1;
+        } else if (strcmp(arg, "--out") == 0 || strcmp(arg, "--workers") == 0 ||
+                   strcmp(arg, "--threads") == 0 || strcmp(arg, "--progress") == 0) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "gi relight: %s needs a value\n", arg);
+                return -1;
+            }
+            const char *v = argv[++i];
+            if (strcmp(arg, "--out") == 0)
+                a->out = v;
+            else if (strcmp(arg, "--progress") == 0) {
+                if (gi_progress_mode_parse(v, &a->progress)) {
+                    fprintf(stderr,
+                            "gi relight: --progress must be auto, bar, lines, json or none\n");
+                    return -1;
+                }
+            } else if (parse_int(arg, v, 1, 1024,
+                                 strcmp(arg, "--workers") == 0 ? &a->workers : &a->threads))
+                return -1;
+        } else if (arg[0] == '-' && arg[1]) {
+            fprintf(stderr, "gi relight: unknown option %s\n", arg);
+            return -1;
+        } else if (!a->job) {
+            a->job = arg;
+        } else if (!a->emissions) {
+            a->emissions = arg;
+        } else {
+            fprintf(stderr, "gi relight: unexpected argument %s\n", arg);
+            return -1;
+        }
+    }
+    if (!a->job || !a->emissions) {
+        relight_usage(stderr);
+        return -1;
+    }
+    return 0;
+}
+
+static double now_ms(void)
+{
+    return gi_now() * 1e3;
+}
+
+static void print_written(void *user, const char *kind, const char *path)
+{
+    printf("  %-4s %s\n", kind, path);
+}
+
+static int relight(const relight_args *a, gi_error *err)
+{
+    gi_job job;
+    int images = a->images;
+    /* Without images the scene is not needed: the job is only parsed. */
+    if (images ? gi_job_load(a->job, &job, err) : gi_job_read(a->job, &job, err)) {
+        gi_job_free(&job);
+        return -1;
+    }
+    int rc = -1;
+    gi_rad_file_info info;
+    gi_rad_model md;
+    gi_rad_factor f;
+    gi_rad_emissions em;
+    memset(&md, 0, sizeof md);
+    memset(&f, 0, sizeof f);
+    memset(&em, 0, sizeof em);
+    float *E = NULL, *B = NULL;
+    gi_rad_solve_info *si = NULL;
+    char *fpath = NULL;
+    if (strcmp(job.method->name, "radiosity") != 0) {
+        gi_fail(err, GI_EINVAL, "%s: relight needs a radiosity job, not %s", a->job,
+                job.method->name);
+        goto done;
+    }
+    const char *ffile = gi_job_output(&job, "factorization");
+    if (!ffile) {
+        gi_fail(err, GI_EINVAL, "%s: the job writes no \"factorization\" output to relight",
+                a->job);
+        goto done;
+    }
+    fpath = gi_path_join(a->out, ffile);
+    double t0 = now_ms();
+    if (gi_rad_file_read(fpath, &info, &md, &f, err))
+        goto done;
+    double t_load = now_ms() - t0;
+    gi_buf text;
+    gi_buf_init(&text);
+    if (gi_read_file(a->emissions, EMISSIONS_MAX_BYTES, &text, err)) {
+        gi_buf_free(&text);
+        goto done;
+    }
+    rc = gi_rad_emissions_parse((const char *)text.data, text.len, a->emissions, &em, err);
+    gi_buf_free(&text);
+    if (rc || (rc = gi_rad_emissions_check(&em, &md, a->emissions, err)))
+        goto done;
+    rc = -1;
+    if (images) {
+        /* The method renders the tiles (and writes every output) in relight
+         * mode: it solves, publishes, and plans only image tiles. */
+        gi_rad_params *p = job.params;
+        p->relight_info = &info;
+        p->relight_model = &md;
+        p->relight_factor = &f;
+        p->relight_emissions = &em;
+        gi_local_opts opts = {a->workers, a->progress};
+        if (gi_mkdirs(a->out, err))
+            goto done;
+        job.out_dir = gi_xstrdup(a->out);
+        gi_local_summary sum;
+        double t1 = now_ms();
+        if (gi_render_local(&job, &opts, &sum, err))
+            goto done;
+        printf("%s: relit %u emission set%s with images in %.1f ms (factorization loaded in "
+               "%.1f ms)\n",
+               job.name, em.count, em.count == 1 ? "" : "s", now_ms() - t1, t_load);
+        for (int i = 0; i + 1 < job.written_count; i += 2)
+            printf("  %-4s %s\n", job.written[i], job.written[i + 1]);
+        rc = 0;
+        goto done;
+    }
+    size_t n3 = 3 * (size_t)f.n;
+    E = gi_try_malloc(em.count * n3 * sizeof *E, err, "relight");
+    B = gi_try_malloc(em.count * n3 * sizeof *B, err, "relight");
+    si = gi_xcalloc(em.count, sizeof *si);
+    if (!E || !B)
+        goto done;
+    gi_rad_solve_opts so;
+    gi_rad_solve_opts_default(&so);
+    so.threads = a->threads;
+    openblas_set_num_threads(1); /* k x k products: one thread is enough */
+    if (gi_rad_solve_emissions(&f, &md, &em, &so, E, B, si, err))
+        goto done;
+    double total = 0.0, worst = 0.0;
+    for (uint32_t i = 0; i < em.count; i++) {
+        total += si[i].seconds * 1e3;
+        worst = si[i].seconds * 1e3 > worst ? si[i].seconds * 1e3 : worst;
+    }
+    printf("%s: relit %u emission set%s (n = %u elements, k = %u patches) in %.2f ms, %.2f ms "
+           "per set (slowest %.2f ms, %d thread%s); factorization loaded in %.1f ms\n",
+           job.name, em.count, em.count == 1 ? "" : "s", f.n, f.k, total, total / em.count, worst,
+           a->threads, a->threads == 1 ? "" : "s", t_load);
+    if (gi_mkdirs(a->out, err))
+        goto done;
+    rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
+                              job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,
+                              NULL, err);
+done:
+    free(fpath);
+    free(E);
+    free(B);
+    free(si);
+    gi_rad_emissions_free(&em);
+    gi_rad_model_free(&md);
+    gi_rad_factor_free(&f);
+    gi_job_free(&job);
+    return rc;
+}
+
+int gi_relight_main(int argc, char **argv)
+{
+    relight_args a;
+    if (parse_args(argc, argv, &a))
+        return 2;
+    gi_error err;
+    gi_error_clear(&err);
+    if (relight(&a, &err)) {
+        fprintf(stderr, "gi: %s\n", err.msg);
+        return gi_error_exit_status(&err);
+    }
+    return 0;
+}

@@ -1,0 +1,67 @@
+# gi relight: new emissions from a finished radiosity job's factorization.
+# The scene's own emission reproduces the job's outputs bit for bit (PLY
+# without the scene; EXR with --images); other sets change them; bad
+# emission files and damaged factorizations are one-line errors (exit 2).
+. "$(dirname "$0")/lib.sh"
+write_job "$TMP/job.json" <<JOB
+{
+  "name": "cb",
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "radiosity",
+  "image": {"width": 40, "height": 32},
+  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
+  "outputs": {"exr": "cb.exr", "ply": "cb.ply", "report": "cb.json", "factorization": "cb.fact"}
+}
+JOB
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/out" --progress none >/dev/null ||
+    fail "render"
+cat >"$TMP/em.json" <<EM
+{"emissions": [
+  {"name": "scene"},
+  {"name": "blue", "materials": {"light": [2, 4, 17]}},
+  {"name": "block", "base": "none", "objects": {"tall_block": [1, 1, 1]}, "scale": 3}
+]}
+EM
+"$GI" relight "$TMP/job.json" "$TMP/em.json" --out "$TMP/out" >"$TMP/relight.log" 2>&1 ||
+    { cat "$TMP/relight.log"; fail "relight"; }
+cat "$TMP/relight.log"
+grep -q "relit 3 emission sets" "$TMP/relight.log" || fail "no summary"
+cmp "$TMP/out/cb.ply" "$TMP/out/cb-scene.ply" || fail "the scene's emission does not reproduce the job's PLY"
+if cmp -s "$TMP/out/cb.ply" "$TMP/out/cb-blue.ply"; then fail "a blue light changes nothing"; fi
+[ -s "$TMP/out/cb-block.ply" ] && [ -s "$TMP/out/cb-relight.json" ] || fail "outputs missing"
+grep -q '"name":	"block"' "$TMP/out/cb-relight.json" || fail "report lacks the sets"
+[ ! -e "$TMP/out/cb-scene.exr" ] || fail "an image without --images"
+"$GI" relight "$TMP/job.json" "$TMP/em.json" --out "$TMP/out" --images --workers 2 >"$TMP/img.log" 2>&1 ||
+    { cat "$TMP/img.log"; fail "relight --images"; }
+cmp "$TMP/out/cb.exr" "$TMP/out/cb-scene.exr" || fail "the scene's emission does not reproduce the job's EXR"
+cmp "$TMP/out/cb.ply" "$TMP/out/cb-scene.ply" || fail "PLY differs with --images"
+
+# Errors: exit 2, one line, naming the file.
+expect_error() {
+    what=$1
+    shift
+    set +e
+    "$GI" relight "$@" >"$TMP/stdout" 2>"$TMP/stderr"
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] || { cat "$TMP/stderr"; fail "relight $*: exit $rc, expected 2"; }
+    [ "$(wc -l <"$TMP/stderr")" -eq 1 ] || fail "relight $*: not one line: $(cat "$TMP/stderr")"
+    grep -qF -- "$what" "$TMP/stderr" || fail "relight $*: '$(cat "$TMP/stderr")' does not say '$what'"
+}
+echo '{"emissions": [{"name": "x", "materials": {"velvet": [1, 1, 1]}}]}' >"$TMP/bad1.json"
+expect_error 'no material "velvet"' "$TMP/job.json" "$TMP/bad1.json" --out "$TMP/out"
+echo '{"emissions": [{"name": "x", "scale": "big"}]}' >"$TMP/bad2.json"
+expect_error "bad2.json: emissions[0].scale" "$TMP/job.json" "$TMP/bad2.json" --out "$TMP/out"
+cp "$TMP/out/cb.fact" "$TMP/good.fact"
+head -c 1000 "$TMP/good.fact" >"$TMP/out/cb.fact"
+expect_error "cb.fact: not a valid factorization file" "$TMP/job.json" "$TMP/em.json" --out "$TMP/out"
+printf 'X' | dd of="$TMP/out/cb.fact" bs=1 seek=5000 conv=notrunc 2>/dev/null
+cp "$TMP/good.fact" "$TMP/out/cb.fact"
+printf 'X' | dd of="$TMP/out/cb.fact" bs=1 seek=5000 conv=notrunc 2>/dev/null
+expect_error "checksum" "$TMP/job.json" "$TMP/em.json" --out "$TMP/out"
+expect_error "usage" "$TMP/job.json"
+expect_error "--threads" "$TMP/job.json" "$TMP/em.json" --threads 0
+sed 's/"radiosity",/"pt",/; s/"radiosity": {[^}]*},//; s/"ply": "cb.ply", "report": "cb.json", "factorization": "cb.fact"//; s/"cb.exr", /"cb.exr"/' \
+    "$TMP/job.json" >"$TMP/pt.json"
+expect_error "needs a radiosity job" "$TMP/pt.json" "$TMP/em.json" --out "$TMP/out"
+echo ok
