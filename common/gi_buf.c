@@ -114,9 +114,21 @@ void gi_buf_put_blob(gi_buf *b, const void *p, size_t n)
     gi_buf_put(b, p, n);
 }
 
+/* IEEE floats in host order are the wire's little-endian bytes on a
+ * little-endian host: arrays then move with one memcpy. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define GI_HOST_LE 1
+#else
+#define GI_HOST_LE 0
+#endif
+
 void gi_buf_put_f32s(gi_buf *b, const float *v, size_t n)
 {
     uint8_t *p = gi_buf_grow(b, 4 * n);
+    if (GI_HOST_LE) {
+        memcpy(p, v, 4 * n);
+        return;
+    }
     for (size_t i = 0; i < n; i++) {
         uint32_t u;
         memcpy(&u, &v[i], 4);
@@ -127,6 +139,10 @@ void gi_buf_put_f32s(gi_buf *b, const float *v, size_t n)
 void gi_buf_put_f64s(gi_buf *b, const double *v, size_t n)
 {
     uint8_t *p = gi_buf_grow(b, 8 * n);
+    if (GI_HOST_LE) {
+        memcpy(p, v, 8 * n);
+        return;
+    }
     for (size_t i = 0; i < n; i++) {
         uint64_t u;
         memcpy(&u, &v[i], 8);
@@ -242,6 +258,8 @@ int gi_get_f32s(gi_reader *r, float *out, size_t n)
         r->failed = 1;
         return -1;
     }
+    if (GI_HOST_LE)
+        return gi_get(r, out, 4 * n);
     for (size_t i = 0; i < n; i++)
         out[i] = gi_get_f32(r);
     return 0;
@@ -253,6 +271,8 @@ int gi_get_f64s(gi_reader *r, double *out, size_t n)
         r->failed = 1;
         return -1;
     }
+    if (GI_HOST_LE)
+        return gi_get(r, out, 8 * n);
     for (size_t i = 0; i < n; i++)
         out[i] = gi_get_f64(r);
     return 0;

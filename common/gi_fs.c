@@ -78,7 +78,16 @@ int gi_commit_file(const char *tmp, const char *path, gi_error *err)
         unlink(tmp);
         return gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(e));
     }
-    return 0;
+    /* The rename itself is durable only once the directory is synced. */
+    char *dir = gi_dirname(path);
+    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    int rc = 0;
+    if (dfd < 0 || fsync(dfd) != 0)
+        rc = gi_fail(err, GI_EIO, "%s: syncing the directory: %s", dir, strerror(errno));
+    if (dfd >= 0)
+        close(dfd);
+    free(dir);
+    return rc;
 }
 
 int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err)

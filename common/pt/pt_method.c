@@ -175,11 +175,15 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
                        (unsigned long long)t->id, result->len, npix * PT_VALUES_PER_PIXEL * 8);
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "pt result");
-    for (uint32_t y = tl.tile.y0; y < tl.tile.y1; y++) {
+    size_t row_values = (size_t)(tl.tile.x1 - tl.tile.x0) * PT_VALUES_PER_PIXEL;
+    double *in = gi_xmalloc(row_values * sizeof *in);
+    for (uint32_t y = tl.tile.y0; y < tl.tile.y1 && !r.failed; y++) {
         double *row = st->sum + ((size_t)y * job->width + tl.tile.x0) * PT_VALUES_PER_PIXEL;
-        for (uint32_t i = 0; i < (tl.tile.x1 - tl.tile.x0) * PT_VALUES_PER_PIXEL; i++)
-            row[i] += gi_get_f64(&r);
+        gi_get_f64s(&r, in, row_values);
+        for (size_t i = 0; i < row_values; i++)
+            row[i] += in[i];
     }
+    free(in);
     return gi_reader_finish(&r, err);
 }
 
