@@ -239,7 +239,18 @@ const char *gi_job_output(const gi_job *job, const char *kind)
 
 char *gi_job_output_path(const gi_job *job, const char *file)
 {
-    return gi_path_join(job->out_dir ? job->out_dir : ".", file);
+    const char *dir = job->out_dir ? job->out_dir : ".";
+    if (!job->in_frame)
+        return gi_path_join(dir, file);
+    /* NAME.EXT -> NAME.0003.EXT (a name without extension gets .0003). */
+    const char *dot = strrchr(file, '.');
+    size_t stem = dot && dot != file ? (size_t)(dot - file) : strlen(file);
+    size_t n = strlen(file) + 16;
+    char *framed = gi_xmalloc(n);
+    snprintf(framed, n, "%.*s.%04u%s", (int)stem, file, job->frame, file + stem);
+    char *path = gi_path_join(dir, framed);
+    free(framed);
+    return path;
 }
 
 void gi_job_note_output(gi_job *job, const char *kind, const char *path)

@@ -38,6 +38,11 @@ struct gi_job {
     gi_output_spec outputs[GI_JOB_MAX_OUTPUTS];
     int output_count;
     void *params; /* method parameters (method->parse) */
+    /* Animations write one set of outputs per frame: while in_frame is
+     * set, output paths get the frame number before the extension
+     * (NAME.0003.exr). */
+    int in_frame;
+    uint32_t frame;
 
     /* Coordinator side. */
     char *out_dir;
@@ -69,7 +74,8 @@ int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err);
 const gi_camera *gi_job_camera(const gi_job *job);
 /* The output file of a kind ("exr"), or NULL if the job does not ask for it. */
 const char *gi_job_output(const gi_job *job, const char *kind);
-/* Full path of an output in out_dir (malloc'ed). */
+/* Full path of an output in out_dir (malloc'ed); the current frame's file
+ * while job->in_frame is set. */
 char *gi_job_output_path(const gi_job *job, const char *file);
 /* Records a written output for the summary. */
 void gi_job_note_output(gi_job *job, const char *kind, const char *path);

@@ -60,6 +60,7 @@ static void state_free(detp_state *st)
     free(st->visible);
     free(st->ref);
     gi_image_free(&st->img);
+    detp_anim_free(st->anim);
     free(st);
 }
 
@@ -92,6 +93,8 @@ static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     if (state_new(job, &st, err))
         return -1;
     job->state = st;
+    if (p->anim.enabled)
+        return detp_anim_plan(job, st, q, err);
     for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch) {
         uint64_t p1 = p0 + (uint64_t)p->batch;
         if (p1 > p->photon_count)
@@ -177,7 +180,13 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
             for (int c = 0; c < 4; c++)
                 st->ref[4 * (size_t)j + c] += gi_get_f64(&r);
         return gi_reader_finish(&r, err);
-    case DETP_TASK_TILE: {
+    case DETP_TASK_ANIM_BATCH:
+    case DETP_TASK_ANIM_UPDATE:
+        if (!st->anim)
+            return gi_fail(err, GI_EPROTO, "unexpected detp animation result");
+        return detp_anim_merge(job, st, t, result, err);
+    case DETP_TASK_TILE:
+    case DETP_TASK_ANIM_TILE: {
         gi_reader pr;
         gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
         gi_tile tile;
@@ -251,8 +260,28 @@ static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)
     gi_buf extra;
     gi_buf_init(&extra);
     gi_buf_put_str(&extra, st->hash);
-    gi_tiles_plan(fq, DETP_TASK_TILE, job->width, job->height, p->tile, p->image_spp, &extra);
+    if (st->anim)
+        gi_buf_put_u32(&extra, job->frame); /* the workers pose the mobile */
+    gi_tiles_plan(fq, st->anim ? DETP_TASK_ANIM_TILE : DETP_TASK_TILE, job->width, job->height,
+                  p->tile, p->image_spp, &extra);
     gi_buf_free(&extra);
+}
+
+/* A frame's vertex outputs (and report); for animations the next frame
+ * is planned after them. */
+static int write_frame(gi_job *job, detp_state *st, const detp_vertex_data *v,
+                       gi_task_queue *fq, gi_error *err)
+{
+    if (detp_write_outputs(job, st, v, err))
+        return -1;
+    if (st->anim && detp_anim_next_frame(job, st, fq, err)) {
+        job->frame = detp_anim_frame(st);
+        st->phase = DETP_PHASE_BAKE;
+        return 0;
+    }
+    job->in_frame = 0;
+    st->phase = DETP_PHASE_DONE;
+    return 0;
 }
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
@@ -260,6 +289,12 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     detp_state *st = job->state;
     if (st->phase == DETP_PHASE_DONE)
         return 0;
+    if (st->anim) {
+        if (detp_anim_fill(job, st, err))
+            return -1;
+        job->in_frame = 1;
+        job->frame = detp_anim_frame(st);
+    }
     detp_vertex_data v;
     if (detp_vertex_data_compute(job, st, &v, err))
         return -1;
@@ -268,6 +303,7 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         st->wall_bake = detp_now() - st->wall_start;
         if (wants_image(job)) {
             static const char *const names[] = {"R", "G", "B"};
+            gi_image_free(&st->img);
             rc = gi_image_init(&st->img, job->width, job->height, 3, names, err);
             if (rc == 0) {
                 publish_radiance(job, st, &v);
@@ -283,15 +319,13 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         rc = gi_write_image_outputs(job, &st->img, err);
     }
     if (rc == 0)
-        rc = detp_write_outputs(job, st, &v, err);
-    if (rc == 0)
-        st->phase = DETP_PHASE_DONE;
+        rc = write_frame(job, st, &v, fq, err);
     detp_vertex_data_free(&v);
     return rc;
 }
 
 #define STATE_MAGIC 0x53505444u /* "DTPS" */
-#define STATE_VERSION 1u
+#define STATE_VERSION 2u /* 2: animations */
 
 static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
@@ -326,6 +360,8 @@ static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
         gi_buf_put_str(out, st->hash);
         gi_buf_put_f32s(out, st->img.pixels, (size_t)job->width * job->height * 3);
     }
+    if (st->anim)
+        detp_anim_save(st, out);
     return 0;
 }
 
@@ -366,18 +402,28 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
     gi_get_f64s(in, st->ref, (size_t)nref * 4);
     if (in->failed)
         return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    char *hash = NULL;
+    int rc = 0;
     if (st->phase == DETP_PHASE_IMAGE) {
-        char *hash = gi_get_str(in, GI_HASH_HEX - 1);
+        hash = gi_get_str(in, GI_HASH_HEX - 1);
         static const char *const names[] = {"R", "G", "B"};
-        int rc = !hash ? gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file)
-                       : gi_image_init(&st->img, job->width, job->height, 3, names, err);
+        rc = !hash ? gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file)
+                   : gi_image_init(&st->img, job->width, job->height, 3, names, err);
         if (rc == 0 && gi_get_f32s(in, st->img.pixels, (size_t)job->width * job->height * 3))
             rc = gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    }
+    if (rc == 0 && p->anim.enabled) {
+        rc = detp_anim_load(job, st, in, err);
+        if (rc == 0) {
+            job->in_frame = 1;
+            job->frame = detp_anim_frame(st);
+        }
+    }
+    if (rc == 0 && hash) {
         /* The tiles still to run fetch the radiance by hash: publish it
          * again (the same bits, so the same hash). */
         detp_vertex_data v;
-        if (rc == 0)
-            rc = detp_vertex_data_compute(job, st, &v, err);
+        rc = detp_vertex_data_compute(job, st, &v, err);
         if (rc == 0) {
             publish_radiance(job, st, &v);
             detp_vertex_data_free(&v);
@@ -385,10 +431,9 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
                 rc = gi_fail(err, GI_EPROTO, "%s: detp checkpoint does not match its radiance",
                              job->file);
         }
-        free(hash);
-        return rc;
     }
-    return 0;
+    free(hash);
+    return rc;
 }
 
 static void detp_release(gi_job *job)

@@ -17,7 +17,13 @@ enum {
     DETP_TASK_BATCH = 1,      /* u64 first photon, u64 end photon */
     DETP_TASK_VISIBILITY = 2, /* u32 first vertex, u32 end vertex */
     DETP_TASK_REFERENCE = 3,  /* u32 first, u32 end reference index */
-    DETP_TASK_TILE = 4        /* gi_tile, str hash of the published radiance */
+    DETP_TASK_TILE = 4,       /* gi_tile, str hash of the published radiance */
+    /* Animations (detp_anim_*.c): u32 frame, u32 batch, u64 first, u64 end
+     * photon. Frame 0 traces the batch and stores it; a later frame updates
+     * the stored batch from the frame before. */
+    DETP_TASK_ANIM_BATCH = 5,
+    DETP_TASK_ANIM_UPDATE = 6,
+    DETP_TASK_ANIM_TILE = 7 /* gi_tile, str hash, u32 frame */
 };
 
 #define DETP_VIS_PER_TASK 2048
@@ -40,6 +46,35 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
 /* Adds the result's per-vertex values into irr (3 per vertex) and hits. */
 int detp_decode_batch(gi_reader *r, uint32_t vertex_count, detp_batch_result *h, double *irr,
                       uint64_t *hits, gi_error *err);
+
+/* An animation frame's batch result: what the worker did, then per vertex
+ * exact integer sums (fixed point, detp_anim.h): for frame 0 every vertex's
+ * sums; for a later frame the static vertices' changes (new segments added,
+ * old ones subtracted) and the mobile's vertices from scratch. */
+typedef struct detp_anim_result {
+    uint32_t frame, batch;
+    uint64_t photons;           /* paths tested */
+    uint64_t segments;          /* in the batch after the frame */
+    uint64_t segments_old;      /* removed (O^t) */
+    uint64_t segments_new;      /* added (N^t) */
+    uint64_t paths_retraced;    /* paths with a retraced suffix */
+    uint64_t segments_repaired; /* second-hit distance changed only */
+    uint64_t bv_passes;         /* segments that passed the bounding pre-test */
+    uint64_t rays;
+    uint64_t regenerated_frames; /* frames replayed because the store had no file */
+    double sec_build, sec_load, sec_regenerate, sec_trace, sec_static, sec_mobile, sec_store;
+    gi_detp_stats stats;
+} detp_anim_result;
+
+/* The fixed part alone (checkpoints keep a frame's totals in this form). */
+void detp_anim_header_put(const detp_anim_result *h, gi_buf *out);
+int detp_anim_header_get(gi_reader *r, detp_anim_result *h);
+void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
+                      uint32_t nv, gi_buf *out);
+/* Adds the result's sums into sum (3 per vertex) and hits; fails on a
+ * malformed result or an overflow. */
+int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
+                     int64_t *hits, gi_error *err);
 
 /* The vertex of reference sample j (of m, over n vertices): evenly spread. */
 static inline uint32_t detp_reference_vertex(uint32_t j, uint32_t m, uint32_t n)
@@ -64,6 +99,7 @@ typedef struct detp_state {
     double wall_start, wall_bake, wall_image; /* coordinator clock, not checkpointed */
     char hash[GI_HASH_HEX];                   /* published radiance (image phase) */
     gi_image img;
+    struct detp_anim_state *anim; /* animations only (detp_anim_job.c) */
 } detp_state;
 
 /* Per-vertex results computed from the state (finish). */
@@ -81,7 +117,54 @@ void detp_vertex_data_free(detp_vertex_data *v);
 int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
                        gi_error *err);
 
-/* Worker side (detp_worker.c). */
+/* Animations, coordinator side (detp_anim_job.c). The frame's state lives
+ * in st->anim; st's per-frame counters and irr/hits are filled from it. */
+int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
+int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf *result,
+                    gi_error *err);
+/* Before a frame's outputs: irr and hits from the exact sums, and the
+ * coordinator's scene posed for the frame. */
+int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err);
+/* After a frame's outputs: plans the next frame; 0 if there is none. */
+int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
+/* The frame's part of the report. */
+cJSON *detp_anim_report(const gi_job *job, const detp_state *st);
+void detp_anim_save(const detp_state *st, gi_buf *out);
+int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, gi_error *err);
+void detp_anim_free(struct detp_anim_state *a);
+uint32_t detp_anim_frame(const detp_state *st);
+
+/* Worker side (detp_worker.c). The discs, the query order and the disc
+ * index are built once per job per process, on the first task that needs
+ * them, and kept in ctx->method_state. */
+typedef struct detp_worker {
+    gi_detp_discs discs;
+    int discs_ready;
+    uint32_t *order;
+    gi_detp_octree *octree;
+    gi_detp_embree_index *embree;
+    int index_ready;
+    gi_detp_accum acc; /* over discs (fixed point for animations) */
+    gi_detp_segments segs;
+    gi_vec3 *inward;
+    /* The radiance the coordinator published for image tiles. */
+    char hash[GI_HASH_HEX];
+    float *radiance;
+    struct detp_anim_worker *anim; /* animations (detp_anim_worker.c) */
+} detp_worker;
+
+detp_worker *detp_worker_state(gi_worker_ctx *ctx);
+int detp_worker_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err);
+int detp_worker_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err);
+/* The job's estimator over w->segs into w->acc. */
+int detp_worker_estimate(gi_worker_ctx *ctx, detp_worker *w, gi_detp_stats *st,
+                         gi_error *err);
+
+/* Animations, worker side (detp_anim_worker.c): frame-0 batches, updates,
+ * and posing the mobile for a frame's image tiles. */
+int detp_anim_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
+int detp_anim_pose_frame(gi_worker_ctx *ctx, detp_worker *w, uint32_t frame, gi_error *err);
+void detp_anim_worker_free(struct detp_anim_worker *a);
 int detp_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
 
 double detp_now(void);

@@ -208,6 +208,8 @@ static cJSON *report(const gi_job *job, const detp_state *st, const detp_vertex_
     cJSON_AddItemToObject(o, "estimator_stats", stats_json(st));
     if (st->nref)
         cJSON_AddItemToObject(o, "reference", reference_json(job, st, v));
+    if (st->anim)
+        cJSON_AddItemToObject(o, "animation", detp_anim_report(job, st));
     return o;
 }
 

@@ -144,3 +144,113 @@ int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *i
     }
     return gi_reader_finish(r, err);
 }
+
+/* ---- Animation frames: exact integer sums ---------------------------- */
+
+#define ANIM_MAGIC 0x41505444u /* "DTPA" */
+
+static uint64_t zigzag(int64_t v) { return ((uint64_t)v << 1) ^ (uint64_t)(v >> 63); }
+static int64_t unzigzag(uint64_t u) { return (int64_t)(u >> 1) ^ -(int64_t)(u & 1); }
+
+void detp_anim_header_put(const detp_anim_result *h, gi_buf *out)
+{
+    gi_buf_put_u32(out, ANIM_MAGIC);
+    gi_buf_put_u32(out, h->frame);
+    gi_buf_put_u32(out, h->batch);
+    gi_buf_put_u64(out, h->photons);
+    gi_buf_put_u64(out, h->segments);
+    gi_buf_put_u64(out, h->segments_old);
+    gi_buf_put_u64(out, h->segments_new);
+    gi_buf_put_u64(out, h->paths_retraced);
+    gi_buf_put_u64(out, h->segments_repaired);
+    gi_buf_put_u64(out, h->bv_passes);
+    gi_buf_put_u64(out, h->rays);
+    gi_buf_put_u64(out, h->regenerated_frames);
+    gi_buf_put_f64(out, h->sec_build);
+    gi_buf_put_f64(out, h->sec_load);
+    gi_buf_put_f64(out, h->sec_regenerate);
+    gi_buf_put_f64(out, h->sec_trace);
+    gi_buf_put_f64(out, h->sec_static);
+    gi_buf_put_f64(out, h->sec_mobile);
+    gi_buf_put_f64(out, h->sec_store);
+    gi_detp_stats_encode(&h->stats, out);
+}
+
+int detp_anim_header_get(gi_reader *r, detp_anim_result *h)
+{
+    memset(h, 0, sizeof *h);
+    if (gi_get_u32(r) != ANIM_MAGIC)
+        return -1;
+    h->frame = gi_get_u32(r);
+    h->batch = gi_get_u32(r);
+    h->photons = gi_get_u64(r);
+    h->segments = gi_get_u64(r);
+    h->segments_old = gi_get_u64(r);
+    h->segments_new = gi_get_u64(r);
+    h->paths_retraced = gi_get_u64(r);
+    h->segments_repaired = gi_get_u64(r);
+    h->bv_passes = gi_get_u64(r);
+    h->rays = gi_get_u64(r);
+    h->regenerated_frames = gi_get_u64(r);
+    h->sec_build = gi_get_f64(r);
+    h->sec_load = gi_get_f64(r);
+    h->sec_regenerate = gi_get_f64(r);
+    h->sec_trace = gi_get_f64(r);
+    h->sec_static = gi_get_f64(r);
+    h->sec_mobile = gi_get_f64(r);
+    h->sec_store = gi_get_f64(r);
+    gi_detp_stats_decode(r, &h->stats);
+    return r->failed ? -1 : 0;
+}
+
+void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
+                      uint32_t nv, gi_buf *out)
+{
+    detp_anim_header_put(h, out);
+    gi_buf_put_u32(out, nv);
+    uint32_t nnz = 0;
+    for (uint32_t i = 0; i < nv; i++)
+        nnz += hits[i] != 0 || sum[3 * (size_t)i] != 0 || sum[3 * (size_t)i + 1] != 0 ||
+               sum[3 * (size_t)i + 2] != 0;
+    gi_buf_put_u32(out, nnz);
+    uint32_t last = 0;
+    for (uint32_t i = 0; i < nv; i++) {
+        const int64_t *e = &sum[3 * (size_t)i];
+        if (hits[i] == 0 && e[0] == 0 && e[1] == 0 && e[2] == 0)
+            continue;
+        put_varint(out, i - last);
+        last = i;
+        for (int c = 0; c < 3; c++)
+            put_varint(out, zigzag(e[c]));
+        put_varint(out, zigzag(hits[i]));
+    }
+}
+
+static int add_checked(int64_t *into, int64_t v)
+{
+    return __builtin_add_overflow(*into, v, into);
+}
+
+int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
+                     int64_t *hits, gi_error *err)
+{
+    if (detp_anim_header_get(r, h))
+        return gi_fail(err, GI_EPROTO, "%s: not a detp animation result", r->what);
+    uint32_t count = gi_get_u32(r), nnz = gi_get_u32(r);
+    if (r->failed || count != nv || nnz > nv)
+        return gi_fail(err, GI_EPROTO, "%s: %u vertices (expected %u), %u entries", r->what,
+                       count, nv, nnz);
+    uint64_t i = 0;
+    for (uint32_t k = 0; k < nnz; k++) {
+        uint64_t step = get_varint(r);
+        i += step;
+        int bad = r->failed || i >= nv || (k > 0 && step == 0);
+        for (int c = 0; c < 3 && !bad; c++)
+            bad = add_checked(&sum[3 * i + c], unzigzag(get_varint(r)));
+        if (!bad)
+            bad = add_checked(&hits[i], unzigzag(get_varint(r))) || r->failed;
+        if (bad)
+            return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
+    }
+    return gi_reader_finish(r, err);
+}

@@ -14,21 +14,6 @@
 #include "gi_worker_ctx.h"
 #include "pt/pt.h"
 
-typedef struct detp_worker {
-    gi_detp_discs discs;
-    int discs_ready;
-    uint32_t *order;
-    gi_detp_octree *octree;
-    gi_detp_embree_index *embree;
-    int index_ready;
-    gi_detp_accum acc;
-    gi_detp_segments segs;
-    gi_vec3 *inward;
-    /* The radiance the coordinator published for image tiles. */
-    char hash[GI_HASH_HEX];
-    float *radiance;
-} detp_worker;
-
 static void worker_free(void *p)
 {
     detp_worker *w = p;
@@ -40,10 +25,11 @@ static void worker_free(void *p)
     gi_detp_segments_free(&w->segs);
     free(w->inward);
     free(w->radiance);
+    detp_anim_worker_free(w->anim);
     free(w);
 }
 
-static detp_worker *worker_state(gi_worker_ctx *ctx)
+detp_worker *detp_worker_state(gi_worker_ctx *ctx)
 {
     if (!ctx->method_state) {
         ctx->method_state = gi_xcalloc(1, sizeof(detp_worker));
@@ -52,14 +38,21 @@ static detp_worker *worker_state(gi_worker_ctx *ctx)
     return ctx->method_state;
 }
 
-static int need_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
+int detp_worker_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
 {
     if (w->discs_ready)
         return 0;
     const gi_detp_params *p = ctx->job.params;
     if (gi_detp_discs_from_scene(&ctx->job.scene, p->disc_radius, &w->discs, err))
         return -1;
-    if (gi_detp_accum_init(&w->acc, w->discs.count, err)) {
+    /* Animations sum exactly, in fixed point (detp_anim_job.c). */
+    int rc = p->anim.enabled
+                 ? gi_detp_accum_init_fixed(&w->acc, w->discs.count,
+                                            gi_detp_fixed_unit(ctx->job.scene.total_power,
+                                                               p->photon_count),
+                                            err)
+                 : gi_detp_accum_init(&w->acc, w->discs.count, err);
+    if (rc) {
         gi_detp_discs_free(&w->discs);
         return -1;
     }
@@ -76,7 +69,7 @@ static void need_inward(gi_worker_ctx *ctx, detp_worker *w)
 }
 
 /* The per-job structures of the estimator. */
-static int need_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
+int detp_worker_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
 {
     if (w->index_ready)
         return 0;
@@ -103,7 +96,7 @@ static int need_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
     return 0;
 }
 
-static int estimate(gi_worker_ctx *ctx, detp_worker *w, gi_detp_stats *st, gi_error *err)
+int detp_worker_estimate(gi_worker_ctx *ctx, detp_worker *w, gi_detp_stats *st, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
     const gi_scene *s = &ctx->job.scene;
@@ -144,11 +137,11 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
     if (p0 >= p1 || p1 > p->photon_count || p1 - p0 > (uint64_t)GI_DETP_MAX_BATCH)
         return gi_fail(err, GI_EPROTO, "detp batch task %llu: bad photon range",
                        (unsigned long long)t->id);
-    detp_worker *w = worker_state(ctx);
+    detp_worker *w = detp_worker_state(ctx);
     detp_batch_result h;
     memset(&h, 0, sizeof h);
     double t0 = detp_now();
-    if (need_discs(ctx, w, err) || need_index(ctx, w, err))
+    if (detp_worker_discs(ctx, w, err) || detp_worker_index(ctx, w, err))
         return -1;
     double t1 = detp_now();
     gi_detp_tracer tr;
@@ -166,7 +159,7 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
     gi_detp_set_extent(&w->segs, p->artifact, p->extent_eps);
     double t2 = detp_now();
     gi_detp_accum_clear(&w->acc);
-    if (estimate(ctx, w, &h.stats, err))
+    if (detp_worker_estimate(ctx, w, &h.stats, err))
         return -1;
     double t3 = detp_now();
     h.photons = p1 - p0;
@@ -197,8 +190,8 @@ static int run_visibility(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, 
     uint32_t v0 = gi_get_u32(&r), v1 = gi_get_u32(&r);
     if (gi_reader_finish(&r, err))
         return -1;
-    detp_worker *w = worker_state(ctx);
-    if (need_discs(ctx, w, err))
+    detp_worker *w = detp_worker_state(ctx);
+    if (detp_worker_discs(ctx, w, err))
         return -1;
     if (v0 >= v1 || v1 > w->discs.count)
         return gi_fail(err, GI_EPROTO, "detp visibility task %llu: bad vertex range",
@@ -240,7 +233,7 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
      * irradiance point as its first bounce. */
     pp.max_bounces = p->max_bounces < 0 ? -1 : p->max_bounces + 1;
     gi_pt_tracer tr = {&ctx->rt, s, &pp, NULL};
-    detp_worker *w = worker_state(ctx);
+    detp_worker *w = detp_worker_state(ctx);
     need_inward(ctx, w);
     /* A vertex on an edge where another surface meets its own (a wall's
      * top edge on the ceiling) is evaluated a hair inside its own
@@ -307,12 +300,18 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
     if (gi_tile_read(&r, job->width, job->height, &tile, err))
         return -1;
     char *hash = gi_get_str(&r, GI_HASH_HEX - 1);
+    /* An animation's tile: the frame whose pose the mobile takes. */
+    uint32_t frame = t->kind == DETP_TASK_ANIM_TILE ? gi_get_u32(&r) : 0;
     if (gi_reader_finish(&r, err) || !hash || !gi_hash_is_valid(hash)) {
         free(hash);
         return gi_fail(err, GI_EPROTO, "detp tile task %llu: bad payload",
                        (unsigned long long)t->id);
     }
-    detp_worker *w = worker_state(ctx);
+    detp_worker *w = detp_worker_state(ctx);
+    if (t->kind == DETP_TASK_ANIM_TILE && detp_anim_pose_frame(ctx, w, frame, err)) {
+        free(hash);
+        return -1;
+    }
     if (strcmp(w->hash, hash) != 0) {
         const gi_buf *blob;
         if (gi_worker_blob(ctx, hash, &blob, err)) {
@@ -363,7 +362,11 @@ int detp_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *
     case DETP_TASK_REFERENCE:
         return run_reference(ctx, task, result, err);
     case DETP_TASK_TILE:
+    case DETP_TASK_ANIM_TILE:
         return run_tile(ctx, task, result, err);
+    case DETP_TASK_ANIM_BATCH:
+    case DETP_TASK_ANIM_UPDATE:
+        return detp_anim_run(ctx, task, result, err);
     }
     return gi_fail(err, GI_EPROTO, "detp: unknown task kind %u", task->kind);
 }

@@ -1,0 +1,250 @@
+/* detp_anim_job: a detp animation on the coordinator (thesis ch. 4 as a
+ * batch job).
+ *
+ * Frame 0 is a bake whose batches the workers also keep on disk. Every
+ * later frame sends one update task per batch: the worker moves its stored
+ * segments from the frame before to this one (only the paths the mobile
+ * touches are retraced) and returns, for the static vertices, the change of
+ * their sums (new segments added, old ones subtracted: eq. 4.4) and, for
+ * the mobile's vertices, their sums from scratch (thesis 1.12.4). The sums
+ * are integers (fixed point), so frame t's result equals a full recompute
+ * over frame t's segments bit for bit, whatever the split or the order.
+ * A frame's image tiles and outputs (NAME.0003.exr ...) follow its bake;
+ * then the next frame is planned. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "detp_anim.h"
+#include "detp_method.h"
+
+typedef struct detp_anim_state {
+    uint32_t frame;   /* the frame being computed */
+    int64_t *sum;     /* 3 per vertex: exact sums in fixed-point units */
+    int64_t *hits;    /* crossings per vertex */
+    detp_anim_result tot; /* this frame's batches, summed */
+    gi_vec3 *base_pos, *base_nrm; /* the mobile as loaded: the PLY shows it posed */
+    double wall_frame;    /* coordinator clock at the frame's start (not saved) */
+} detp_anim_state;
+
+void detp_anim_free(detp_anim_state *a)
+{
+    if (!a)
+        return;
+    free(a->sum);
+    free(a->hits);
+    free(a->base_pos);
+    free(a->base_nrm);
+    free(a);
+}
+
+uint32_t detp_anim_frame(const detp_state *st) { return st->anim->frame; }
+
+static int anim_new(gi_job *job, detp_state *st, gi_error *err)
+{
+    detp_anim_state *a = gi_xcalloc(1, sizeof *a);
+    a->sum = gi_try_calloc((size_t)job->scene.vertex_count * 3 + 1, sizeof *a->sum, err,
+                           "detp animation sums");
+    a->hits = gi_try_calloc((size_t)job->scene.vertex_count + 1, sizeof *a->hits, err,
+                            "detp animation hits");
+    if (!a->sum || !a->hits) {
+        detp_anim_free(a);
+        return -1;
+    }
+    const gi_detp_params *p = job->params;
+    const gi_object *o = &job->scene.objects[p->anim.object_index];
+    a->base_pos = gi_xmalloc(((size_t)o->vertex_count + 1) * sizeof *a->base_pos);
+    a->base_nrm = gi_xmalloc(((size_t)o->vertex_count + 1) * sizeof *a->base_nrm);
+    memcpy(a->base_pos, &job->scene.positions[o->first_vertex],
+           o->vertex_count * sizeof *a->base_pos);
+    memcpy(a->base_nrm, &job->scene.normals[o->first_vertex],
+           o->vertex_count * sizeof *a->base_nrm);
+    st->anim = a;
+    return 0;
+}
+
+/* One task per batch for frame `frame`; a batch sticks to the worker host
+ * that holds its segments (affinity). */
+static void plan_frame(gi_job *job, uint32_t frame, gi_task_queue *q)
+{
+    const gi_detp_params *p = job->params;
+    uint32_t b = 0;
+    for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch, b++) {
+        uint64_t p1 = p0 + (uint64_t)p->batch;
+        if (p1 > p->photon_count)
+            p1 = p->photon_count;
+        gi_task *t = gi_task_queue_add(q, frame ? DETP_TASK_ANIM_UPDATE : DETP_TASK_ANIM_BATCH,
+                                       (double)(p1 - p0));
+        t->affinity = (uint64_t)b + 1;
+        gi_buf_put_u32(&t->payload, frame);
+        gi_buf_put_u32(&t->payload, b);
+        gi_buf_put_u64(&t->payload, p0);
+        gi_buf_put_u64(&t->payload, p1);
+    }
+}
+
+static void reset_frame_counters(detp_state *st)
+{
+    memset(&st->anim->tot, 0, sizeof st->anim->tot);
+    st->batches = st->photons = st->segments = 0;
+    st->rays_trace = st->rays_image = 0;
+    st->sec_trace = st->sec_build = st->sec_estimate = st->sec_image = 0;
+    memset(&st->stats, 0, sizeof st->stats);
+    st->anim->wall_frame = detp_now();
+    st->wall_start = st->anim->wall_frame;
+}
+
+int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
+{
+    if (anim_new(job, st, err))
+        return -1;
+    reset_frame_counters(st);
+    plan_frame(job, 0, q);
+    return 0;
+}
+
+int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf *result,
+                    gi_error *err)
+{
+    detp_anim_state *a = st->anim;
+    gi_reader pr;
+    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp animation task");
+    uint32_t frame = gi_get_u32(&pr), batch = gi_get_u32(&pr);
+    if (pr.failed || frame != a->frame)
+        return gi_fail(err, GI_EPROTO, "detp task %llu: frame %u while at frame %u",
+                       (unsigned long long)t->id, frame, a->frame);
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp animation result");
+    detp_anim_result h;
+    if (detp_decode_anim(&r, st->nv, &h, a->sum, a->hits, err))
+        return -1;
+    (void)job;
+    if (h.frame != frame || h.batch != batch)
+        return gi_fail(err, GI_EPROTO, "detp task %llu: result of frame %u batch %u",
+                       (unsigned long long)t->id, h.frame, h.batch);
+    detp_anim_result *s = &a->tot;
+    s->photons += h.photons;
+    s->segments += h.segments;
+    s->segments_old += h.segments_old;
+    s->segments_new += h.segments_new;
+    s->paths_retraced += h.paths_retraced;
+    s->segments_repaired += h.segments_repaired;
+    s->bv_passes += h.bv_passes;
+    s->rays += h.rays;
+    s->regenerated_frames += h.regenerated_frames;
+    s->sec_build += h.sec_build;
+    s->sec_load += h.sec_load;
+    s->sec_regenerate += h.sec_regenerate;
+    s->sec_trace += h.sec_trace;
+    s->sec_static += h.sec_static;
+    s->sec_mobile += h.sec_mobile;
+    s->sec_store += h.sec_store;
+    gi_detp_stats_add(&s->stats, &h.stats);
+    return 0;
+}
+
+int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    const detp_anim_state *a = st->anim;
+    /* The mobile where this frame has it, for the PLY. */
+    gi_mat4 m;
+    gi_detp_anim_pose(&p->anim, a->frame, &m);
+    if (gi_scene_pose_object(&job->scene, p->anim.object_index, a->base_pos, a->base_nrm, &m,
+                             err))
+        return -1;
+    /* Fixed point -> energy -> irradiance (over the disc area). */
+    double k = gi_detp_fixed_unit(job->scene.total_power, p->photon_count) /
+               (GI_PI * (double)p->disc_radius * (double)p->disc_radius);
+    for (size_t i = 0; i < (size_t)st->nv * 3; i++)
+        st->irr[i] = (double)a->sum[i] * k;
+    for (uint32_t i = 0; i < st->nv; i++)
+        st->hits[i] = a->hits[i] > 0 ? (uint64_t)a->hits[i] : 0;
+    const detp_anim_result *s = &a->tot;
+    st->batches = (uint64_t)((p->photon_count + (uint64_t)p->batch - 1) / (uint64_t)p->batch);
+    st->photons = s->photons;
+    st->segments = s->segments;
+    st->rays_trace = s->rays;
+    st->sec_build = s->sec_build;
+    st->sec_trace = s->sec_trace + s->sec_regenerate;
+    st->sec_estimate = s->sec_static + s->sec_mobile;
+    st->stats = s->stats;
+    return 0;
+}
+
+int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    detp_anim_state *a = st->anim;
+    (void)err;
+    if (a->frame + 1 >= p->anim.frames)
+        return 0;
+    a->frame++;
+    /* The mobile's vertices are recomputed from scratch each frame. */
+    const gi_object *o = &job->scene.objects[p->anim.object_index];
+    memset(&a->sum[3 * (size_t)o->first_vertex], 0, 3 * (size_t)o->vertex_count * sizeof *a->sum);
+    memset(&a->hits[o->first_vertex], 0, (size_t)o->vertex_count * sizeof *a->hits);
+    reset_frame_counters(st);
+    plan_frame(job, a->frame, q);
+    return 1;
+}
+
+static void add_num(cJSON *o, const char *k, double v) { cJSON_AddNumberToObject(o, k, v); }
+
+cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
+{
+    const gi_detp_params *p = job->params;
+    const detp_anim_state *a = st->anim;
+    const detp_anim_result *s = &a->tot;
+    cJSON *o = cJSON_CreateObject();
+    add_num(o, "frame", a->frame);
+    add_num(o, "frames", p->anim.frames);
+    cJSON_AddStringToObject(o, "object", p->anim.object);
+    add_num(o, "paths_tested", (double)s->photons);
+    add_num(o, "paths_retraced", (double)s->paths_retraced);
+    add_num(o, "segments", (double)s->segments);
+    add_num(o, "segments_old", (double)s->segments_old);
+    add_num(o, "segments_new", (double)s->segments_new);
+    add_num(o, "segments_second_hit_repaired", (double)s->segments_repaired);
+    add_num(o, "segments_past_bounding_pretest", (double)s->bv_passes);
+    add_num(o, "rays", (double)s->rays);
+    add_num(o, "frames_regenerated", (double)s->regenerated_frames);
+    cJSON *sec = cJSON_AddObjectToObject(o, "seconds");
+    add_num(sec, "index_build", s->sec_build);
+    add_num(sec, "store_read", s->sec_load);
+    add_num(sec, "regenerate", s->sec_regenerate);
+    add_num(sec, a->frame ? "test_and_retrace" : "photon_tracing", s->sec_trace);
+    add_num(sec, a->frame ? "static_update" : "density_estimation", s->sec_static);
+    add_num(sec, "mobile_vertices", s->sec_mobile);
+    add_num(sec, "store_write", s->sec_store);
+    return o;
+}
+
+void detp_anim_save(const detp_state *st, gi_buf *out)
+{
+    const detp_anim_state *a = st->anim;
+    gi_buf_put_u32(out, a->frame);
+    detp_anim_header_put(&a->tot, out);
+    for (size_t i = 0; i < (size_t)st->nv * 3; i++)
+        gi_buf_put_u64(out, (uint64_t)a->sum[i]);
+    for (uint32_t i = 0; i < st->nv; i++)
+        gi_buf_put_u64(out, (uint64_t)a->hits[i]);
+}
+
+int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    if (anim_new(job, st, err))
+        return -1;
+    detp_anim_state *a = st->anim;
+    a->frame = gi_get_u32(in);
+    if (detp_anim_header_get(in, &a->tot) || a->frame >= p->anim.frames)
+        return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp animation", job->file);
+    for (size_t i = 0; i < (size_t)st->nv * 3; i++)
+        a->sum[i] = (int64_t)gi_get_u64(in);
+    for (uint32_t i = 0; i < st->nv; i++)
+        a->hits[i] = (int64_t)gi_get_u64(in);
+    if (in->failed)
+        return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    a->wall_frame = detp_now();
+    return 0;
+}

@@ -1,0 +1,391 @@
+/* detp_anim_worker: a detp animation in a worker process.
+ *
+ * Frame 0 of a batch traces its photons with the mobile at pose 0, stores
+ * them (detp_batch.c) and estimates every vertex. Frame f > 0 opens the
+ * batch as stored at f-1, updates it path by path (thesis Fig. 4.2,
+ * detp_anim_update.c), subtracts the old segments' contributions from the
+ * static vertices and adds the new ones' (Embree Disc Indexing over the
+ * static discs: the thesis's choice for them), estimates the mobile's own
+ * vertices from scratch, and stores the frame as a delta. A batch the
+ * store does not have (another host ran it, the disk lost it) is
+ * regenerated: traced at frame 0 and updated through frames 1..f-1, which
+ * gives the very same segments (random numbers keyed by frame). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "detp_anim.h"
+#include "detp_batch.h"
+#include "detp_method.h"
+#include "detp_sphere.h"
+#include "gi_worker_ctx.h"
+
+typedef struct detp_anim_worker {
+    uint32_t object;
+    gi_vec3 *base_pos, *base_nrm; /* the mobile's vertices as loaded */
+    int scene_posed, rt_posed;
+    uint32_t scene_frame, rt_frame;
+    gi_detp_embree_index *static_index;
+    gi_detp_segments old_list, new_list, changed, near, regen[2];
+    int64_t *sum, *hits; /* the result, per vertex */
+} detp_anim_worker;
+
+void detp_anim_worker_free(detp_anim_worker *a)
+{
+    if (!a)
+        return;
+    free(a->base_pos);
+    free(a->base_nrm);
+    gi_detp_embree_free(a->static_index);
+    gi_detp_segments_free(&a->old_list);
+    gi_detp_segments_free(&a->new_list);
+    gi_detp_segments_free(&a->changed);
+    gi_detp_segments_free(&a->near);
+    gi_detp_segments_free(&a->regen[0]);
+    gi_detp_segments_free(&a->regen[1]);
+    free(a->sum);
+    free(a->hits);
+    free(a);
+}
+
+static int pose_scene(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_error *err);
+
+/* The per-process animation state, created before the mobile first moves
+ * (its vertices as loaded are the poses' reference). */
+static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out,
+                      gi_error *err)
+{
+    const gi_detp_params *p = ctx->job.params;
+    if (!p->anim.enabled)
+        return gi_fail(err, GI_EPROTO, "detp: animation task for a job without animation");
+    if (w->anim) {
+        *out = w->anim;
+        return 0;
+    }
+    const gi_scene *s = &ctx->job.scene;
+    const gi_object *o = &s->objects[p->anim.object_index];
+    detp_anim_worker *a = gi_xcalloc(1, sizeof *a);
+    a->object = p->anim.object_index;
+    size_t n = (size_t)o->vertex_count + 1;
+    a->base_pos = gi_xmalloc(n * sizeof *a->base_pos);
+    a->base_nrm = gi_xmalloc(n * sizeof *a->base_nrm);
+    memcpy(a->base_pos, &s->positions[o->first_vertex], o->vertex_count * sizeof *a->base_pos);
+    memcpy(a->base_nrm, &s->normals[o->first_vertex], o->vertex_count * sizeof *a->base_nrm);
+    a->sum = gi_try_calloc((size_t)s->vertex_count * 3 + 1, sizeof *a->sum, err, "detp sums");
+    a->hits = gi_try_calloc((size_t)s->vertex_count + 1, sizeof *a->hits, err, "detp hits");
+    w->anim = a;
+    if (!a->sum || !a->hits)
+        return -1;
+    /* The discs (and any index over them) at pose 0, where frame 0's
+     * estimate needs the mobile's; later frames recompute the mobile's
+     * vertices on their own and use only the static discs' entries. */
+    if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err) ||
+        gi_detp_embree_build(ctx->rt.device, &w->discs, &a->static_index, err))
+        return -1;
+    *out = a;
+    return 0;
+}
+
+/* The scene's mobile at `frame` (vertices, normals, bounds), without the
+ * ray tracer: what the bounding spheres need. */
+static int pose_scene(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_error *err)
+{
+    if (a->scene_posed && a->scene_frame == frame)
+        return 0;
+    const gi_detp_params *p = ctx->job.params;
+    gi_mat4 m;
+    gi_detp_anim_pose(&p->anim, frame, &m);
+    if (gi_scene_pose_object(&ctx->job.scene, a->object, a->base_pos, a->base_nrm, &m, err))
+        return -1;
+    a->scene_posed = 1;
+    a->scene_frame = frame;
+    return 0;
+}
+
+/* The scene and the ray tracer at `frame`. */
+static int pose(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_error *err)
+{
+    if (pose_scene(ctx, a, frame, err))
+        return -1;
+    if (a->rt_posed && a->rt_frame == frame)
+        return 0;
+    if (gi_rt_update_object(&ctx->rt, a->object, err))
+        return -1;
+    a->rt_posed = 1;
+    a->rt_frame = frame;
+    return 0;
+}
+
+int detp_anim_pose_frame(gi_worker_ctx *ctx, detp_worker *w, uint32_t frame, gi_error *err)
+{
+    detp_anim_worker *a;
+    const gi_detp_params *p = ctx->job.params;
+    if (anim_state(ctx, w, &a, err))
+        return -1;
+    if (frame >= p->anim.frames)
+        return gi_fail(err, GI_EPROTO, "detp: frame %u of %u", frame, p->anim.frames);
+    return pose(ctx, a, frame, err);
+}
+
+static void tracer_at(gi_worker_ctx *ctx, uint32_t frame, gi_detp_tracer *tr)
+{
+    const gi_detp_params *p = ctx->job.params;
+    gi_detp_tracer_init(tr, &ctx->rt, &ctx->job.scene, ctx->job.seed, p->photon_count,
+                        p->max_bounces, p->artifact == GI_DETP_AC_SECOND_HIT);
+    tr->frame = frame;
+}
+
+/* The batch's paths at frame 0 (the mobile at pose 0). */
+static int trace_frame0(gi_worker_ctx *ctx, detp_anim_worker *a, uint64_t p0, uint64_t p1,
+                        gi_detp_segments *out, gi_error *err)
+{
+    const gi_detp_params *p = ctx->job.params;
+    if (pose(ctx, a, 0, err))
+        return -1;
+    gi_detp_tracer tr;
+    tracer_at(ctx, 0, &tr);
+    out->count = 0;
+    for (uint64_t ph = p0; ph < p1; ph++)
+        gi_detp_trace_photon(&tr, ph, out);
+    gi_detp_set_extent(out, p->artifact, p->extent_eps);
+    return 0;
+}
+
+/* The update's fixed inputs for frame f (scene and tracer posed at f). */
+static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
+                     const gi_detp_tracer *tr, gi_detp_anim_update_in *in, gi_error *err)
+{
+    const gi_detp_params *p = ctx->job.params;
+    const gi_object *o = &ctx->job.scene.objects[a->object];
+    memset(in, 0, sizeof *in);
+    if (pose_scene(ctx, a, f - 1, err))
+        return -1;
+    in->old_pose = gi_detp_object_sphere(&ctx->job.scene, a->object);
+    if (pose(ctx, a, f, err))
+        return -1;
+    in->new_pose = gi_detp_object_sphere(&ctx->job.scene, a->object);
+    in->tracer = tr;
+    in->mobile_first_tri = o->first_triangle;
+    in->mobile_tri_count = o->triangle_count;
+    in->mobile_scene = gi_rt_object_scene(&ctx->rt, a->object);
+    in->artifact = p->artifact;
+    in->eps = p->extent_eps;
+    return in->mobile_scene ? 0 : gi_fail(err, GI_EINTERNAL, "detp: no scene of the mobile");
+}
+
+/* A batch the store lacks: frame 0 traced again and updated through
+ * frames 1..f, stored as a base at f. */
+static int regenerate(gi_worker_ctx *ctx, detp_anim_worker *a, const char *dir, uint32_t batch,
+                      uint64_t p0, uint64_t p1, uint32_t f, detp_anim_result *h, gi_error *err)
+{
+    gi_detp_segments *cur = &a->regen[0], *nxt = &a->regen[1];
+    if (trace_frame0(ctx, a, p0, p1, cur, err))
+        return -1;
+    for (uint32_t g = 1; g <= f; g++) {
+        gi_detp_tracer tr;
+        tracer_at(ctx, g, &tr);
+        gi_detp_anim_update_in in;
+        if (update_in(ctx, a, g, &tr, &in, err))
+            return -1;
+        in.prev = cur->v;
+        in.prev_count = cur->count;
+        gi_detp_update_stats us;
+        memset(&us, 0, sizeof us);
+        nxt->count = a->old_list.count = a->new_list.count = 0;
+        if (gi_detp_anim_update(&in, nxt, &a->old_list, &a->new_list, &us, err))
+            return -1;
+        gi_detp_segments *t = cur;
+        cur = nxt;
+        nxt = t;
+    }
+    h->regenerated_frames += (uint64_t)f + 1;
+    int rc = detp_batch_write_base(dir, batch, p0, p1, f, cur, err);
+    /* Give the memory back: regeneration is the exception. */
+    gi_detp_segments_free(&a->regen[0]);
+    gi_detp_segments_free(&a->regen[1]);
+    return rc;
+}
+
+/* Collects the segments that may cross one of the mobile's discs (near
+ * its bounding sphere grown by the disc radius), for the mobile's estimate. */
+typedef struct near_test {
+    gi_vec3 c;
+    float rr;
+} near_test;
+
+static near_test near_sphere(const gi_scene *s, uint32_t object, float radius)
+{
+    gi_detp_mobile_pose b = gi_detp_object_sphere(s, object);
+    float r0 = b.r * 1.0001f + radius;
+    float rr = r0 + gi_detp_sphere_slack(r0);
+    return (near_test){b.c, rr * rr};
+}
+
+static void collect_near(detp_anim_worker *a, near_test nt, const gi_detp_segment *seg,
+                         size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (gi_detp_segment_meets_sphere(&seg[i], nt.c, nt.rr))
+            *gi_detp_segments_push(&a->near) = seg[i];
+}
+
+/* The mobile's vertices from scratch (thesis 1.12.4) over a->near. */
+static int mobile_vertices(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a,
+                           gi_detp_stats *st, gi_error *err)
+{
+    const gi_detp_params *p = ctx->job.params;
+    const gi_detp_sc_params *sc =
+        p->anim.mobile_estimator == GI_DETP_MOBILE_SPHERE_CACHE ? &p->sc : NULL;
+    return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, &a->near,
+                                        sc, ctx->rt.device, &w->acc, st, err);
+}
+
+/* The result: the accumulator as signed per-vertex sums. */
+static void encode_result(const detp_worker *w, detp_anim_worker *a, const detp_anim_result *h,
+                          gi_buf *result)
+{
+    for (size_t i = 0; i < (size_t)w->acc.count * 3; i++)
+        a->sum[i] = w->acc.fixed[i];
+    /* Removals count down modulo 2^32 (detp.h): back to signed. */
+    for (uint32_t i = 0; i < w->acc.count; i++)
+        a->hits[i] = (int32_t)w->acc.hits[i];
+    detp_encode_anim(h, a->sum, a->hits, w->acc.count, result);
+}
+
+static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
+                      detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
+{
+    double t0 = detp_now();
+    if (detp_worker_index(ctx, w, err) || trace_frame0(ctx, a, p0, p1, &w->segs, err))
+        return -1;
+    double t1 = detp_now();
+    if (detp_batch_write_base(dir, h->batch, p0, p1, 0, &w->segs, err))
+        return -1;
+    double t2 = detp_now();
+    gi_detp_accum_clear(&w->acc);
+    w->acc.sign = 1;
+    if (detp_worker_estimate(ctx, w, &h->stats, err))
+        return -1;
+    double t3 = detp_now();
+    a->near.count = 0;
+    collect_near(a, near_sphere(&ctx->job.scene, a->object, w->discs.radius), w->segs.v,
+                 w->segs.count);
+    if (mobile_vertices(ctx, w, a, &h->stats, err))
+        return -1;
+    h->sec_trace = t1 - t0;
+    h->sec_store = t2 - t1;
+    h->sec_static = t3 - t2;
+    h->sec_mobile = detp_now() - t3;
+    h->segments = h->segments_new = w->segs.count;
+    return 0;
+}
+
+static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
+                      detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
+{
+    uint32_t f = h->frame;
+    double t0 = detp_now();
+    detp_batch prev;
+    gi_error miss;
+    gi_error_clear(&miss);
+    int found = detp_batch_open(dir, h->batch, p0, p1, f - 1, &prev, &miss);
+    if (found < 0)
+        return gi_fail(err, miss.code, "%s", miss.msg);
+    if (!found) {
+        double tr0 = detp_now();
+        if (regenerate(ctx, a, dir, h->batch, p0, p1, f - 1, h, err))
+            return -1;
+        h->sec_regenerate = detp_now() - tr0;
+        found = detp_batch_open(dir, h->batch, p0, p1, f - 1, &prev, err);
+        if (found != 1)
+            return found < 0 ? -1 : gi_fail(err, GI_EIO, "detp batch %u: stored state lost",
+                                            h->batch);
+    }
+    double t1 = detp_now();
+    gi_detp_tracer tr;
+    tracer_at(ctx, f, &tr);
+    gi_detp_anim_update_in in;
+    if (update_in(ctx, a, f, &tr, &in, err)) {
+        detp_batch_close(&prev);
+        return -1;
+    }
+    near_test nt = near_sphere(&ctx->job.scene, a->object, w->discs.radius);
+    gi_detp_update_stats us;
+    memset(&us, 0, sizeof us);
+    a->changed.count = a->old_list.count = a->new_list.count = a->near.count = 0;
+    detp_batch_iter it;
+    detp_batch_iter_init(&it, &prev);
+    detp_run run;
+    while (detp_batch_next(&it, &run)) {
+        size_t c0 = a->changed.count;
+        if (gi_detp_anim_update_path(&in, run.seg, run.count, &a->changed, &a->old_list,
+                                     &a->new_list, &us))
+            collect_near(a, nt, a->changed.v + c0, a->changed.count - c0);
+        else
+            collect_near(a, nt, run.seg, run.count);
+    }
+    double t2 = detp_now();
+    /* Eq. 4.4 for the static vertices: minus the old, plus the new. */
+    gi_detp_accum_clear(&w->acc);
+    w->acc.sign = -1;
+    gi_detp_embree_estimate(a->static_index, &a->old_list, &w->acc, &h->stats);
+    w->acc.sign = 1;
+    gi_detp_embree_estimate(a->static_index, &a->new_list, &w->acc, &h->stats);
+    double t3 = detp_now();
+    int rc = mobile_vertices(ctx, w, a, &h->stats, err);
+    double t4 = detp_now();
+    if (rc == 0)
+        rc = detp_batch_write_frame(dir, &prev, f, &a->changed, err);
+    h->segments = detp_batch_segments(&prev) - us.old_segments + us.new_segments;
+    detp_batch_close(&prev);
+    h->segments_old = us.old_segments;
+    h->segments_new = us.new_segments;
+    h->paths_retraced = us.paths_retraced;
+    h->segments_repaired = us.second_changed;
+    h->bv_passes = us.sphere_passes;
+    h->sec_load = t1 - t0 - h->sec_regenerate;
+    h->sec_trace = t2 - t1;
+    h->sec_static = t3 - t2;
+    h->sec_mobile = t4 - t3;
+    h->sec_store = detp_now() - t4;
+    return rc;
+}
+
+int detp_anim_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
+{
+    const gi_detp_params *p = ctx->job.params;
+    gi_reader r;
+    gi_reader_init(&r, t->payload.data, t->payload.len, "detp animation task");
+    detp_anim_result h;
+    memset(&h, 0, sizeof h);
+    h.frame = gi_get_u32(&r);
+    h.batch = gi_get_u32(&r);
+    uint64_t p0 = gi_get_u64(&r), p1 = gi_get_u64(&r);
+    if (gi_reader_finish(&r, err))
+        return -1;
+    if (!p->anim.enabled || h.frame >= p->anim.frames ||
+        (h.frame == 0) != (t->kind == DETP_TASK_ANIM_BATCH) || p0 >= p1 ||
+        p1 > p->photon_count || p1 - p0 > (uint64_t)GI_DETP_MAX_BATCH ||
+        p0 != (uint64_t)h.batch * (uint64_t)p->batch)
+        return gi_fail(err, GI_EPROTO, "detp animation task %llu: bad payload",
+                       (unsigned long long)t->id);
+    detp_worker *w = detp_worker_state(ctx);
+    detp_anim_worker *a;
+    const char *dir;
+    double t0 = detp_now();
+    if (anim_state(ctx, w, &a, err) || gi_worker_batch_dir(ctx, &dir, err))
+        return -1;
+    h.sec_build = detp_now() - t0;
+    h.photons = p1 - p0;
+    uint64_t rays0 = ctx->rt.rays;
+    int rc = h.frame == 0 ? run_frame0(ctx, w, a, dir, &h, p0, p1, err)
+                          : run_update(ctx, w, a, dir, &h, p0, p1, err);
+    if (rc)
+        return -1;
+    h.rays = ctx->rt.rays - rays0;
+    /* The batch's last frame: its files are of no more use. */
+    if (h.frame + 1 == p->anim.frames)
+        detp_batch_remove(dir, h.batch);
+    encode_result(w, a, &h, result);
+    ctx->stats.samples = h.photons;
+    return 0;
+}

@@ -1,0 +1,285 @@
+/* detp_batch: an animation batch on disk as a base plus per-frame deltas
+ * (see detp_batch.h). */
+#include "detp_batch.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* A base counts this many times its deltas before it is rewritten. */
+#define DELTA_SHARE 4
+
+static char *file_name(const char *dir, uint32_t batch, uint32_t frame, int delta)
+{
+    size_t n = strlen(dir) + 64;
+    char *p = gi_xmalloc(n);
+    snprintf(p, n, "%s/b%u.f%u.%s", dir, batch, frame, delta ? "delta" : "base");
+    return p;
+}
+
+static int exists(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0;
+}
+
+/* Maps one file of the batch, checking that it is the one asked for. */
+static int map_file(const char *dir, const detp_batch *b, uint32_t frame, int delta,
+                    gi_detp_store_mapping *m, gi_error *err)
+{
+    char *path = file_name(dir, b->batch, frame, delta);
+    int rc = gi_detp_store_map(path, m, err);
+    if (rc == 1) {
+        const gi_detp_store_header *h = &m->header;
+        if (h->p0 != b->p0 || h->p1 != b->p1 || h->frame != frame ||
+            h->kind != (uint32_t)(delta ? GI_DETP_STORE_DELTA : GI_DETP_STORE_BASE)) {
+            gi_detp_store_unmap(m);
+            gi_fail(err, GI_EPROTO, "%s: not this batch's file", path);
+            rc = 0;
+        }
+    }
+    free(path);
+    return rc;
+}
+
+typedef struct aged_run {
+    detp_run run;
+    uint32_t age; /* 0: the newest delta */
+} aged_run;
+
+static int cmp_aged(const void *a, const void *b)
+{
+    const aged_run *x = a, *y = b;
+    if (x->run.photon != y->run.photon)
+        return x->run.photon < y->run.photon ? -1 : 1;
+    return x->age < y->age ? -1 : x->age > y->age;
+}
+
+/* The newest run of each path the deltas hold, by photon. */
+static void build_overrides(detp_batch *b)
+{
+    size_t n = 0;
+    for (uint32_t d = 0; d < b->delta_count; d++)
+        n += b->deltas[d].count; /* an upper bound on the runs */
+    aged_run *all = gi_xmalloc((n + 1) * sizeof *all);
+    size_t k = 0;
+    for (uint32_t d = 0; d < b->delta_count; d++) {
+        const gi_detp_store_mapping *m = &b->deltas[d];
+        for (size_t i = 0; i < m->count;) {
+            size_t j = i + 1;
+            while (j < m->count && m->seg[j].photon == m->seg[i].photon)
+                j++;
+            all[k].run = (detp_run){m->seg[i].photon, &m->seg[i], (uint32_t)(j - i)};
+            all[k++].age = b->delta_count - 1 - d;
+            i = j;
+        }
+    }
+    qsort(all, k, sizeof *all, cmp_aged);
+    b->over = gi_xmalloc((k + 1) * sizeof *b->over);
+    b->over_count = 0;
+    for (size_t i = 0; i < k; i++)
+        if (i == 0 || all[i].run.photon != all[i - 1].run.photon)
+            b->over[b->over_count++] = all[i].run;
+    free(all);
+}
+
+int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
+                    detp_batch *b, gi_error *err)
+{
+    memset(b, 0, sizeof *b);
+    b->batch = batch;
+    b->frame = frame;
+    b->p0 = p0;
+    b->p1 = p1;
+    /* The newest base at or before the frame. */
+    uint32_t g = frame;
+    for (;;) {
+        char *path = file_name(dir, batch, g, 0);
+        int found = exists(path);
+        free(path);
+        if (found)
+            break;
+        char *dpath = file_name(dir, batch, g, 1);
+        int has_delta = exists(dpath);
+        free(dpath);
+        if (!has_delta || g == 0) {
+            gi_fail(err, GI_EIO, "batch %u: no stored state for frame %u", batch, g);
+            return 0;
+        }
+        g--;
+    }
+    b->base_frame = g;
+    int rc = map_file(dir, b, g, 0, &b->base, err);
+    if (rc != 1)
+        return rc;
+    b->deltas = gi_xcalloc((size_t)(frame - g) + 1, sizeof *b->deltas);
+    for (uint32_t f = g + 1; f <= frame; f++) {
+        rc = map_file(dir, b, f, 1, &b->deltas[b->delta_count], err);
+        if (rc != 1) {
+            detp_batch_close(b);
+            return rc;
+        }
+        b->delta_segments += b->deltas[b->delta_count].count;
+        b->delta_count++;
+    }
+    build_overrides(b);
+    return 1;
+}
+
+void detp_batch_from_memory(const gi_detp_segments *s, uint32_t batch, uint64_t p0,
+                            uint64_t p1, uint32_t frame, detp_batch *b)
+{
+    memset(b, 0, sizeof *b);
+    b->batch = batch;
+    b->frame = b->base_frame = frame;
+    b->p0 = p0;
+    b->p1 = p1;
+    b->mem = s;
+}
+
+void detp_batch_close(detp_batch *b)
+{
+    gi_detp_store_unmap(&b->base);
+    for (uint32_t d = 0; d < b->delta_count; d++)
+        gi_detp_store_unmap(&b->deltas[d]);
+    free(b->deltas);
+    free(b->over);
+    memset(b, 0, sizeof *b);
+}
+
+int detp_batch_next(detp_batch_iter *it, detp_run *run)
+{
+    const detp_batch *b = it->b;
+    const gi_detp_segment *seg = b->mem ? b->mem->v : b->base.seg;
+    size_t n = b->mem ? b->mem->count : b->base.count;
+    if (it->i >= n)
+        return 0;
+    uint64_t photon = seg[it->i].photon;
+    size_t j = it->i + 1;
+    while (j < n && seg[j].photon == photon)
+        j++;
+    while (it->o < b->over_count && b->over[it->o].photon < photon)
+        it->o++; /* cannot happen for files we wrote: every path is in the base */
+    if (it->o < b->over_count && b->over[it->o].photon == photon)
+        *run = b->over[it->o++];
+    else
+        *run = (detp_run){photon, &seg[it->i], (uint32_t)(j - it->i)};
+    it->i = j;
+    return 1;
+}
+
+uint64_t detp_batch_segments(const detp_batch *b)
+{
+    if (b->mem)
+        return b->mem->count;
+    uint64_t n = b->base.count;
+    /* Runs replaced by deltas: base length out, newest run in. */
+    size_t o = 0;
+    for (size_t i = 0; i < b->base.count && o < b->over_count;) {
+        uint64_t photon = b->base.seg[i].photon;
+        size_t j = i + 1;
+        while (j < b->base.count && b->base.seg[j].photon == photon)
+            j++;
+        while (o < b->over_count && b->over[o].photon < photon)
+            o++;
+        if (o < b->over_count && b->over[o].photon == photon)
+            n = n - (j - i) + b->over[o].count;
+        i = j;
+    }
+    return n;
+}
+
+static int write_file(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
+                      int delta, uint32_t prev_base, const gi_detp_segments *s, gi_error *err)
+{
+    gi_detp_store_header h;
+    memset(&h, 0, sizeof h);
+    h.p0 = p0;
+    h.p1 = p1;
+    h.frame = frame;
+    h.kind = delta ? GI_DETP_STORE_DELTA : GI_DETP_STORE_BASE;
+    h.prev_base = prev_base;
+    char *path = file_name(dir, batch, frame, delta);
+    int rc = gi_detp_store_write(path, &h, s, 0, err);
+    free(path);
+    return rc;
+}
+
+int detp_batch_write_base(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
+                          uint32_t frame, const gi_detp_segments *s, gi_error *err)
+{
+    return write_file(dir, batch, p0, p1, frame, 0, GI_DETP_STORE_NO_BASE, s, err);
+}
+
+static void remove_file(const char *dir, uint32_t batch, uint32_t frame, int delta)
+{
+    char *path = file_name(dir, batch, frame, delta);
+    unlink(path);
+    free(path);
+}
+
+int detp_batch_write_frame(const char *dir, const detp_batch *prev, uint32_t frame,
+                           const gi_detp_segments *changed, gi_error *err)
+{
+    int rc;
+    if (prev->mem || (prev->delta_segments + changed->count) * DELTA_SHARE > prev->base.count) {
+        /* A new base: the batch at this frame, whole. */
+        gi_detp_segments all;
+        gi_detp_segments_init(&all);
+        detp_batch_iter it;
+        detp_batch_iter_init(&it, prev);
+        detp_run r;
+        size_t c = 0;
+        while (detp_batch_next(&it, &r)) {
+            while (c < changed->count && changed->v[c].photon < r.photon)
+                c++;
+            if (c < changed->count && changed->v[c].photon == r.photon) {
+                size_t j = c;
+                while (j < changed->count && changed->v[j].photon == r.photon)
+                    *gi_detp_segments_push(&all) = changed->v[j++];
+                c = j;
+            } else {
+                for (uint32_t k = 0; k < r.count; k++)
+                    *gi_detp_segments_push(&all) = r.seg[k];
+            }
+        }
+        rc = write_file(dir, prev->batch, prev->p0, prev->p1, frame, 0,
+                        prev->mem ? GI_DETP_STORE_NO_BASE : prev->base_frame, &all, err);
+        gi_detp_segments_free(&all);
+    } else {
+        rc = write_file(dir, prev->batch, prev->p0, prev->p1, frame, 1, 0, changed, err);
+    }
+    /* prev stands on a base only: the base before it and the deltas up to
+     * it are no longer needed, even by a retry of this frame. */
+    if (rc == 0 && !prev->mem && prev->delta_count == 0 &&
+        prev->base.header.prev_base != GI_DETP_STORE_NO_BASE) {
+        uint32_t k = prev->base.header.prev_base;
+        remove_file(dir, prev->batch, k, 0);
+        for (uint32_t f = k + 1; f <= prev->base_frame; f++)
+            remove_file(dir, prev->batch, f, 1);
+    }
+    return rc;
+}
+
+void detp_batch_remove(const char *dir, uint32_t batch)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return;
+    char prefix[32];
+    int n = snprintf(prefix, sizeof prefix, "b%u.", batch);
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (strncmp(e->d_name, prefix, (size_t)n) == 0) {
+            size_t len = strlen(dir) + strlen(e->d_name) + 2;
+            char *p = gi_xmalloc(len);
+            snprintf(p, len, "%s/%s", dir, e->d_name);
+            unlink(p);
+            free(p);
+        }
+    closedir(d);
+}

@@ -1,0 +1,87 @@
+/* detp_batch: a photon batch of an animation as the worker keeps it between
+ * frames, in its batch directory.
+ *
+ * Rewriting every segment every frame would cost more than the update
+ * itself (the update only reads them), so a batch is a BASE file holding
+ * all its segments at some frame k plus one DELTA file per later frame,
+ * holding the whole new path of every path that frame changed (both in the
+ * batch store format, detp_store.c):
+ *
+ *   b000012.f00000.base  b000012.f00001.delta  b000012.f00002.delta ...
+ *
+ * The batch at frame f is the base with, for each path, its newest run in
+ * the deltas up to f. When the deltas outgrow a quarter of the base, the
+ * frame is written as a new base. Files a retry could still need (the
+ * frame before the newest) are kept; older ones are removed. The files are
+ * a cache: they are not fsync'ed; a torn or missing file is regenerated
+ * from the seed range (detp_anim_worker.c). */
+#ifndef GI_DETP_BATCH_H
+#define GI_DETP_BATCH_H
+
+#include <stdint.h>
+
+#include "detp_anim.h"
+
+/* One path: its segments, in bounce order. */
+typedef struct detp_run {
+    uint64_t photon;
+    const gi_detp_segment *seg;
+    uint32_t count;
+} detp_run;
+
+typedef struct detp_batch {
+    uint32_t batch, frame, base_frame;
+    uint64_t p0, p1;
+    /* Either mapped files ... */
+    gi_detp_store_mapping base;
+    gi_detp_store_mapping *deltas; /* frames base_frame+1 .. frame */
+    uint32_t delta_count;
+    uint64_t delta_segments;
+    /* ... or segments in memory (a regenerated batch), not owned. */
+    const gi_detp_segments *mem;
+    /* The newest run of every path the deltas changed, by photon. */
+    detp_run *over;
+    size_t over_count;
+} detp_batch;
+
+/* Opens batch `batch` (photons [p0, p1)) at `frame` from dir: 1 if found
+ * whole, 0 if some file is missing or invalid (err says which; regenerate),
+ * -1 on an I/O error. */
+int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
+                    detp_batch *b, gi_error *err);
+/* A batch over segments held in memory (path-ordered). */
+void detp_batch_from_memory(const gi_detp_segments *s, uint32_t batch, uint64_t p0,
+                            uint64_t p1, uint32_t frame, detp_batch *b);
+void detp_batch_close(detp_batch *b);
+
+/* Iterates the batch's paths in photon order. */
+typedef struct detp_batch_iter {
+    const detp_batch *b;
+    size_t i; /* next base record */
+    size_t o; /* next override */
+} detp_batch_iter;
+
+static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b)
+{
+    it->b = b;
+    it->i = 0;
+    it->o = 0;
+}
+/* The next path, or 0 at the end. */
+int detp_batch_next(detp_batch_iter *it, detp_run *run);
+/* Segments in the batch (counting each path's newest run). */
+uint64_t detp_batch_segments(const detp_batch *b);
+
+/* Writes frame f of a batch: a delta (the whole new runs of the changed
+ * paths, path-ordered, in `changed`) after `prev` (the batch at f-1, still
+ * open), or a new base if the deltas would outgrow the base or prev is in
+ * memory. Then removes the files older than prev's base. */
+int detp_batch_write_frame(const char *dir, const detp_batch *prev, uint32_t frame,
+                           const gi_detp_segments *changed, gi_error *err);
+/* Writes a whole batch as a base at `frame` (frame 0, or a regeneration). */
+int detp_batch_write_base(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
+                          uint32_t frame, const gi_detp_segments *s, gi_error *err);
+/* Removes every file of the batch (after its last frame). */
+void detp_batch_remove(const char *dir, uint32_t batch);
+
+#endif
