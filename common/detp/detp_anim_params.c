@@ -194,6 +194,11 @@ gi_mat4 gi_detp_anim_matrix(const double pivot[3], const double translate[3],
  * where slerp's 1/sin(theta) loses precision. */
 static void slerp(const double a[4], const double b[4], double t, double out[4])
 {
+    if (memcmp(a, b, 4 * sizeof *a) == 0) {
+        /* Equal keys (e.g. a translation only): keep the rotation exact. */
+        memcpy(out, a, 4 * sizeof *a);
+        return;
+    }
     double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
     double sb = 1.0;
     if (d < 0.0) {

@@ -231,6 +231,20 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
     want = expected_pose(a->pivot, 0, 0, 0, 0, 1, 0, -170, 1);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
 
+    /* Between keys with the same rotation, only the translation moves: the
+     * 3x3 part stays exactly the identity. */
+    GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 0},"
+                                  " {\"frame\": 7, \"translate\": [7, -3.5, 1]}]"),
+                             p, &err));
+    a->pivot[0] = 3.25, a->pivot[1] = -1.0, a->pivot[2] = 0.5;
+    gi_detp_anim_pose(a, 3, &m);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            GI_CHECK(m.m[i][j] == (i == j ? 1.0 : 0.0));
+    GI_CHECK_NEAR(m.m[0][3], 3.0, 1e-12);
+    GI_CHECK_NEAR(m.m[1][3], -1.5, 1e-12);
+    GI_CHECK_NEAR(m.m[2][3], 3.0 / 7.0, 1e-12);
+
     /* A default key is exactly the identity, whatever the pivot. */
     GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 3}, {\"frame\": 9,"
                                   " \"rotate\": {\"axis\": [1, 1, 0], \"degrees\": 0}}]"),
