@@ -266,7 +266,7 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
     return 0;
 }
 
-int gi_scene_update_derived(gi_scene *s, gi_error *err)
+void gi_scene_update_bbox(gi_scene *s)
 {
     gi_vec3 lo = gi_v3(INFINITY, INFINITY, INFINITY), hi = gi_scale(lo, -1.0f);
     for (uint32_t i = 0; i < s->vertex_count; i++) {
@@ -275,12 +275,11 @@ int gi_scene_update_derived(gi_scene *s, gi_error *err)
     }
     s->bbox_min = lo;
     s->bbox_max = hi;
+}
 
-    free(s->tri_normal);
-    free(s->tri_smooth);
-    s->tri_normal = gi_xmalloc(((size_t)s->triangle_count + 1) * sizeof *s->tri_normal);
-    s->tri_smooth = gi_xmalloc((size_t)s->triangle_count + 1);
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
+void gi_scene_update_triangles(gi_scene *s, uint32_t first, uint32_t count)
+{
+    for (uint32_t t = first; t < first + count; t++) {
         gi_vec3 a, b, c;
         gi_scene_triangle(s, t, &a, &b, &c);
         gi_vec3 n = gi_normalize(gi_cross(gi_sub(b, a), gi_sub(c, a)));
@@ -291,6 +290,16 @@ int gi_scene_update_derived(gi_scene *s, gi_error *err)
             smooth |= gi_dot(s->normals[ix[k]], n) < 0.999999f;
         s->tri_smooth[t] = (uint8_t)smooth;
     }
+}
+
+int gi_scene_update_derived(gi_scene *s, gi_error *err)
+{
+    gi_scene_update_bbox(s);
+    free(s->tri_normal);
+    free(s->tri_smooth);
+    s->tri_normal = gi_xmalloc(((size_t)s->triangle_count + 1) * sizeof *s->tri_normal);
+    s->tri_smooth = gi_xmalloc((size_t)s->triangle_count + 1);
+    gi_scene_update_triangles(s, 0, s->triangle_count);
 
     free(s->light_tris);
     free(s->light_cdf);

@@ -131,6 +131,25 @@ static inline gi_vec3 gi_scene_shading_normal(const gi_scene *s, uint32_t tri, f
 
 /* Recomputes bbox and the light distribution (after loading or moving). */
 int gi_scene_update_derived(gi_scene *s, gi_error *err);
+/* The parts of it that a moved non-emissive object needs: the scene bbox,
+ * and the front normals and smooth flags of triangles [first, first+count). */
+void gi_scene_update_bbox(gi_scene *s);
+void gi_scene_update_triangles(gi_scene *s, uint32_t first, uint32_t count);
+
+/* Poses (gi_scene_pose.c): sets object's vertices to m applied to its base
+ * (as loaded / refined) positions, and its normals to the inverse transpose
+ * of m applied to the base normals, renormalized; then recomputes its
+ * triangles' normals and smooth flags and the scene bbox. The light
+ * distribution is not touched, so the object must not be emissive. The
+ * base arrays hold objects[object].vertex_count entries. Deterministic: the
+ * same base and matrix give the same bits, and the identity restores the
+ * base exactly. On error the scene is unchanged. */
+int gi_scene_pose_object(gi_scene *s, uint32_t object, const gi_vec3 *base_positions,
+                         const gi_vec3 *base_normals, const gi_mat4 *m, gi_error *err);
+/* Copies an object's current positions and normals (its base pose, before
+ * any gi_scene_pose_object) into new arrays the caller frees with free(). */
+int gi_scene_object_copy_base(const gi_scene *s, uint32_t object, gi_vec3 **positions,
+                              gi_vec3 **normals, gi_error *err);
 
 /* Index of the object named `name`, or -1. */
 int gi_scene_find_object(const gi_scene *s, const char *name);

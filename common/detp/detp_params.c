@@ -92,6 +92,31 @@ static int block_for(gi_jv *v, const gi_detp_params *p, const char *name, int ok
                       gi_detp_estimator_names[p->estimator]);
 }
 
+/* What the incremental update (thesis 1.12) cannot keep exact: it adds and
+ * subtracts per-segment disc contributions, so the estimator must be a sum
+ * over segments (photon_map's k nearest hits and impact_count's per-triangle
+ * counts are not kept per disc), the visible-area rule would need its
+ * shadow rays re-cast against every pose, and the path-traced reference
+ * would be one per frame. */
+static int check_animation(const gi_detp_params *p, gi_jv *v)
+{
+    if (!p->anim.enabled)
+        return 0;
+    if (p->artifact == GI_DETP_AC_VISIBLE_AREA)
+        return gi_jv_fail(v, "detp.artifact_control",
+                          "\"visible_area\" cannot be used with detp.animation (use "
+                          "\"second_hit\" or \"none\")");
+    if (p->estimator == GI_DETP_EST_IMPACT_COUNT || p->estimator == GI_DETP_EST_PHOTON_MAP)
+        return gi_jv_fail(v, "detp.estimator",
+                          "\"%s\" cannot be used with detp.animation (use a disc estimator: "
+                          "embree, octree, sphere_cache, multilist or basic)",
+                          gi_detp_estimator_names[p->estimator]);
+    if (p->reference_spp > 0)
+        return gi_jv_fail(v, "detp.reference",
+                          "the path-traced reference cannot be used with detp.animation");
+    return 0;
+}
+
 int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
 {
     memset(p, 0, sizeof *p);
@@ -118,7 +143,7 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
     static const char *const keys[] = {
         "photons", "relative_error", "batch", "radius", "subdivide", "estimator",
         "artifact_control", "max_bounces", "sphere_cache", "octree", "photon_map",
-        "reference", "tile", "image_spp", NULL};
+        "reference", "tile", "image_spp", "animation", NULL};
     if (gi_jv_keys(v, b, "detp", keys))
         return -1;
     int est = (int)p->estimator, ac = (int)p->artifact;
@@ -156,11 +181,12 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
     if (p->photons > 0 && p->batch > p->photons)
         p->batch = p->photons;
 
-    const cJSON *sc, *oc, *pm, *ref;
+    const cJSON *sc, *oc, *pm, *ref, *anim;
     if (gi_jv_member_object(v, b, "detp", "sphere_cache", 0, &sc) ||
         gi_jv_member_object(v, b, "detp", "octree", 0, &oc) ||
         gi_jv_member_object(v, b, "detp", "photon_map", 0, &pm) ||
-        gi_jv_member_object(v, b, "detp", "reference", 0, &ref))
+        gi_jv_member_object(v, b, "detp", "reference", 0, &ref) ||
+        gi_jv_member_object(v, b, "detp", "animation", 0, &anim))
         return -1;
     if (p->estimator == GI_DETP_EST_MULTILIST)
         p->sc.width = 4;
@@ -207,6 +233,8 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
         p->reference_spp = (uint32_t)spp;
         p->reference_vertices = (uint32_t)nv;
     }
+    if (gi_detp_anim_parse(&p->anim, anim, v) || check_animation(p, v))
+        return -1;
     return 0;
 }
 
@@ -254,5 +282,6 @@ int gi_detp_resolve_params(gi_detp_params *p, gi_scene *scene, const char *file,
         p->photon_count = (uint64_t)p->photons;
     }
     p->extent_eps = (float)(1e-5 * p->scene_size);
-    return 0;
+    /* After refinement: the pivot is the refined mobile's bounding-box centre. */
+    return gi_detp_anim_resolve(&p->anim, scene, file, err);
 }

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "detp.h"
+#include "detp_anim_params.h"
 #include "gi_json.h"
 
 typedef enum {
@@ -49,6 +50,7 @@ typedef struct gi_detp_params {
     uint32_t reference_spp;      /* 0: no path-traced reference */
     uint32_t reference_vertices; /* how many vertices get one (evenly spread) */
     int tile, image_spp;
+    gi_detp_anim_params anim; /* detp.animation; anim.enabled = 0 without one */
 
     /* Derived from the (refined) scene in check_scene: the same on the
      * coordinator and on every worker. */

@@ -1,0 +1,267 @@
+/* detp_anim_params: parsing, resolving and evaluating "detp.animation"
+ * (the keyframed pose of one mobile object, thesis 1.12). */
+#include "detp_anim_params.h"
+
+#include <math.h>
+#include <string.h>
+
+const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", NULL};
+
+#define ANIM_PATH "detp.animation"
+
+/* Unit quaternion of a rotation by `degrees` about `axis` (not zero):
+ * (cos(h), sin(h) * axis / |axis|), h = degrees / 2, with w >= 0 so that
+ * every rotation has one representative. */
+static void axis_angle_quat(const double axis[3], double degrees, double q[4])
+{
+    if (degrees == 0.0) {
+        q[0] = 1.0;
+        q[1] = q[2] = q[3] = 0.0;
+        return;
+    }
+    double n = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    double h = degrees * GI_PI / 360.0, s = sin(h) / n;
+    q[0] = cos(h);
+    q[1] = axis[0] * s;
+    q[2] = axis[1] * s;
+    q[3] = axis[2] * s;
+    if (q[0] < 0.0)
+        for (int i = 0; i < 4; i++)
+            q[i] = -q[i];
+}
+
+static int parse_rotate(gi_detp_anim_key *k, const cJSON *obj, const char *path, gi_jv *v)
+{
+    static const char *const keys[] = {"axis", "degrees", NULL};
+    const cJSON *rot;
+    char rpath[160], apath[192];
+    if (gi_jv_member_object(v, obj, path, "rotate", 0, &rot))
+        return -1;
+    if (!rot)
+        return 0;
+    gi_json_path(rpath, sizeof rpath, path, "rotate");
+    double axis[3], degrees;
+    if (gi_jv_keys(v, rot, rpath, keys) ||
+        gi_jv_vec3d(v, rot, rpath, "axis", 1, -1e30, 1e30, axis) ||
+        gi_jv_number(v, rot, rpath, "degrees", 1, -360.0, 360.0, &degrees))
+        return -1;
+    double n2 = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2];
+    if (!(n2 > 0.0) || !isfinite(n2))
+        return gi_jv_fail(v, gi_json_path(apath, sizeof apath, rpath, "axis"),
+                          "the axis is zero (or its length is not finite)");
+    axis_angle_quat(axis, degrees, k->rotation);
+    return 0;
+}
+
+static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, gi_jv *v)
+{
+    static const char *const keys[] = {"frame", "translate", "rotate", "scale", NULL};
+    gi_detp_anim_key *k = &a->keys[i];
+    char path[96], fpath[128];
+    gi_json_index_path(path, sizeof path, ANIM_PATH ".keyframes", i);
+    gi_json_path(fpath, sizeof fpath, path, "frame");
+    memset(k, 0, sizeof *k);
+    k->rotation[0] = 1.0;
+    k->scale = 1.0;
+    int64_t frame = 0;
+    if (gi_jv_object(v, obj, path) || gi_jv_keys(v, obj, path, keys) ||
+        gi_jv_int(v, obj, path, "frame", 1, 0, GI_DETP_ANIM_MAX_FRAMES - 1, &frame))
+        return -1;
+    if (frame >= (int64_t)a->frames)
+        return gi_jv_fail(v, fpath, "%lld is not less than " ANIM_PATH ".frames (%u)",
+                          (long long)frame, a->frames);
+    if (i > 0 && frame <= (int64_t)a->keys[i - 1].frame)
+        return gi_jv_fail(v, fpath,
+                          "%lld is not after keyframes[%d].frame (%u): key frames must be "
+                          "strictly increasing",
+                          (long long)frame, i - 1, a->keys[i - 1].frame);
+    k->frame = (uint32_t)frame;
+    char spath[128];
+    gi_json_path(spath, sizeof spath, path, "scale");
+    if (gi_jv_vec3d(v, obj, path, "translate", 0, -1e15, 1e15, k->translate) ||
+        parse_rotate(k, obj, path, v) ||
+        gi_jv_number(v, obj, path, "scale", 0, -INFINITY, 1e6, &k->scale))
+        return -1;
+    if (!(k->scale > 0.0))
+        return gi_jv_fail(v, spath, "%g is not > 0 (a uniform scale factor)", k->scale);
+    if (k->scale < 1e-6)
+        return gi_jv_fail(v, spath, "%g is below 1e-6", k->scale);
+    return 0;
+}
+
+int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
+{
+    memset(a, 0, sizeof *a);
+    if (!b)
+        return 0;
+    static const char *const keys[] = {"object", "frames", "keyframes", "mobile_estimator",
+                                       NULL};
+    const char *object = NULL;
+    int64_t frames = 0;
+    int est = GI_DETP_MOBILE_SPHERE_CACHE;
+    const cJSON *arr = NULL;
+    if (gi_jv_object(v, b, ANIM_PATH) || gi_jv_keys(v, b, ANIM_PATH, keys) ||
+        gi_jv_string(v, b, ANIM_PATH, "object", 1, &object))
+        return -1;
+    if (!object[0])
+        return gi_jv_fail(v, ANIM_PATH ".object", "the object name is empty");
+    if (strlen(object) >= GI_DETP_ANIM_NAME_MAX)
+        return gi_jv_fail(v, ANIM_PATH ".object", "the name is longer than %d bytes",
+                          GI_DETP_ANIM_NAME_MAX - 1);
+    if (gi_jv_int(v, b, ANIM_PATH, "frames", 1, 1, GI_DETP_ANIM_MAX_FRAMES, &frames) ||
+        gi_jv_enum(v, b, ANIM_PATH, "mobile_estimator", 0, gi_detp_mobile_estimator_names,
+                   &est) ||
+        gi_jv_member_array(v, b, ANIM_PATH, "keyframes", 1, &arr))
+        return -1;
+    strcpy(a->object, object);
+    a->frames = (uint32_t)frames;
+    a->mobile_estimator = (gi_detp_mobile_estimator)est;
+    int n = cJSON_GetArraySize(arr);
+    if (n < 1)
+        return gi_jv_fail(v, ANIM_PATH ".keyframes", "at least one key is needed");
+    if (n > GI_DETP_ANIM_MAX_KEYS)
+        return gi_jv_fail(v, ANIM_PATH ".keyframes", "%d keys (at most %d)", n,
+                          GI_DETP_ANIM_MAX_KEYS);
+    int i = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, arr)
+    {
+        if (parse_key(a, i, it, v))
+            return -1;
+        i++;
+    }
+    a->key_count = (uint32_t)n;
+    a->enabled = 1;
+    return 0;
+}
+
+int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *file,
+                         gi_error *err)
+{
+    if (!a->enabled)
+        return 0;
+    int idx = gi_scene_find_object(s, a->object);
+    if (idx < 0)
+        return gi_fail(err, GI_EINVAL, "%s: " ANIM_PATH ".object: no object \"%s\" in the scene",
+                       file, a->object);
+    const gi_object *o = &s->objects[idx];
+    if (!o->mobile)
+        return gi_fail(err, GI_EINVAL,
+                       "%s: " ANIM_PATH ".object: object \"%s\" is not mobile (give it "
+                       "\"mobile\": true in the scene)",
+                       file, a->object);
+    for (uint32_t t = o->first_triangle; t < o->first_triangle + o->triangle_count; t++)
+        if (!gi_is_black(gi_scene_tri_material(s, t)->emission))
+            return gi_fail(err, GI_EINVAL,
+                           "%s: " ANIM_PATH ".object: object \"%s\" is emissive (moving "
+                           "lights are not supported)",
+                           file, a->object);
+    gi_vec3 lo = s->positions[o->first_vertex], hi = lo;
+    for (uint32_t i = 1; i < o->vertex_count; i++) {
+        lo = gi_min_v3(lo, s->positions[o->first_vertex + i]);
+        hi = gi_max_v3(hi, s->positions[o->first_vertex + i]);
+    }
+    a->object_index = (uint32_t)idx;
+    a->pivot[0] = 0.5 * ((double)lo.x + (double)hi.x);
+    a->pivot[1] = 0.5 * ((double)lo.y + (double)hi.y);
+    a->pivot[2] = 0.5 * ((double)lo.z + (double)hi.z);
+    return 0;
+}
+
+gi_mat4 gi_detp_anim_matrix(const double pivot[3], const double translate[3],
+                            const double q[4], double scale)
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double r[3][3] = {
+        {1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)},
+        {2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)},
+        {2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)},
+    };
+    gi_mat4 m = gi_mat4_identity();
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++)
+            m.m[i][j] = scale * r[i][j];
+        /* p' = M3 p + (pivot + translate - M3 pivot); the identity pose
+         * gives pivot - pivot = 0 exactly. */
+        double mp = m.m[i][0] * pivot[0] + m.m[i][1] * pivot[1] + m.m[i][2] * pivot[2];
+        m.m[i][3] = (pivot[i] + translate[i]) - mp;
+    }
+    return m;
+}
+
+/* Spherical linear interpolation of unit quaternions, the short way (q and
+ * -q are the same rotation). Nearly parallel keys use the normalized lerp,
+ * where slerp's 1/sin(theta) loses precision. */
+static void slerp(const double a[4], const double b[4], double t, double out[4])
+{
+    if (memcmp(a, b, 4 * sizeof *a) == 0) {
+        /* Equal keys (e.g. a translation only): keep the rotation exact. */
+        memcpy(out, a, 4 * sizeof *a);
+        return;
+    }
+    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    double sb = 1.0;
+    if (d < 0.0) {
+        d = -d;
+        sb = -1.0;
+    }
+    double wa = 1.0 - t, wb = t;
+    if (d < 0.9995) {
+        double th = acos(d), s = sin(th);
+        wa = sin((1.0 - t) * th) / s;
+        wb = sin(t * th) / s;
+    }
+    double n2 = 0.0;
+    for (int i = 0; i < 4; i++) {
+        out[i] = wa * a[i] + wb * sb * b[i];
+        n2 += out[i] * out[i];
+    }
+    double inv = 1.0 / sqrt(n2);
+    for (int i = 0; i < 4; i++)
+        out[i] *= inv;
+}
+
+static gi_mat4 key_matrix(const gi_detp_anim_params *a, const gi_detp_anim_key *k)
+{
+    return gi_detp_anim_matrix(a->pivot, k->translate, k->rotation, k->scale);
+}
+
+void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *out)
+{
+    if (!a->enabled || a->key_count == 0) {
+        *out = gi_mat4_identity();
+        return;
+    }
+    const gi_detp_anim_key *k = a->keys;
+    uint32_t n = a->key_count;
+    if (frame <= k[0].frame) {
+        *out = key_matrix(a, &k[0]);
+        return;
+    }
+    if (frame >= k[n - 1].frame) {
+        *out = key_matrix(a, &k[n - 1]);
+        return;
+    }
+    /* k[lo].frame <= frame < k[hi].frame */
+    uint32_t lo = 0, hi = n - 1;
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (k[mid].frame <= frame)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (k[lo].frame == frame) {
+        *out = key_matrix(a, &k[lo]);
+        return;
+    }
+    const gi_detp_anim_key *k0 = &k[lo], *k1 = &k[hi];
+    double t = (double)(frame - k0->frame) / (double)(k1->frame - k0->frame);
+    double tr[3], q[4];
+    /* (1 - t) a + t b, not a + t (b - a): exact at both ends. */
+    for (int i = 0; i < 3; i++)
+        tr[i] = (1.0 - t) * k0->translate[i] + t * k1->translate[i];
+    double s = (1.0 - t) * k0->scale + t * k1->scale;
+    slerp(k0->rotation, k1->rotation, t, q);
+    *out = gi_detp_anim_matrix(a->pivot, tr, q, s);
+}
