@@ -179,10 +179,16 @@ int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q, gi_error
     if (a->frame + 1 >= p->anim.frames)
         return 0;
     a->frame++;
-    /* The mobile's vertices are recomputed from scratch each frame. */
+    /* The mobile's vertices are recomputed from scratch each frame (all of
+     * them with "update": "full"). */
     const gi_object *o = &job->scene.objects[p->anim.object_index];
-    memset(&a->sum[3 * (size_t)o->first_vertex], 0, 3 * (size_t)o->vertex_count * sizeof *a->sum);
-    memset(&a->hits[o->first_vertex], 0, (size_t)o->vertex_count * sizeof *a->hits);
+    uint32_t v0 = o->first_vertex, nv = o->vertex_count;
+    if (p->anim.update == GI_DETP_UPDATE_FULL) {
+        v0 = 0;
+        nv = st->nv;
+    }
+    memset(&a->sum[3 * (size_t)v0], 0, 3 * (size_t)nv * sizeof *a->sum);
+    memset(&a->hits[v0], 0, (size_t)nv * sizeof *a->hits);
     reset_frame_counters(st);
     plan_frame(job, a->frame, q);
     return 1;

@@ -6,6 +6,7 @@
 #include <string.h>
 
 const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", NULL};
+const char *const gi_detp_anim_update_names[] = {"incremental", "full", NULL};
 
 #define ANIM_PATH "detp.animation"
 
@@ -95,10 +96,10 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
     if (!b)
         return 0;
     static const char *const keys[] = {"object", "frames", "keyframes", "mobile_estimator",
-                                       NULL};
+                                       "update", NULL};
     const char *object = NULL;
     int64_t frames = 0;
-    int est = GI_DETP_MOBILE_SPHERE_CACHE;
+    int est = GI_DETP_MOBILE_SPHERE_CACHE, update = GI_DETP_UPDATE_INCREMENTAL;
     const cJSON *arr = NULL;
     if (gi_jv_object(v, b, ANIM_PATH) || gi_jv_keys(v, b, ANIM_PATH, keys) ||
         gi_jv_string(v, b, ANIM_PATH, "object", 1, &object))
@@ -111,11 +112,13 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
     if (gi_jv_int(v, b, ANIM_PATH, "frames", 1, 1, GI_DETP_ANIM_MAX_FRAMES, &frames) ||
         gi_jv_enum(v, b, ANIM_PATH, "mobile_estimator", 0, gi_detp_mobile_estimator_names,
                    &est) ||
+        gi_jv_enum(v, b, ANIM_PATH, "update", 0, gi_detp_anim_update_names, &update) ||
         gi_jv_member_array(v, b, ANIM_PATH, "keyframes", 1, &arr))
         return -1;
     strcpy(a->object, object);
     a->frames = (uint32_t)frames;
     a->mobile_estimator = (gi_detp_mobile_estimator)est;
+    a->update = (gi_detp_anim_update)update;
     int n = cJSON_GetArraySize(arr);
     if (n < 1)
         return gi_jv_fail(v, ANIM_PATH ".keyframes", "at least one key is needed");

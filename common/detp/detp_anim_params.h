@@ -34,6 +34,13 @@ typedef enum {
 
 extern const char *const gi_detp_mobile_estimator_names[];
 
+/* How a frame after the first is computed. Both trace the same paths; "full"
+ * estimates every vertex from scratch over the frame's segments (for checks
+ * and benchmarks: the incremental result must equal it bit for bit). */
+typedef enum { GI_DETP_UPDATE_INCREMENTAL, GI_DETP_UPDATE_FULL } gi_detp_anim_update;
+
+extern const char *const gi_detp_anim_update_names[];
+
 typedef struct gi_detp_anim_key {
     uint32_t frame;
     double translate[3];
@@ -48,6 +55,7 @@ typedef struct gi_detp_anim_params {
     uint32_t key_count;
     gi_detp_anim_key keys[GI_DETP_ANIM_MAX_KEYS]; /* frames strictly increasing */
     gi_detp_mobile_estimator mobile_estimator;
+    gi_detp_anim_update update;
 
     /* Resolved against the (refined) scene by gi_detp_anim_resolve. */
     uint32_t object_index;

@@ -282,6 +282,7 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
 static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
                       detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
 {
+    const gi_detp_params *p = ctx->job.params;
     uint32_t f = h->frame;
     double t0 = detp_now();
     detp_batch prev;
@@ -324,14 +325,24 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
             collect_near(a, nt, run.seg, run.count);
     }
     double t2 = detp_now();
-    /* Eq. 4.4 for the static vertices: minus the old, plus the new. */
     gi_detp_accum_clear(&w->acc);
-    w->acc.sign = -1;
-    gi_detp_embree_estimate(a->static_index, &a->old_list, &w->acc, &h->stats);
-    w->acc.sign = 1;
-    gi_detp_embree_estimate(a->static_index, &a->new_list, &w->acc, &h->stats);
+    int rc = 0;
+    if (p->anim.update == GI_DETP_UPDATE_FULL) {
+        /* Every vertex from scratch over the frame's segments (the check
+         * of the incremental result, and its benchmark). */
+        detp_batch_materialize(&prev, &a->changed, &w->segs);
+        w->acc.sign = 1;
+        rc = detp_worker_estimate(ctx, w, &h->stats, err);
+    } else {
+        /* Eq. 4.4 for the static vertices: minus the old, plus the new. */
+        w->acc.sign = -1;
+        gi_detp_embree_estimate(a->static_index, &a->old_list, &w->acc, &h->stats);
+        w->acc.sign = 1;
+        gi_detp_embree_estimate(a->static_index, &a->new_list, &w->acc, &h->stats);
+    }
     double t3 = detp_now();
-    int rc = mobile_vertices(ctx, w, a, &h->stats, err);
+    if (rc == 0)
+        rc = mobile_vertices(ctx, w, a, &h->stats, err);
     double t4 = detp_now();
     if (rc == 0)
         rc = detp_batch_write_frame(dir, &prev, f, &a->changed, err);

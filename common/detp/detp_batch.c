@@ -193,6 +193,27 @@ uint64_t detp_batch_segments(const detp_batch *b)
     return n;
 }
 
+void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *changed,
+                            gi_detp_segments *out)
+{
+    out->count = 0;
+    detp_batch_iter it;
+    detp_batch_iter_init(&it, prev);
+    detp_run r;
+    size_t c = 0;
+    while (detp_batch_next(&it, &r)) {
+        while (c < changed->count && changed->v[c].photon < r.photon)
+            c++;
+        if (c < changed->count && changed->v[c].photon == r.photon) {
+            while (c < changed->count && changed->v[c].photon == r.photon)
+                *gi_detp_segments_push(out) = changed->v[c++];
+        } else {
+            for (uint32_t k = 0; k < r.count; k++)
+                *gi_detp_segments_push(out) = r.seg[k];
+        }
+    }
+}
+
 static int write_file(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
                       int delta, uint32_t prev_base, const gi_detp_segments *s, gi_error *err)
 {
@@ -230,23 +251,7 @@ int detp_batch_write_frame(const char *dir, const detp_batch *prev, uint32_t fra
         /* A new base: the batch at this frame, whole. */
         gi_detp_segments all;
         gi_detp_segments_init(&all);
-        detp_batch_iter it;
-        detp_batch_iter_init(&it, prev);
-        detp_run r;
-        size_t c = 0;
-        while (detp_batch_next(&it, &r)) {
-            while (c < changed->count && changed->v[c].photon < r.photon)
-                c++;
-            if (c < changed->count && changed->v[c].photon == r.photon) {
-                size_t j = c;
-                while (j < changed->count && changed->v[j].photon == r.photon)
-                    *gi_detp_segments_push(&all) = changed->v[j++];
-                c = j;
-            } else {
-                for (uint32_t k = 0; k < r.count; k++)
-                    *gi_detp_segments_push(&all) = r.seg[k];
-            }
-        }
+        detp_batch_materialize(prev, changed, &all);
         rc = write_file(dir, prev->batch, prev->p0, prev->p1, frame, 0,
                         prev->mem ? GI_DETP_STORE_NO_BASE : prev->base_frame, &all, err);
         gi_detp_segments_free(&all);

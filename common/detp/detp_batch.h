@@ -72,6 +72,10 @@ int detp_batch_next(detp_batch_iter *it, detp_run *run);
 /* Segments in the batch (counting each path's newest run). */
 uint64_t detp_batch_segments(const detp_batch *b);
 
+/* The batch after `prev` with the whole new runs in `changed` (path-ordered)
+ * replacing their paths' runs: every segment, path-ordered, into out. */
+void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *changed,
+                            gi_detp_segments *out);
 /* Writes frame f of a batch: a delta (the whole new runs of the changed
  * paths, path-ordered, in `changed`) after `prev` (the batch at f-1, still
  * open), or a new base if the deltas would outgrow the base or prev is in
