@@ -76,6 +76,7 @@ static void run_free(gi_farm_job *j)
         return;
     gi_jobrun_free(&j->jr);
     gi_job_free(&j->job);
+    gi_affinity_free(&j->affinity);
     j->loaded = 0;
 }
 
