@@ -127,6 +127,7 @@ typedef struct gi_farm_host {
      * this host can take work now or when a slot frees (affinity owners). */
     int present;
     char last_error[512];
+    int seen; /* has had an active connection since this coordinator started */
 } gi_farm_host;
 
 typedef struct gi_farm_conn {
@@ -296,6 +297,10 @@ gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
 int gi_farm_host_blocked(const gi_farm_host *h, double now);
 /* Makes a job that just became runnable start at the current fair share. */
 void gi_farm_sched_join(gi_farm *f, gi_farm_job *j);
+/* The job's affinity owners, by host name, in a file beside its checkpoint
+ * (written atomically; a hint: failures are logged, never fatal). */
+void gi_farm_affinity_save(const gi_farm_job *j, const char *path);
+void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path);
 
 /* gi_farm_api.c */
 int gi_farm_api_start(gi_farm *f, gi_error *err);

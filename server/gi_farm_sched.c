@@ -32,11 +32,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_fs.h"
 #include "gi_progress.h"
 #include "gi_log.h"
 #include "gi_msg.h"
+
+/* After a coordinator restart, the owners of restored affinity keys get
+ * this long to reconnect before their keys go to whoever asks. */
+#define AFFINITY_RESTART_GRACE_S 30.0
 
 /* Output queue size above which no more work is queued on a connection. */
 #define SCHED_OUT_HIGH ((size_t)64 << 20)
@@ -154,15 +160,21 @@ void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j)
 /* ---- affinity ------------------------------------------------------------ */
 
 /* Marks the hosts that can take work, now or when a slot frees: an owner
- * that is not present loses its keys to whoever asks (no stalls). */
+ * that is not present loses its keys to whoever asks (no stalls). A host
+ * not yet back since this coordinator started counts as present for a
+ * short grace time, so keys restored from a checkpoint wait for it. */
 static void mark_present(gi_farm *f, double now)
 {
+    int grace = now - f->started < AFFINITY_RESTART_GRACE_S;
     for (size_t i = 0; i < f->host_count; i++)
-        f->hosts[i]->present = 0;
+        f->hosts[i]->present = grace && !f->hosts[i]->seen;
     for (size_t ci = 0; ci < f->conn_count; ci++) {
         const gi_farm_conn *c = f->conns[ci];
-        if (c->host && c->state == GI_FC_ACTIVE && c->fd >= 0 && c->hello.slots > 0 &&
-            !gi_farm_host_blocked(c->host, now) && now - c->last_heard <= 2.0 * f->cfg.heartbeat_s)
+        if (!c->host || c->state != GI_FC_ACTIVE || c->fd < 0)
+            continue;
+        c->host->seen = 1;
+        if (c->hello.slots > 0 && !gi_farm_host_blocked(c->host, now) &&
+            now - c->last_heard <= 2.0 * f->cfg.heartbeat_s)
             c->host->present = 1;
     }
 }
@@ -200,6 +212,69 @@ static void affinity_own(gi_farm_job *j, uint64_t key, gi_farm_host *host, const
     j->affinity_moves++;
     gi_info("job %llu: affinity key %llu moves from worker %s to worker %s (%s)",
             (unsigned long long)j->id, (unsigned long long)key, prev->name, host->name, how);
+}
+
+#define AFFINITY_MAGIC 0x46414947u /* "GIAF" */
+#define AFFINITY_VERSION 1u
+
+void gi_farm_affinity_save(const gi_farm_job *j, const char *path)
+{
+    const gi_affinity *m = &j->affinity;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_u32(&b, AFFINITY_MAGIC);
+    gi_buf_put_u32(&b, AFFINITY_VERSION);
+    uint64_t n = 0;
+    for (size_t i = 0; i < m->cap; i++)
+        n += m->slots[i].key && m->slots[i].owner;
+    gi_buf_put_u64(&b, n);
+    for (size_t i = 0; i < m->cap; i++)
+        if (m->slots[i].key && m->slots[i].owner) {
+            gi_buf_put_u64(&b, m->slots[i].key);
+            gi_buf_put_str(&b, ((const gi_farm_host *)m->slots[i].owner)->name);
+        }
+    gi_error err;
+    if (gi_write_file_atomic(path, b.data, b.len, &err))
+        gi_warn("job %llu: saving affinity owners: %s", (unsigned long long)j->id, err.msg);
+    gi_buf_free(&b);
+}
+
+void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path)
+{
+    if (access(path, F_OK) != 0)
+        return;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_error err;
+    if (gi_read_file(path, (size_t)1 << 30, &b, &err)) {
+        gi_warn("job %llu: affinity owners not restored: %s", (unsigned long long)j->id, err.msg);
+        gi_buf_free(&b);
+        return;
+    }
+    gi_reader r;
+    gi_reader_init(&r, b.data, b.len, path);
+    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    uint64_t n = gi_get_u64(&r);
+    if (r.failed || magic != AFFINITY_MAGIC || version != AFFINITY_VERSION || n > r.left / 12) {
+        gi_warn("%s: not an affinity file (ignored)", path);
+        gi_buf_free(&b);
+        return;
+    }
+    gi_affinity_free(&j->affinity);
+    for (uint64_t i = 0; i < n && !r.failed; i++) {
+        uint64_t key = gi_get_u64(&r);
+        char *name = gi_get_str(&r, GI_MSG_MAX_NAME);
+        if (name && key && name[0])
+            gi_affinity_set(&j->affinity, key, gi_farm_host_get(f, name));
+        free(name);
+    }
+    if (gi_reader_finish(&r, &err)) {
+        gi_warn("job %llu: affinity owners partly restored: %s", (unsigned long long)j->id,
+                err.msg);
+    }
+    gi_debug("job %llu: %zu affinity owners restored", (unsigned long long)j->id,
+             j->affinity.count);
+    gi_buf_free(&b);
 }
 
 /* ---- leasing -------------------------------------------------------------- */

@@ -2,10 +2,12 @@
  * (gi_affinity_may_take through gi_jobrun_lease_if, owners claimed on lease
  * and on result as gi_farm_sched.c does), with synthetic tasks and hosts;
  * affinity through checkpoints and the TASK message. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gi_affinity.h"
+#include "gi_farm_impl.h"
 #include "gi_jobrun.h"
 #include "gi_msg.h"
 #include "gi_test.h"
@@ -258,4 +260,48 @@ GI_TEST(test_farm_affinity_survives_checkpoint_and_task_message)
     gi_buf_free(&b);
     gi_jobrun_free(&jr);
     gi_job_free(&job);
+}
+
+/* The coordinator's owners, saved beside a checkpoint and restored by host
+ * name into a fresh coordinator (whose hosts have not reconnected yet). */
+GI_TEST(test_farm_affinity_owners_survive_a_restart)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/affinity", gi_test_tmpdir());
+    gi_farm *f = gi_xcalloc(1, sizeof *f);
+    gi_farm_job *j = gi_xcalloc(1, sizeof *j);
+    j->id = 5;
+    gi_farm_host *a = gi_farm_host_get(f, "render-a"), *b = gi_farm_host_get(f, "render-b");
+    for (uint64_t k = 1; k <= 100; k++)
+        gi_affinity_set(&j->affinity, k, k % 3 ? a : b);
+    gi_affinity_set(&j->affinity, 50, NULL); /* forgotten: not saved */
+    gi_farm_affinity_save(j, path);
+    gi_affinity_free(&j->affinity);
+
+    gi_farm *g = gi_xcalloc(1, sizeof *g);
+    gi_farm_affinity_load(g, j, path);
+    GI_REQUIRE(g->host_count == 2);
+    for (uint64_t k = 1; k <= 100; k++) {
+        const gi_farm_host *h = gi_affinity_owner(&j->affinity, k);
+        if (k == 50)
+            GI_CHECK(h == NULL);
+        else
+            GI_CHECK_MSG(h && strcmp(h->name, k % 3 ? "render-a" : "render-b") == 0,
+                         "key %llu", (unsigned long long)k);
+    }
+    /* Damaged or foreign files are ignored (a hint, never fatal). */
+    FILE *fp = fopen(path, "wb");
+    fputs("garbage", fp);
+    fclose(fp);
+    gi_farm_affinity_load(g, j, path);
+    GI_CHECK(gi_affinity_owner(&j->affinity, 1) != NULL);
+    gi_affinity_free(&j->affinity);
+    gi_farm *farms[2] = {f, g};
+    for (int k = 0; k < 2; k++) {
+        for (size_t i = 0; i < farms[k]->host_count; i++)
+            free(farms[k]->hosts[i]);
+        free(farms[k]->hosts);
+        free(farms[k]);
+    }
+    free(j);
 }
