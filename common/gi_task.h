@@ -18,6 +18,13 @@ typedef struct gi_task {
     uint32_t kind;    /* method-defined */
     uint32_t attempt; /* 0 on the first run, +1 per retry */
     double cost;      /* work units (progress and rates), e.g. samples */
+    /* Scheduling hint, 0 = none. Tasks of one job with the same non-zero key
+     * reuse state a worker host keeps on its disk (e.g. a photon batch), so
+     * the farm sends them to the host that last returned a result for the
+     * key while it is connected (docs/farm.md, "Affinity"). Set by methods
+     * after gi_task_queue_add (which leaves it 0); kept through retries,
+     * requeues, checkpoints and the TASK message. Never affects results. */
+    uint64_t affinity;
     gi_buf payload;   /* method-defined, explicitly serialized */
 } gi_task;
 

@@ -50,6 +50,9 @@ void gi_msg_task_encode(gi_buf *out, uint64_t job_id, const gi_task *t)
     gi_buf_put_u32(out, t->attempt);
     gi_buf_put_f64(out, t->cost);
     gi_buf_put_blob(out, t->payload.data, t->payload.len);
+    /* Optional trailing field: a task without affinity encodes as before. */
+    if (t->affinity)
+        gi_buf_put_u64(out, t->affinity);
 }
 
 int gi_msg_task_decode(const gi_buf *in, gi_msg_task *out, gi_error *err)
@@ -64,6 +67,8 @@ int gi_msg_task_decode(const gi_buf *in, gi_msg_task *out, gi_error *err)
     out->task.cost = gi_get_f64(&r);
     size_t len;
     const uint8_t *p = gi_get_blob(&r, GI_MSG_MAX_TASK, &len);
+    if (!r.failed && r.left > 0)
+        out->task.affinity = gi_get_u64(&r);
     if (gi_reader_finish(&r, err))
         return -1;
     gi_buf_init(&out->task.payload);

@@ -30,7 +30,9 @@ void gi_msg_job_encode(gi_buf *out, uint64_t job_id, const char *file, const cha
 int gi_msg_job_decode(const gi_buf *in, gi_msg_job *out, gi_error *err);
 void gi_msg_job_free(gi_msg_job *m);
 
-/* TASK: one task of a job. The decoded payload points into `in`. */
+/* TASK: one task of a job. The decoded payload points into `in`. A
+ * non-zero affinity follows the payload as an optional u64 (absent when 0,
+ * so tasks without one encode as in earlier versions). */
 typedef struct gi_msg_task {
     uint64_t job_id;
     gi_task task; /* payload is a copy */

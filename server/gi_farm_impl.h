@@ -14,6 +14,7 @@
 #include <stdint.h>
 #include <sys/types.h>
 
+#include "gi_affinity.h"
 #include "gi_auth.h"
 #include "gi_farm.h"
 #include "gi_frame.h"
@@ -84,6 +85,11 @@ typedef struct gi_farm_job {
     /* Task counts and statistics as they stood when the run ended. */
     uint64_t final_tasks, final_merged, final_retries;
     gi_task_stats final_stats;
+    /* Affinity key -> gi_farm_host owning it (gi_farm_sched.c). Kept with
+     * the job's checkpoint (<dir>/affinity, by host name) so a restarted
+     * coordinator sends a key's tasks to the same host again. */
+    gi_affinity affinity;
+    uint64_t affinity_moves; /* keys that changed owner */
     uint64_t ckpt_seq, ckpt_merged;
     double ckpt_done_cost;
     double ckpt_last; /* monotonic */
@@ -117,7 +123,11 @@ typedef struct gi_farm_host {
     uint32_t consecutive_failures;
     uint64_t failures, successes;
     double blocked_until; /* monotonic; 0 = not blocklisted */
+    /* Set by each scheduling round: an authenticated, active connection of
+     * this host can take work now or when a slot frees (affinity owners). */
+    int present;
     char last_error[512];
+    int seen; /* has had an active connection since this coordinator started */
 } gi_farm_host;
 
 typedef struct gi_farm_conn {
@@ -287,6 +297,10 @@ gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
 int gi_farm_host_blocked(const gi_farm_host *h, double now);
 /* Makes a job that just became runnable start at the current fair share. */
 void gi_farm_sched_join(gi_farm *f, gi_farm_job *j);
+/* The job's affinity owners, by host name, in a file beside its checkpoint
+ * (written atomically; a hint: failures are logged, never fatal). */
+void gi_farm_affinity_save(const gi_farm_job *j, const char *path);
+void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path);
 
 /* gi_farm_api.c */
 int gi_farm_api_start(gi_farm *f, gi_error *err);

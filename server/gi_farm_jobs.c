@@ -76,6 +76,7 @@ static void run_free(gi_farm_job *j)
         return;
     gi_jobrun_free(&j->jr);
     gi_job_free(&j->job);
+    gi_affinity_free(&j->affinity);
     j->loaded = 0;
 }
 
@@ -443,6 +444,14 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     return j;
 }
 
+static char *affinity_path(const gi_farm_job *j)
+{
+    size_t n = strlen(j->dir) + 16;
+    char *p = gi_xmalloc(n);
+    snprintf(p, n, "%s/affinity", j->dir);
+    return p;
+}
+
 static char *checkpoint_path(const gi_farm_job *j)
 {
     size_t n = strlen(j->dir) + 16;
@@ -563,8 +572,12 @@ static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
     if (rc == 0)
         rc = gi_jobrun_restore(&j->jr, &j->job, &cp, err);
     gi_buf_free(&cp);
-    if (rc == 0)
+    if (rc == 0) {
+        char *ap = affinity_path(j);
+        gi_farm_affinity_load(f, j, ap);
+        free(ap);
         return 1;
+    }
     /* A checkpoint that does not restore costs its work, not the job. The
      * method may have half-built its state: start from a fresh load. */
     gi_farm_job_log(j, "checkpoint unusable, starting over: %s", err->msg);
@@ -662,6 +675,9 @@ static int checkpoint(gi_farm *f, gi_farm_job *j, gi_error *err)
         rc = gi_write_file_atomic(path, cp.data, cp.len, err);
     free(path);
     if (rc == 0) {
+        char *ap = affinity_path(j);
+        gi_farm_affinity_save(j, ap);
+        free(ap);
         j->ckpt_seq++;
         j->ckpt_merged = j->jr.merge_next;
         j->ckpt_done_cost = j->jr.cost_done;

@@ -18,6 +18,13 @@
  * pass gets the next free slot. A job that becomes runnable starts at the
  * lowest pass of the others, so waiting earns no credit.
  *
+ * Affinity. A task with a non-zero gi_task.affinity key goes to the host
+ * that owns the key (the last to return a result for it, or to take its
+ * task while the previous owner was gone) while that host is present:
+ * connected, active, not blocklisted, heard from lately. Other hosts pass
+ * such tasks over (they stay pending, in order, for the owner's next free
+ * slot). An absent owner's keys go to the first host asking (gi_affinity.h).
+ *
  * Blocklisting. A worker (by name, across reconnections) whose tasks fail
  * `blocklist_failures` times in a row gets no tasks for `blocklist_s`.
  * Failures that are the job's fault (GI_EINVAL: bad input) do not count. */
@@ -25,11 +32,17 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_fs.h"
 #include "gi_progress.h"
 #include "gi_log.h"
 #include "gi_msg.h"
+
+/* After a coordinator restart, the owners of restored affinity keys get
+ * this long to reconnect before their keys go to whoever asks. */
+#define AFFINITY_RESTART_GRACE_S 30.0
 
 /* Output queue size above which no more work is queued on a connection. */
 #define SCHED_OUT_HIGH ((size_t)64 << 20)
@@ -144,18 +157,165 @@ void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j)
     c->jobs_sent[c->jobs_sent_count++] = j->id;
 }
 
-/* The running job with the lowest pass that may still have pending tasks. */
-static gi_farm_job *pick_job(gi_farm *f, const unsigned char *exhausted)
+/* ---- affinity ------------------------------------------------------------ */
+
+/* Marks the hosts that can take work, now or when a slot frees: an owner
+ * that is not present loses its keys to whoever asks (no stalls). A host
+ * not yet back since this coordinator started counts as present for a
+ * short grace time, so keys restored from a checkpoint wait for it. */
+static void mark_present(gi_farm *f, double now)
 {
-    gi_farm_job *best = NULL;
+    int grace = now - f->started < AFFINITY_RESTART_GRACE_S;
+    for (size_t i = 0; i < f->host_count; i++)
+        f->hosts[i]->present = grace && !f->hosts[i]->seen;
+    for (size_t ci = 0; ci < f->conn_count; ci++) {
+        const gi_farm_conn *c = f->conns[ci];
+        if (!c->host || c->state != GI_FC_ACTIVE || c->fd < 0)
+            continue;
+        c->host->seen = 1;
+        if (c->hello.slots > 0 && !gi_farm_host_blocked(c->host, now) &&
+            now - c->last_heard <= 2.0 * f->cfg.heartbeat_s)
+            c->host->present = 1;
+    }
+}
+
+static int host_present(void *ctx, const void *owner)
+{
+    (void)ctx;
+    return ((const gi_farm_host *)owner)->present;
+}
+
+typedef struct taker {
+    const gi_farm_job *job;
+    const gi_farm_host *host;
+} taker;
+
+static int may_take(void *ctx, const gi_task *t)
+{
+    const taker *k = ctx;
+    return gi_affinity_may_take(&k->job->affinity, t->affinity, k->host, host_present, NULL);
+}
+
+/* host now owns the key (it took or returned the key's task). */
+static void affinity_own(gi_farm_job *j, uint64_t key, gi_farm_host *host, const char *how)
+{
+    if (!key || !host)
+        return;
+    const gi_farm_host *prev = gi_affinity_set(&j->affinity, key, host);
+    if (prev == host)
+        return;
+    if (!prev) {
+        gi_debug("job %llu: affinity key %llu goes to worker %s", (unsigned long long)j->id,
+                 (unsigned long long)key, host->name);
+        return;
+    }
+    j->affinity_moves++;
+    gi_info("job %llu: affinity key %llu moves from worker %s to worker %s (%s)",
+            (unsigned long long)j->id, (unsigned long long)key, prev->name, host->name, how);
+}
+
+#define AFFINITY_MAGIC 0x46414947u /* "GIAF" */
+#define AFFINITY_VERSION 1u
+
+void gi_farm_affinity_save(const gi_farm_job *j, const char *path)
+{
+    const gi_affinity *m = &j->affinity;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_u32(&b, AFFINITY_MAGIC);
+    gi_buf_put_u32(&b, AFFINITY_VERSION);
+    uint64_t n = 0;
+    for (size_t i = 0; i < m->cap; i++)
+        n += m->slots[i].key && m->slots[i].owner;
+    gi_buf_put_u64(&b, n);
+    for (size_t i = 0; i < m->cap; i++)
+        if (m->slots[i].key && m->slots[i].owner) {
+            gi_buf_put_u64(&b, m->slots[i].key);
+            gi_buf_put_str(&b, ((const gi_farm_host *)m->slots[i].owner)->name);
+        }
+    gi_error err;
+    if (gi_write_file_atomic(path, b.data, b.len, &err))
+        gi_warn("job %llu: saving affinity owners: %s", (unsigned long long)j->id, err.msg);
+    gi_buf_free(&b);
+}
+
+void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path)
+{
+    if (access(path, F_OK) != 0)
+        return;
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_error err;
+    if (gi_read_file(path, (size_t)1 << 30, &b, &err)) {
+        gi_warn("job %llu: affinity owners not restored: %s", (unsigned long long)j->id, err.msg);
+        gi_buf_free(&b);
+        return;
+    }
+    gi_reader r;
+    gi_reader_init(&r, b.data, b.len, path);
+    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    uint64_t n = gi_get_u64(&r);
+    if (r.failed || magic != AFFINITY_MAGIC || version != AFFINITY_VERSION || n > r.left / 12) {
+        gi_warn("%s: not an affinity file (ignored)", path);
+        gi_buf_free(&b);
+        return;
+    }
+    gi_affinity_free(&j->affinity);
+    for (uint64_t i = 0; i < n && !r.failed; i++) {
+        uint64_t key = gi_get_u64(&r);
+        char *name = gi_get_str(&r, GI_MSG_MAX_NAME);
+        if (name && key && name[0])
+            gi_affinity_set(&j->affinity, key, gi_farm_host_get(f, name));
+        free(name);
+    }
+    if (gi_reader_finish(&r, &err)) {
+        gi_warn("job %llu: affinity owners partly restored: %s", (unsigned long long)j->id,
+                err.msg);
+    }
+    gi_debug("job %llu: %zu affinity owners restored", (unsigned long long)j->id,
+             j->affinity.count);
+    gi_buf_free(&b);
+}
+
+/* ---- leasing -------------------------------------------------------------- */
+
+/* The running job with the lowest pass that may still have pending tasks
+ * for this connection, as an index into f->jobs, or -1. */
+static long pick_job(gi_farm *f, const unsigned char *exhausted, const unsigned char *passed)
+{
+    long best = -1;
     for (size_t i = 0; i < f->job_count; i++) {
         gi_farm_job *j = f->jobs[i];
-        if (exhausted[i] || j->state != GI_FJ_RUNNING || !j->loaded)
+        if (exhausted[i] || passed[i] || j->state != GI_FJ_RUNNING || !j->loaded)
             continue;
-        if (!best || j->pass < best->pass)
-            best = j;
+        if (best < 0 || j->pass < f->jobs[best]->pass)
+            best = (long)i;
     }
     return best;
+}
+
+/* A task for connection c, from the job with the lowest pass that has one
+ * it may take. exhausted[i]: job i has nothing pending for anyone. */
+static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, unsigned char *exhausted,
+                                unsigned char *passed, gi_farm_job **job)
+{
+    memset(passed, 0, f->job_count);
+    long i;
+    while ((i = pick_job(f, exhausted, passed)) >= 0) {
+        gi_farm_job *j = f->jobs[i];
+        taker k = {j, c->host};
+        uint64_t refused;
+        const gi_task *t = gi_jobrun_lease_if(&j->jr, may_take, &k, &refused);
+        if (t) {
+            *job = j;
+            return t;
+        }
+        if (refused)
+            passed[i] = 1; /* its pending tasks belong to other hosts */
+        else
+            exhausted[i] = 1;
+    }
+    return NULL;
 }
 
 void gi_farm_schedule(gi_farm *f)
@@ -163,8 +323,9 @@ void gi_farm_schedule(gi_farm *f)
     if (f->job_count == 0 || f->conn_count == 0)
         return;
     double now = gi_now();
+    mark_present(f, now);
     unsigned char *exhausted = gi_xcalloc(f->job_count, 1);
-    size_t job_index_cap = f->job_count;
+    unsigned char *passed = gi_xcalloc(f->job_count, 1);
     int any = 1;
     /* Round-robin over workers, one task at a time, so a burst of work is
      * spread rather than piled on the first worker. */
@@ -174,20 +335,11 @@ void gi_farm_schedule(gi_farm *f)
             gi_farm_conn *c = f->conns[ci];
             if (!conn_takes_work(f, c, now))
                 continue;
-            const gi_task *t = NULL;
-            gi_farm_job *j;
-            while ((j = pick_job(f, exhausted))) {
-                t = gi_jobrun_lease(&j->jr);
-                if (t)
-                    break;
-                for (size_t k = 0; k < job_index_cap; k++)
-                    if (f->jobs[k] == j)
-                        exhausted[k] = 1;
-            }
-            if (!t) {
-                free(exhausted);
-                return; /* nothing is pending anywhere */
-            }
+            gi_farm_job *j = NULL;
+            const gi_task *t = lease_for(f, c, exhausted, passed, &j);
+            if (!t)
+                continue;
+            affinity_own(j, t->affinity, c->host, "its owner cannot take work");
             gi_farm_lease l = {j->id, t->id, t->attempt, now + f->cfg.lease_s, j->est_task_s};
             lease_add(c, &l);
             charge(j, j->est_task_s);
@@ -203,6 +355,7 @@ void gi_farm_schedule(gi_farm *f)
         }
     }
     free(exhausted);
+    free(passed);
 }
 
 /* ---- what workers report ------------------------------------------------- */
@@ -281,6 +434,8 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         c->host->consecutive_failures = 0;
         c->host->successes++;
     }
+    if (l.task_id < j->jr.task_count)
+        affinity_own(j, j->jr.tasks[l.task_id].task.affinity, c->host, "it returned a result");
     c->tasks_done++;
     c->result_bytes += r.data.len;
     /* Correct the provisional charge with what the task really cost. */

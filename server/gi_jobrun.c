@@ -93,12 +93,33 @@ void gi_jobrun_free(gi_jobrun *jr)
     memset(jr, 0, sizeof *jr);
 }
 
-const gi_task *gi_jobrun_lease(gi_jobrun *jr)
+const gi_task *gi_jobrun_lease(gi_jobrun *jr) { return gi_jobrun_lease_if(jr, NULL, NULL, NULL); }
+
+const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const gi_task *t),
+                                  void *ctx, uint64_t *passed)
 {
-    while (!gi_jobrun_done(jr) && jr->pending_head < jr->pending_count) {
-        gi_jobrun_task *jt = &jr->tasks[jr->pending[jr->pending_head++]];
+    if (passed)
+        *passed = 0;
+    if (gi_jobrun_done(jr))
+        return NULL;
+    /* Entries of tasks no longer pending (leased again after a requeue put
+     * a second entry in front) are dropped as they are met. */
+    while (jr->pending_head < jr->pending_count &&
+           jr->tasks[jr->pending[jr->pending_head]].state != GI_TASK_PENDING)
+        jr->pending_head++;
+    for (uint64_t i = jr->pending_head; i < jr->pending_count; i++) {
+        gi_jobrun_task *jt = &jr->tasks[jr->pending[i]];
         if (jt->state != GI_TASK_PENDING)
             continue;
+        if (accept && !accept(ctx, &jt->task)) {
+            if (passed)
+                ++*passed;
+            continue;
+        }
+        /* Close the gap, keeping the order of the entries passed over. */
+        memmove(jr->pending + jr->pending_head + 1, jr->pending + jr->pending_head,
+                (i - jr->pending_head) * sizeof *jr->pending);
+        jr->pending_head++;
         jt->state = GI_TASK_LEASED;
         jr->leased++;
         return &jt->task;
@@ -217,7 +238,7 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 }
 
 #define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
-#define CHECKPOINT_VERSION 1u
+#define CHECKPOINT_VERSION 2u /* 2: tasks carry their affinity; 1 is still read */
 
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
 {
@@ -239,6 +260,7 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
         gi_buf_put_u32(out, t->kind);
         gi_buf_put_u32(out, t->attempt);
         gi_buf_put_f64(out, t->cost);
+        gi_buf_put_u64(out, t->affinity);
         gi_buf_put_blob(out, t->payload.data, t->payload.len);
     }
     gi_buf state;
@@ -261,7 +283,8 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     gi_reader_init(&r, in->data, in->len, "checkpoint");
     uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
     char *method = gi_get_str(&r, 64);
-    if (r.failed || magic != CHECKPOINT_MAGIC || version != CHECKPOINT_VERSION || !method ||
+    if (r.failed || magic != CHECKPOINT_MAGIC || version < 1 || version > CHECKPOINT_VERSION ||
+        !method ||
         strcmp(method, job->method->name) != 0) {
         free(method);
         return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of a %s job (version %u)",
@@ -293,6 +316,8 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
         jt->task.kind = gi_get_u32(&r);
         jt->task.attempt = gi_get_u32(&r);
         jt->task.cost = gi_get_f64(&r);
+        if (version >= 2)
+            jt->task.affinity = gi_get_u64(&r);
         size_t len;
         const uint8_t *p = gi_get_blob(&r, (size_t)1 << 30, &len);
         if (r.failed)

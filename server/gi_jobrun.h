@@ -57,6 +57,12 @@ void gi_jobrun_free(gi_jobrun *jr);
 /* The next task to run (its state becomes LEASED), or NULL if none is
  * pending right now. */
 const gi_task *gi_jobrun_lease(gi_jobrun *jr);
+/* Like gi_jobrun_lease, for one particular taker: the first pending task
+ * accept() agrees to (NULL: any). Tasks passed over stay pending, in their
+ * order. *passed (optional) gets how many pending tasks were refused, so a
+ * caller can tell "nothing for you" (> 0) from "nothing at all" (0). */
+const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const gi_task *t),
+                                  void *ctx, uint64_t *passed);
 /* A result for a leased task: taken over (result is left empty). Stale or
  * duplicate results are ignored. Returns -1 if the job failed (merge or
  * finish error): see jr->error. */

@@ -1,10 +1,21 @@
-/* gi_local: the embedded coordinator behind `gi render`. */
+/* gi_local: the embedded coordinator behind `gi render`.
+ *
+ * Batch directories: the children's per-job cache directory (gi_batch_dir.h)
+ * lies under a private temporary directory, $TMPDIR/gi-render-XXXXXX
+ * (/var/tmp when TMPDIR is unset: batches can be large and /tmp is often
+ * in memory), created before the pool starts and removed when the render
+ * ends, whether it succeeded, failed or was interrupted (SIGINT/SIGTERM).
+ * Only a killed process leaves it behind. Affinity keys are ignored here:
+ * one host, one disk. */
 #include "gi_local.h"
 
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "gi_batch_dir.h"
 #include "gi_log.h"
 #include "gi_pool.h"
 
@@ -16,6 +27,7 @@ typedef struct local_run {
     gi_job *job;
     gi_jobrun jr;
     gi_pool pool;
+    char *batch_root; /* private temporary directory */
     uint64_t crashes;
     unsigned respawn_budget;
 } local_run;
@@ -49,6 +61,36 @@ static const gi_buf *on_asset(void *user, const char *hash)
     return lr->job->assets ? gi_asset_store_get(lr->job->assets, hash) : NULL;
 }
 
+/* Creates the render's private batch root. */
+static int batch_root_make(local_run *lr, gi_error *err)
+{
+    const char *tmp = getenv("TMPDIR");
+    if (!tmp || !tmp[0])
+        tmp = "/var/tmp";
+    size_t n = strlen(tmp) + 32;
+    lr->batch_root = gi_xmalloc(n);
+    snprintf(lr->batch_root, n, "%s/gi-render-XXXXXX", tmp);
+    if (!mkdtemp(lr->batch_root)) {
+        gi_fail(err, GI_EIO, "%s: cannot create a temporary directory for batch files: %s "
+                "(set TMPDIR to a writable directory)", lr->batch_root, strerror(errno));
+        free(lr->batch_root);
+        lr->batch_root = NULL;
+        return -1;
+    }
+    return 0;
+}
+
+static void batch_root_remove(local_run *lr)
+{
+    if (!lr->batch_root)
+        return;
+    gi_error err;
+    if (gi_batch_dir_remove(lr->batch_root, &err))
+        gi_warn("%s", err.msg);
+    free(lr->batch_root);
+    lr->batch_root = NULL;
+}
+
 static int default_workers(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -71,7 +113,12 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     if ((uint64_t)workers > lr.jr.task_count)
         workers = (int)lr.jr.task_count;
     summary->workers = workers;
-    if (gi_pool_start(&lr.pool, workers, err)) {
+    if (batch_root_make(&lr, err)) {
+        gi_jobrun_free(&lr.jr);
+        return -1;
+    }
+    if (gi_pool_start(&lr.pool, workers, lr.batch_root, err)) {
+        batch_root_remove(&lr);
         gi_jobrun_free(&lr.jr);
         return -1;
     }
@@ -125,7 +172,8 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     if (rc == 0)
         gi_progress_update(&prog, lr.jr.cost_done, lr.jr.cost_total, (double)lr.jr.stats.rays, 1);
     gi_progress_end(&prog);
-    gi_pool_stop(&lr.pool);
+    gi_pool_stop(&lr.pool); /* children gone: nothing writes below batch_root now */
+    batch_root_remove(&lr);
     gi_debug("%s: peak bytes of results held for in-order merging: %llu", job->name,
              (unsigned long long)lr.jr.held_results_peak);
     summary->seconds = gi_now() - t0;

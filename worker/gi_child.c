@@ -6,6 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "gi_batch_dir.h"
 #include "gi_frame.h"
 #include "gi_log.h"
 #include "gi_msg.h"
@@ -22,6 +23,7 @@ typedef struct child {
     gi_worker_ctx ctx;
     int loaded;
     gi_asset_store *store;
+    const char *batch_root;
 } child;
 
 static int send_msg(child *c, uint16_t type, const gi_buf *b, gi_error *err)
@@ -112,6 +114,8 @@ static int ensure_job(child *c, uint64_t job_id, gi_error *err)
     if (gi_worker_ctx_load(&c->ctx, job_id, def->file, def->text, &def->manifest, fetch_asset,
                            c, c->store, err))
         return -1;
+    if (c->batch_root)
+        c->ctx.batch_dir = gi_batch_dir_path(c->batch_root, job_id, def->text);
     c->loaded = 1;
     return 0;
 }
@@ -170,11 +174,12 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
     return rc;
 }
 
-int gi_child_main(int fd)
+int gi_child_main(int fd, const char *batch_root)
 {
     child c;
     memset(&c, 0, sizeof c);
     c.fd = fd;
+    c.batch_root = batch_root;
     c.limits = gi_frame_limits_default();
     c.store = gi_asset_store_new();
     signal(SIGPIPE, SIG_IGN);

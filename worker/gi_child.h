@@ -9,8 +9,10 @@
 #ifndef GI_CHILD_H
 #define GI_CHILD_H
 
-/* Runs until BYE or the parent goes away; returns the exit status. */
-int gi_child_main(int fd);
+/* Runs until BYE or the parent goes away; returns the exit status.
+ * batch_root (NULL: none): where the host keeps per-job batch directories
+ * (gi_batch_dir.h); each loaded job's ctx.batch_dir lies below it. */
+int gi_child_main(int fd, const char *batch_root);
 
 /* Fault injection for tests: GI_FAULT_CRASH_TASK="ID[:ATTEMPT][,ID[:ATTEMPT]...]"
  * makes a child kill itself with SIGKILL after computing task ID on that

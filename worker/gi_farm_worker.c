@@ -14,7 +14,9 @@
 
 #include "gi_asset_cache.h"
 #include "gi_auth.h"
+#include "gi_batch_dir.h"
 #include "gi_frame.h"
+#include "gi_fs.h"
 #include "gi_log.h"
 #include "gi_msg.h"
 #include "gi_msg_ctrl.h"
@@ -26,6 +28,7 @@
 #define HANDSHAKE_S 10.0
 #define MAX_DEFS 1024
 #define READ_BUDGET ((size_t)8 << 20)
+#define SWEEP_EVERY_S 3600.0
 
 static volatile sig_atomic_t signals_seen;
 
@@ -62,6 +65,8 @@ typedef struct worker {
     gi_pool pool;
     double tokens, tokens_at; /* respawn budget (token bucket) */
     char name[GI_MSG_MAX_NAME + 1];
+    char *batch_root; /* per-job batch directories */
+    double next_sweep;
 
     /* The session. */
     int fd;
@@ -139,6 +144,28 @@ static void def_drop(worker *w, uint64_t id)
         }
 }
 
+/* The job's batch directory (malloc'ed). */
+static char *def_batch_dir(const worker *w, const job_def *d)
+{
+    return gi_batch_dir_path(w->batch_root, d->id, d->text);
+}
+
+/* Removes the batch directories idle for long, except those of the jobs
+ * this worker has now. */
+static void sweep_batches(worker *w)
+{
+    char **keep = gi_xcalloc(w->def_count + 1, sizeof *keep);
+    for (size_t i = 0; i < w->def_count; i++)
+        keep[i] = def_batch_dir(w, &w->defs[i]);
+    int n = gi_batch_dir_sweep(w->batch_root, GI_BATCH_DIR_MAX_AGE_S, (const char *const *)keep);
+    if (n)
+        gi_info("removed %d batch directories idle for more than %.0f days", n,
+                GI_BATCH_DIR_MAX_AGE_S / 86400.0);
+    for (size_t i = 0; i < w->def_count; i++)
+        free(keep[i]);
+    free(keep);
+}
+
 static void def_add(worker *w, gi_msg_job *m)
 {
     def_drop(w, m->job_id);
@@ -160,6 +187,11 @@ static void def_add(worker *w, gi_msg_job *m)
     d->manifest = m->manifest;
     m->file = m->text = NULL;
     gi_manifest_init(&m->manifest);
+    /* The coordinator still runs this job: what its directory holds (from
+     * before a reconnection or a restart of this worker) is worth keeping. */
+    char *dir = def_batch_dir(w, d);
+    gi_batch_dir_touch(dir);
+    free(dir);
 }
 
 static gi_msg_taskref ref_of(uint64_t job, const gi_task *t)
@@ -438,8 +470,18 @@ static void on_cancel(worker *w, const gi_frame *fr)
             running++;
         }
     }
-    if (all)
+    if (all) {
+        /* The job is over on the coordinator: its batch files are useless. */
+        const job_def *d = def_find(w, m.job_id);
+        if (d) {
+            char *dir = def_batch_dir(w, d);
+            gi_error derr;
+            if (gi_batch_dir_remove(dir, &derr))
+                gi_warn("%s", derr.msg);
+            free(dir);
+        }
         def_drop(w, m.job_id);
+    }
     gi_info("job %llu %s: %u queued and %u running tasks dropped", (unsigned long long)m.job_id,
             all ? "is over" : "task cancelled", queued, running);
 }
@@ -787,6 +829,10 @@ static int session(worker *w, gi_error *err)
             break;
         }
         drain_frames(w); /* frames that arrived with the handshake's last one */
+        if (now >= w->next_sweep) {
+            sweep_batches(w);
+            w->next_sweep = now + SWEEP_EVERY_S;
+        }
         respawn(w, now);
         assign(w);
         if (now >= w->next_hb) {
@@ -845,8 +891,20 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
     }
     if (gi_asset_cache_open(&w.cache, o->cache_dir, o->cache_max, err))
         return -1;
-    if (gi_pool_start(&w.pool, o->procs, err)) {
+    w.batch_root = o->batch_dir ? gi_xstrdup(o->batch_dir) : gi_path_join(o->cache_dir, "batches");
+    if (gi_mkdirs(w.batch_root, err)) {
+        gi_error_prefix(err, "batch directory");
         gi_asset_cache_close(&w.cache);
+        free(w.batch_root);
+        return -1;
+    }
+    /* Left by an earlier run of this worker: kept while recent (the
+     * coordinator may send the same jobs again), swept when idle for long. */
+    sweep_batches(&w);
+    w.next_sweep = now_s() + SWEEP_EVERY_S;
+    if (gi_pool_start(&w.pool, o->procs, w.batch_root, err)) {
+        gi_asset_cache_close(&w.cache);
+        free(w.batch_root);
         return -1;
     }
     w.tokens = 2.0 * o->procs + 4;
@@ -885,6 +943,7 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
     }
     gi_pool_stop(&w.pool);
     gi_asset_cache_close(&w.cache);
+    free(w.batch_root);
     free(w.defs);
     free(w.q);
     free(w.waits);

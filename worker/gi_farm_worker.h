@@ -14,6 +14,10 @@
  *     children wait for it);
  *   - sends HEARTBEATs listing the tasks it holds (renewing their leases) and
  *     gives up on a coordinator silent for 4 leases;
+ *   - gives each job a batch directory (gi_batch_dir.h) that its children
+ *     share; removes it when the coordinator says the job is over (CANCEL
+ *     of all its tasks), and sweeps directories idle for
+ *     GI_BATCH_DIR_MAX_AGE_S at start-up and hourly;
  *   - on SIGTERM drains: hands its queued tasks back (DRAIN), finishes the
  *     running ones (killing them after drain_s), says BYE and exits; a second
  *     SIGTERM stops at once.
@@ -32,6 +36,7 @@ typedef struct gi_worker_opts {
     const char *name;      /* NULL: the host name */
     const char *cache_dir;
     uint64_t cache_max;    /* bytes; 0 = unbounded */
+    const char *batch_dir; /* root of per-job batch directories; NULL: <cache_dir>/batches */
     int procs;             /* pool children */
     int queue;             /* extra tasks queued beyond procs */
     double drain_s;        /* time allowed to finish running tasks on SIGTERM */

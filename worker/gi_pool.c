@@ -16,9 +16,10 @@
 #include "gi_log.h"
 #include "gi_netio.h"
 
-int gi_pool_start(gi_pool *p, int count, gi_error *err)
+int gi_pool_start(gi_pool *p, int count, const char *batch_root, gi_error *err)
 {
     memset(p, 0, sizeof *p);
+    p->batch_root = batch_root;
     if (count < 1 || count > 1024)
         return gi_fail(err, GI_EINVAL, "pool size %d is out of range [1, 1024]", count);
     p->count = count;
@@ -61,7 +62,7 @@ int gi_pool_spawn(gi_pool *p, int i, gi_error *err)
             close(p->extra_fds[j]);
         signal(SIGINT, SIG_DFL);
         signal(SIGTERM, SIG_DFL);
-        _exit(gi_child_main(sv[1]));
+        _exit(gi_child_main(sv[1], p->batch_root));
     }
     close(sv[1]);
     k->pid = pid;

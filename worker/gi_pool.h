@@ -51,9 +51,13 @@ typedef struct gi_pool {
     int extra_fds[8]; /* closed in children after fork (e.g. a coordinator socket) */
     int extra_fd_count;
     unsigned spawned; /* children forked so far */
+    /* Root of the host's per-job batch directories, passed to every child
+     * (NULL: none; the string must outlive the pool). */
+    const char *batch_root;
 } gi_pool;
 
-int gi_pool_start(gi_pool *p, int count, gi_error *err);
+/* batch_root: see gi_pool.batch_root (NULL: none). */
+int gi_pool_start(gi_pool *p, int count, const char *batch_root, gi_error *err);
 /* (Re)forks child i. */
 int gi_pool_spawn(gi_pool *p, int i, gi_error *err);
 /* Asks children to exit (BYE), then reaps them (SIGKILL after a grace time). */

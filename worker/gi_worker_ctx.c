@@ -1,8 +1,11 @@
 /* gi_worker_ctx: loading a job in a worker process and running its tasks. */
 #include "gi_worker_ctx.h"
 
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+#include "gi_fs.h"
 
 int gi_worker_ctx_load(gi_worker_ctx *ctx, uint64_t job_id, const char *file,
                        const char *text, const gi_manifest *manifest,
@@ -38,6 +41,7 @@ void gi_worker_ctx_free(gi_worker_ctx *ctx)
         ctx->method_state_free(ctx->method_state);
     gi_rt_free(&ctx->rt);
     gi_job_free(&ctx->job);
+    free(ctx->batch_dir);
     memset(ctx, 0, sizeof *ctx);
 }
 
@@ -53,6 +57,20 @@ int gi_worker_blob(gi_worker_ctx *ctx, const char hash[GI_HASH_HEX], const gi_bu
         return gi_error_prefix(err, "published data %.12s", hash);
     *out = gi_asset_store_get(ctx->store, hash);
     return *out ? 0 : gi_fail(err, GI_EIO, "published data %.12s was not delivered", hash);
+}
+
+int gi_worker_batch_dir(gi_worker_ctx *ctx, const char **dir, gi_error *err)
+{
+    *dir = NULL;
+    if (!ctx->batch_dir)
+        return gi_fail(err, GI_EIO, "job %llu: this host has no batch directory",
+                       (unsigned long long)ctx->job_id);
+    /* Children race to create it: mkdir -p takes EEXIST as success. */
+    if (!ctx->batch_dir_made && gi_mkdirs(ctx->batch_dir, err))
+        return gi_error_prefix(err, "batch directory");
+    ctx->batch_dir_made = 1;
+    *dir = ctx->batch_dir;
+    return 0;
 }
 
 int gi_worker_run_task(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result,

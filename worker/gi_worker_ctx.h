@@ -22,6 +22,12 @@ struct gi_worker_ctx {
     /* Assets and published data: bytes by hash, fetched on demand. */
     gi_asset_store *store;
     gi_manifest_source source;
+    /* This job's directory on this host's disk for method caches, shared by
+     * the host's pool children and removed by the host process when the job
+     * ends (docs/farm.md, "Batch directories"); NULL when the host gives
+     * none. Use gi_worker_batch_dir, which creates it. */
+    char *batch_dir;
+    int batch_dir_made;
     /* Filled by run(): the method's work units; rays come from rt. */
     gi_task_stats stats;
 };
@@ -37,6 +43,12 @@ void gi_worker_ctx_free(gi_worker_ctx *ctx);
 /* Bytes the coordinator published with gi_job_publish (fetched once). */
 int gi_worker_blob(gi_worker_ctx *ctx, const char hash[GI_HASH_HEX], const gi_buf **out,
                    gi_error *err);
+
+/* This job's batch directory, created (mkdir -p) on first use: *dir is
+ * ctx->batch_dir. Files inside are the method's (write them to a temporary
+ * name and rename: another child of the host may read them). GI_EIO when the
+ * host gives no directory or it cannot be created. */
+int gi_worker_batch_dir(gi_worker_ctx *ctx, const char **dir, gi_error *err);
 
 /* Runs one task: stats are filled (rays, samples, seconds). */
 int gi_worker_run_task(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result,

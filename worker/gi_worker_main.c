@@ -1,6 +1,6 @@
 /* gi-worker: a render host of the farm (docs/farm.md).
  *
- *   gi-worker --connect HOST:PORT [--procs N] [--cache DIR] [options]
+ *   gi-worker --connect HOST:PORT [--procs N] [--cache DIR] [--batch-dir DIR] [options]
  *
  * The farm secret comes from --secret-file FILE, GI_FARM_SECRET_FILE or
  * GI_FARM_SECRET, never from the command line. SIGTERM drains (queued tasks
@@ -32,6 +32,8 @@ static void usage(FILE *out)
             "  --queue N            tasks queued beyond the running ones (default procs/2, >= 1)\n"
             "  --cache DIR          asset cache (default $XDG_CACHE_HOME/gi-worker or ~/.cache/gi-worker)\n"
             "  --cache-max BYTES    cache size bound (default 10G; K, M, G, T suffixes)\n"
+            "  --batch-dir DIR      per-job batch directories (default CACHE/batches; not\n"
+            "                       bounded by --cache-max)\n"
             "  --name NAME          name shown by `gi workers` (default: the host name)\n"
             "  --secret-file FILE   farm secret (or GI_FARM_SECRET_FILE, GI_FARM_SECRET)\n"
             "  --drain-seconds S    time to finish running tasks on SIGTERM (default 120)\n"
@@ -88,7 +90,8 @@ int main(int argc, char **argv)
             return 2;
         }
         const char *names[] = {"--connect", "--procs", "--queue", "--cache", "--cache-max",
-                               "--name", "--secret-file", "--drain-seconds", "--backoff-max"};
+                               "--name", "--secret-file", "--drain-seconds", "--backoff-max",
+                               "--batch-dir"};
         size_t k;
         for (k = 0; k < GI_ARRAY_LEN(names); k++)
             if ((rc = gi_args_take(argc, argv, &i, names[k], &v)) != 0)
@@ -113,6 +116,7 @@ int main(int argc, char **argv)
         case 6: secret_file = v; break;
         case 7: ok = gi_args_number(v, 0, 86400, &o.drain_s) == 0; break;
         case 8: ok = gi_args_number(v, 0.1, 3600, &o.backoff_max_s) == 0; break;
+        case 9: ok = v[0] != 0; o.batch_dir = v; break;
         }
         if (!ok) {
             fprintf(stderr, "gi-worker: %s: \"%s\" is out of range\n", names[k], v);
