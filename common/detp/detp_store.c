@@ -131,7 +131,7 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
     const char *why = NULL;
     if (memcmp(h.magic, GI_DETP_STORE_MAGIC, 4) != 0)
         why = "bad magic";
-    else if (h.header_crc != header_crc(&h))
+    else if (h.header_crc != header_crc(&h) || h.reserved[0] || h.reserved[1] || h.reserved[2])
         why = "bad header CRC";
     else if (h.version != GI_DETP_STORE_VERSION || h.endian != GI_DETP_STORE_ENDIAN ||
              h.record_bytes != sizeof(gi_detp_segment))
