@@ -9,7 +9,6 @@
 #include <unistd.h>
 
 #include "detp/detp_anim.h"
-#include "gi_fs.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -18,7 +17,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         snprintf(path, sizeof path, "/tmp/fuzz_detp_store.%ld", (long)getpid());
     gi_error err;
     gi_error_clear(&err);
-    if (gi_write_file_atomic(path, data, size, &err))
+    FILE *f = fopen(path, "wb"); /* no fsync: thousands of runs a second */
+    if (!f || fwrite(data, 1, size, f) != size || fclose(f) != 0)
         abort();
     gi_detp_store_mapping m;
     int rc = gi_detp_store_map(path, &m, &err);
