@@ -28,7 +28,7 @@ typedef struct gi_rt {
     RTCDevice device;
     RTCScene scene;      /* what rays are traced against */
     RTCScene statics;    /* two-level only: the objects that never move, one instance in scene */
-    RTCScene *alone;     /* per object: a scene of that object alone (gi_rt_object_scene), or NULL */
+    RTCScene *alone;     /* per object: the object alone (gi_rt_object_scene), or NULL */
     const gi_scene *src; /* geometry buffers are shared with the gi_scene */
     uint64_t rays;       /* rays traced (closest hit + occlusion) */
     int failed;          /* set by the Embree error callback */

@@ -120,7 +120,10 @@ static inline int gi_detp_crosses(const gi_detp_disc *D, float r2, const gi_detp
  * of `energy`; each crossing adds sign * llround(energy_c * inv_unit). Integer
  * sums do not depend on the order or the split of the segments, so
  * "frame 0 + new - old" equals a recompute over the final segments bit for
- * bit. `hits` then counts modulo 2^32 (a removal adds (uint32_t)-1). */
+ * bit. `hits` then counts modulo 2^32 (a removal adds (uint32_t)-1). Only
+ * the estimators that go through gi_detp_accum_add (basic, Sphere Cache,
+ * multilist, octree, Embree DI) support it: impact count and the photon map
+ * write irradiance to `energy` themselves. */
 typedef struct gi_detp_accum {
     uint32_t count;
     double *energy; /* 3 per disc (double mode) */

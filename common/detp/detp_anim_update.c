@@ -99,6 +99,16 @@ static void append(gi_detp_segments *s, const gi_detp_segment *v, size_t n)
         *gi_detp_segments_push(s) = v[i];
 }
 
+/* Room for n more without a doubling realloc's copies (next ends up about
+ * as long as prev). */
+static void reserve(gi_detp_segments *s, size_t n)
+{
+    if (s->cap - s->count < n) {
+        s->cap = s->count + n;
+        s->v = gi_xrealloc(s->v, s->cap * sizeof *s->v);
+    }
+}
+
 static int same_float(float a, float b)
 {
     return memcmp(&a, &b, sizeof a) == 0;
@@ -112,13 +122,17 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
     const gi_detp_segment *prev = in->prev;
     size_t n = in->prev_count;
     uint32_t m0 = in->mobile_first_tri, mn = in->mobile_tri_count;
+    if (!in->mobile_scene || !tr)
+        return gi_fail(err, GI_EINTERNAL, "animation update: no tracer or mobile scene");
     double t_start = now(), t_retrace = 0.0;
+    reserve(next, n + n / 16 + 1024);
     for (size_t i = 0; i < n;) {
         uint64_t photon = prev[i].photon;
         size_t j = i + 1;
         while (j < n && prev[j].photon == photon) {
             if (prev[j].bounce != prev[j - 1].bounce + 1)
-                return gi_fail(err, GI_EINTERNAL, "animation update: segment %zu breaks its path", j);
+                return gi_fail(err, GI_EINTERNAL, "animation update: segment %zu breaks its path",
+                               j);
             j++;
         }
         if (j < n && prev[j].photon < photon)
@@ -227,7 +241,8 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
             if (gi_detp_segment_meets_sphere(&segs->v[j], b.c, rr))
                 *gi_detp_segments_push(&near) = segs->v[j];
         uint32_t *order = gi_detp_query_order(&d, sc->order, 0, err);
-        rc = order ? gi_detp_sphere_cache_root(&d, order, &near, sc, b.c, r0, &view, st, err) : -1;
+        rc = order ? gi_detp_sphere_cache_root(&d, order, &near, sc, b.c, r0, &view, st, err)
+                   : -1;
         free(order);
         gi_detp_segments_free(&near);
     } else {
