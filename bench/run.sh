@@ -14,6 +14,8 @@ echo "== detp_tree: thesis Tables A.2-A.4 on a generated tree scene (one core; m
 TREE=$(mktemp -d "${TMPDIR:-/tmp}/detp-tree.XXXXXX")
 "$BIN/scenes/gi_scenegen" tree "$TREE"
 "$BIN/bench/detp_tree" "$TREE/scene.json" 409600 3
+echo "== anim_rt: moving the tree scene's torus (update_object, one incremental frame vs full retrace)"
+"$BIN/bench/anim_rt" "$TREE/scene.json" 400000 21
 rm -rf "$TREE"
 echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minutes)"
 sh bench/detp_memory.sh "$BIN" 5000000 50000000

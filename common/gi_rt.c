@@ -1,7 +1,9 @@
-/* gi_rt: Embree device and scene lifetime, error callback. */
+/* gi_rt: Embree device and scene lifetime, error callback, the two-level
+ * layout for scenes with mobile objects (gi_rt.h). */
 #include "gi_rt.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void rt_error_callback(void *user, enum RTCError code, const char *str)
@@ -36,6 +38,13 @@ static RTCGeometry new_object_geometry(gi_rt *rt, const gi_scene *s, uint32_t ob
     return g;
 }
 
+static void attach_object(gi_rt *rt, RTCScene scene, uint32_t obj)
+{
+    RTCGeometry g = new_object_geometry(rt, rt->src, obj);
+    rtcAttachGeometryByID(scene, g, obj);
+    rtcReleaseGeometry(g);
+}
+
 int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
 {
     memset(rt, 0, sizeof *rt);
@@ -45,12 +54,29 @@ int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
         return gi_fail(err, GI_EINTERNAL, "Embree: cannot create a device (error %d)",
                        (int)rtcGetDeviceError(NULL));
     rtcSetDeviceErrorFunction(rt->device, rt_error_callback, rt);
+    int two_level = 0;
+    for (uint32_t i = 0; i < s->object_count; i++)
+        two_level |= s->objects[i].mobile;
     rt->scene = rtcNewScene(rt->device);
-    rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
-    for (uint32_t i = 0; i < s->object_count && !rt->failed; i++) {
-        RTCGeometry g = new_object_geometry(rt, s, i);
-        rtcAttachGeometryByID(rt->scene, g, i);
-        rtcReleaseGeometry(g);
+    if (!two_level) {
+        rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
+        for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
+            attach_object(rt, rt->scene, i);
+    } else {
+        rt->statics = rtcNewScene(rt->device);
+        rtcSetSceneBuildQuality(rt->statics, RTC_BUILD_QUALITY_HIGH);
+        for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
+            attach_object(rt, s->objects[i].mobile ? rt->scene : rt->statics, i);
+        rtcCommitScene(rt->statics);
+        /* The top level changes every frame: a quick build of a few entries. */
+        rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_LOW);
+        RTCGeometry inst = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(inst, rt->statics);
+        const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+        rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+        rtcCommitGeometry(inst);
+        rtcAttachGeometryByID(rt->scene, inst, s->object_count); /* past every object's ID */
+        rtcReleaseGeometry(inst);
     }
     if (!rt->failed)
         rtcCommitScene(rt->scene);
@@ -63,21 +89,68 @@ int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
 
 void gi_rt_free(gi_rt *rt)
 {
+    if (rt->alone) {
+        for (uint32_t i = 0; i < rt->src->object_count; i++)
+            if (rt->alone[i])
+                rtcReleaseScene(rt->alone[i]);
+        free(rt->alone);
+    }
     if (rt->scene)
         rtcReleaseScene(rt->scene);
+    if (rt->statics)
+        rtcReleaseScene(rt->statics);
     if (rt->device)
         rtcReleaseDevice(rt->device);
-    rt->scene = NULL;
+    rt->alone = NULL;
+    rt->scene = rt->statics = NULL;
     rt->device = NULL;
+}
+
+static void refit(RTCScene scene, uint32_t object)
+{
+    RTCGeometry g = rtcGetGeometry(scene, object);
+    rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(g);
+    rtcCommitScene(scene);
 }
 
 int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err)
 {
     if (object >= rt->src->object_count)
         return gi_fail(err, GI_EINTERNAL, "gi_rt_update_object: no object %u", object);
-    RTCGeometry g = rtcGetGeometry(rt->scene, object);
-    rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
-    rtcCommitGeometry(g);
-    rtcCommitScene(rt->scene);
+    if (rt->statics && !rt->src->objects[object].mobile) {
+        /* A static object moved after all: rebuild the lower level and
+         * tell the instance. */
+        refit(rt->statics, object);
+        RTCGeometry inst = rtcGetGeometry(rt->scene, rt->src->object_count);
+        rtcCommitGeometry(inst);
+        rtcCommitScene(rt->scene);
+    } else {
+        refit(rt->scene, object);
+    }
+    if (rt->alone && rt->alone[object])
+        refit(rt->alone[object], object);
     return rt_check(rt, err, "updating a moved object");
+}
+
+RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err)
+{
+    if (object >= rt->src->object_count) {
+        gi_fail(err, GI_EINTERNAL, "gi_rt_object_scene: no object %u", object);
+        return NULL;
+    }
+    if (!rt->alone)
+        rt->alone = gi_xcalloc(rt->src->object_count, sizeof *rt->alone);
+    if (!rt->alone[object]) {
+        RTCScene sc = rtcNewScene(rt->device);
+        rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_MEDIUM);
+        attach_object(rt, sc, object);
+        rtcCommitScene(sc);
+        if (rt_check(rt, err, "building an object's own scene")) {
+            rtcReleaseScene(sc);
+            return NULL;
+        }
+        rt->alone[object] = sc;
+    }
+    return rt->alone[object];
 }

@@ -4,7 +4,15 @@
  * inherited), single-threaded: a pool already runs one process per core.
  * Each scene object is its own triangle geometry whose geomID is the object
  * index, so objects can move on their own later; a hit reports the global
- * triangle index. Embree errors go through an error callback into gi_error. */
+ * triangle index. Embree errors go through an error callback into gi_error.
+ *
+ * A scene with mobile objects is two-level: the static objects are one
+ * scene, built once with high quality and placed in the top scene as one
+ * identity instance, next to the mobile objects' geometries. Moving an
+ * object then refits it and rebuilds a top level of a few entries instead
+ * of the whole BVH. Hits inside the instance report the object's geomID
+ * all the same. Scenes without mobile objects stay one level (their hits
+ * are bit for bit what they were). */
 #ifndef GI_RT_H
 #define GI_RT_H
 
@@ -18,7 +26,9 @@
 
 typedef struct gi_rt {
     RTCDevice device;
-    RTCScene scene;
+    RTCScene scene;      /* what rays are traced against */
+    RTCScene statics;    /* two-level only: the objects that never move, one instance in scene */
+    RTCScene *alone;     /* per object: the object alone (gi_rt_object_scene), or NULL */
     const gi_scene *src; /* geometry buffers are shared with the gi_scene */
     uint64_t rays;       /* rays traced (closest hit + occlusion) */
     int failed;          /* set by the Embree error callback */
@@ -36,8 +46,13 @@ typedef struct gi_hit {
  * must outlive the gi_rt (its vertex and index arrays are shared). */
 int gi_rt_create(gi_rt *rt, const gi_scene *scene, gi_error *err);
 void gi_rt_free(gi_rt *rt);
-/* Re-reads the object's vertices from the gi_scene (it moved) and rebuilds. */
+/* Re-reads the object's vertices from the gi_scene (it moved) and rebuilds
+ * (and its gi_rt_object_scene, if made). */
 int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err);
+/* A scene holding the object alone, at its current pose (the animation
+ * tests segments against the mobile only): made on first use, kept in step
+ * by gi_rt_update_object, owned by rt. NULL on failure (err says why). */
+RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err);
 
 /* Closest hit along org + t dir, t in [tnear, tfar]; dir need not be unit
  * (t is then in units of |dir|). Returns 1 on a hit, 0 on a miss. */

@@ -15,6 +15,7 @@
 #ifndef GI_DETP_H
 #define GI_DETP_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -113,18 +114,45 @@ static inline int gi_detp_crosses(const gi_detp_disc *D, float r2, const gi_detp
 
 /* Per-disc sums: energy (RGB, double) and the number of crossings. Every
  * estimator adds a disc's contributions in segment order, so the sums are
- * bit-identical whichever estimator found the pairs. */
+ * bit-identical whichever estimator found the pairs.
+ *
+ * Fixed-point mode (animation, issue 7): `fixed` (3 int64 per disc) instead
+ * of `energy`; each crossing adds sign * llround(energy_c * inv_unit). Integer
+ * sums do not depend on the order or the split of the segments, so
+ * "frame 0 + new - old" equals a recompute over the final segments bit for
+ * bit. `hits` then counts modulo 2^32 (a removal adds (uint32_t)-1). Only
+ * the estimators that go through gi_detp_accum_add (basic, Sphere Cache,
+ * multilist, octree, Embree DI) support it: impact count and the photon map
+ * write irradiance to `energy` themselves. */
 typedef struct gi_detp_accum {
     uint32_t count;
-    double *energy; /* 3 per disc */
+    double *energy; /* 3 per disc (double mode) */
     uint32_t *hits;
+    int64_t *fixed;  /* 3 per disc (fixed-point mode), else NULL */
+    double inv_unit; /* 1 / unit (fixed-point mode) */
+    int sign;        /* +1 adds segments, -1 removes them (fixed-point mode) */
 } gi_detp_accum;
 
 int gi_detp_accum_init(gi_detp_accum *a, uint32_t count, gi_error *err);
+/* A fixed-point accumulator (energy == NULL) of value unit per count,
+ * sign +1. */
+int gi_detp_accum_init_fixed(gi_detp_accum *a, uint32_t count, double unit, gi_error *err);
+/* The animation's fixed-point unit: one photon's luminance power
+ * (total_power / photons_total) times 2^-32. */
+double gi_detp_fixed_unit(double total_power, uint64_t photons_total);
 void gi_detp_accum_clear(gi_detp_accum *a);
 void gi_detp_accum_free(gi_detp_accum *a);
 static inline void gi_detp_accum_add(gi_detp_accum *a, uint32_t disc, const gi_detp_segment *s)
 {
+    if (__builtin_expect(a->fixed != NULL, 0)) {
+        int64_t *f = &a->fixed[3 * (size_t)disc];
+        int64_t sg = a->sign;
+        f[0] += sg * (int64_t)llround((double)s->energy.x * a->inv_unit);
+        f[1] += sg * (int64_t)llround((double)s->energy.y * a->inv_unit);
+        f[2] += sg * (int64_t)llround((double)s->energy.z * a->inv_unit);
+        a->hits[disc] += (uint32_t)sg;
+        return;
+    }
     double *e = &a->energy[3 * (size_t)disc];
     e[0] += s->energy.x;
     e[1] += s->energy.y;
@@ -166,11 +194,16 @@ typedef struct gi_detp_tracer {
     int max_bounces;        /* reflections per path; -1: until absorbed */
     int second_hit;         /* trace t_second (artifact control rule 1) */
     double select_shift;    /* Cranley-Patterson shift of the emitter selection */
+    uint32_t frame;         /* animation frame (0: still jobs; set after init) */
 } gi_detp_tracer;
 
 /* Random numbers of photon p at bounce b come from gi_rng (seed,
  * GI_DETP_STREAM_PHOTON + p, b): a path depends only on (job, p), and a
- * retrace from bounce b reuses the numbers of the bounces from b on. */
+ * retrace from bounce b reuses the numbers of the bounces from b on.
+ * Reflections traced at animation frame f > 0 draw from sample
+ * (f << 13) | b instead (b < GI_DETP_MAX_PATH = 2^12): a suffix retraced
+ * at frame f is new, but the same for every worker; frame 0 is the still
+ * stream. Emission (b = 0) never depends on the frame. */
 #define GI_DETP_STREAM_PHOTON (1ull << 62)
 /* Paths are cut here even if never absorbed (reflectance < 1 makes this
  * unreachable in practice; it bounds a path's memory). */
@@ -244,6 +277,12 @@ typedef struct gi_detp_sc_params {
 int gi_detp_sphere_cache(const gi_detp_discs *d, const uint32_t *order,
                          const gi_detp_segments *s, const gi_detp_sc_params *p, gi_vec3 lo,
                          gi_vec3 hi, gi_detp_accum *acc, gi_detp_stats *st, gi_error *err);
+/* The same with the root sphere given (it must hold every disc whole): the
+ * animation roots a mobile's cache at its bounding sphere (thesis 4.7). */
+int gi_detp_sphere_cache_root(const gi_detp_discs *d, const uint32_t *order,
+                              const gi_detp_segments *s, const gi_detp_sc_params *p,
+                              gi_vec3 c0, float r0, gi_detp_accum *acc, gi_detp_stats *st,
+                              gi_error *err);
 int gi_detp_multilist(const gi_detp_discs *d, const uint32_t *order, const gi_detp_segments *s,
                       const gi_detp_sc_params *p, gi_vec3 lo, gi_vec3 hi, gi_detp_accum *acc,
                       gi_detp_stats *st, gi_error *err);

@@ -55,6 +55,7 @@ void gi_detp_tracer_init(gi_detp_tracer *tr, gi_rt *rt, const gi_scene *scene, u
     gi_rng r;
     gi_rng_init(&r, seed, GI_DETP_STREAM_PHOTON - 1, 0);
     tr->select_shift = gi_rng_double(&r);
+    tr->frame = 0;
 }
 
 void gi_detp_trace_photon(const gi_detp_tracer *tr, uint64_t photon, gi_detp_segments *out)
@@ -119,7 +120,8 @@ void gi_detp_trace_from(const gi_detp_tracer *tr, uint64_t photon, uint32_t boun
         gi_vec3 reflected = gi_mul(energy, m->diffuse);
         float q = lum > 0.0f ? gi_luminance(reflected) / lum : 0.0f;
         gi_rng rng;
-        gi_rng_init(&rng, tr->seed, GI_DETP_STREAM_PHOTON + photon, bounce + 1);
+        gi_rng_init(&rng, tr->seed, GI_DETP_STREAM_PHOTON + photon,
+                    (tr->frame << 13) | (bounce + 1));
         if (!(gi_rng_float(&rng) < q))
             return; /* absorbed */
         energy = gi_scale(reflected, 1.0f / q);

@@ -112,15 +112,42 @@ int gi_detp_accum_init(gi_detp_accum *a, uint32_t count, gi_error *err)
     return 0;
 }
 
+int gi_detp_accum_init_fixed(gi_detp_accum *a, uint32_t count, double unit, gi_error *err)
+{
+    memset(a, 0, sizeof *a);
+    if (!(unit > 0.0) || !isfinite(unit))
+        return gi_fail(err, GI_EINVAL, "fixed-point accumulator: bad unit %g", unit);
+    a->fixed = gi_try_calloc((size_t)count * 3 + 1, sizeof *a->fixed, err, "disc sums");
+    a->hits = gi_try_calloc((size_t)count + 1, sizeof *a->hits, err, "disc hit counts");
+    if (!a->fixed || !a->hits) {
+        gi_detp_accum_free(a);
+        return -1;
+    }
+    a->count = count;
+    a->inv_unit = 1.0 / unit;
+    a->sign = 1;
+    return 0;
+}
+
+double gi_detp_fixed_unit(double total_power, uint64_t photons_total)
+{
+    return ldexp(total_power / (double)(photons_total ? photons_total : 1), -32);
+}
+
 void gi_detp_accum_clear(gi_detp_accum *a)
 {
-    memset(a->energy, 0, (size_t)a->count * 3 * sizeof *a->energy);
-    memset(a->hits, 0, (size_t)a->count * sizeof *a->hits);
+    if (a->energy)
+        memset(a->energy, 0, (size_t)a->count * 3 * sizeof *a->energy);
+    if (a->fixed)
+        memset(a->fixed, 0, (size_t)a->count * 3 * sizeof *a->fixed);
+    if (a->hits)
+        memset(a->hits, 0, (size_t)a->count * sizeof *a->hits);
 }
 
 void gi_detp_accum_free(gi_detp_accum *a)
 {
     free(a->energy);
+    free(a->fixed);
     free(a->hits);
     memset(a, 0, sizeof *a);
 }

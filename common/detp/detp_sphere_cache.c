@@ -29,10 +29,22 @@ int gi_detp_sphere_cache(const gi_detp_discs *d, const uint32_t *order,
                          const gi_detp_segments *s, const gi_detp_sc_params *p, gi_vec3 lo,
                          gi_vec3 hi, gi_detp_accum *acc, gi_detp_stats *st, gi_error *err)
 {
+    gi_vec3 c;
+    float r;
+    gi_detp_sphere_root(lo, hi, d->radius, &c, &r);
+    return gi_detp_sphere_cache_root(d, order, s, p, c, r, acc, st, err);
+}
+
+int gi_detp_sphere_cache_root(const gi_detp_discs *d, const uint32_t *order,
+                              const gi_detp_segments *s, const gi_detp_sc_params *p,
+                              gi_vec3 c0, float r0, gi_detp_accum *acc, gi_detp_stats *st,
+                              gi_error *err)
+{
     uint32_t max_levels = p->max_levels < GI_DETP_MAX_LEVELS - 1 ? p->max_levels
                                                                   : GI_DETP_MAX_LEVELS - 1;
     level lv[GI_DETP_MAX_LEVELS] = {{{0, 0, 0}, 0, NULL, 0, 0}};
-    gi_detp_sphere_root(lo, hi, d->radius, &lv[0].c, &lv[0].r);
+    lv[0].c = c0;
+    lv[0].r = r0;
     lv[0].n = s->count;
     float slack = gi_detp_sphere_slack(lv[0].r);
     uint32_t top = 0;

@@ -1,0 +1,130 @@
+/* detp_anim: quasi-static animation (issue 7, thesis ch. 4).
+ *
+ * A batch's photon paths are traced once at frame 0 and then updated frame
+ * by frame (thesis Fig. 4.2): only the paths that meet the mobile object at
+ * its old or new pose are retraced. The segments a frame drops (old_list)
+ * and adds (new_list) give the static vertices' change, summed in fixed
+ * point (gi_detp_accum_init_fixed) so that frame 0 + all deltas equals a
+ * recompute over the frame's segments bit for bit; the mobile's own
+ * vertices are estimated from scratch each frame (thesis 4.5).
+ *
+ * Between frames a batch's segments live in the batch store: one file per
+ * (batch, frame) in the worker's batch directory (detp_store.c). */
+#ifndef GI_DETP_ANIM_H
+#define GI_DETP_ANIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "detp.h"
+
+/* ---- Batch store (detp_store.c) ------------------------------------- */
+
+#define GI_DETP_STORE_MAGIC "GIDS"
+#define GI_DETP_STORE_VERSION 1u
+#define GI_DETP_STORE_ENDIAN 0x01020304u /* written natively: a foreign host reads it swapped */
+
+/* The file's first 64 bytes; the records (raw native gi_detp_segment,
+ * 64 bytes each, path-ordered: photon ascending, bounce 0, 1, ... within a
+ * path) follow. The caller fills p0, p1, frame; the writer the rest. */
+typedef struct gi_detp_store_header {
+    char magic[4];         /* "GIDS" */
+    uint32_t version;      /* GI_DETP_STORE_VERSION */
+    uint32_t endian;       /* GI_DETP_STORE_ENDIAN */
+    uint32_t record_bytes; /* sizeof(gi_detp_segment) */
+    uint64_t p0, p1;       /* the batch's photons [p0, p1) */
+    uint64_t count;        /* segments */
+    uint32_t frame;
+    uint32_t records_crc;  /* CRC32C of the records */
+    uint32_t header_crc;   /* CRC32C of the bytes before this field */
+    uint32_t reserved[3];  /* zero */
+} gi_detp_store_header;
+
+typedef struct gi_detp_store_mapping {
+    gi_detp_store_header header;
+    const gi_detp_segment *seg; /* count records, read-only (mmap'ed) */
+    size_t count;
+    void *base; /* mapping (NULL if none) */
+    size_t len;
+} gi_detp_store_mapping;
+
+/* Writes the segments behind a header (temp name, fsync, rename: a reader
+ * sees the old file, no file or the whole new one). */
+int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
+                        const gi_detp_segments *s, gi_error *err);
+/* Maps a store file. Returns 1 if it is valid (size, header, CRCs, records
+ * path-ordered within [p0, p1) with finite origins, directions and
+ * energies), 0 if it is missing, truncated or invalid (regenerate it; err
+ * says why), -1 on an I/O error. The caller checks m->header's p0, p1,
+ * frame against what it expects. */
+int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err);
+void gi_detp_store_unmap(gi_detp_store_mapping *m);
+/* A read-only gi_detp_segments view of a mapping (cap 0: never push). */
+static inline gi_detp_segments gi_detp_store_view(const gi_detp_store_mapping *m)
+{
+    gi_detp_segments s = {(gi_detp_segment *)m->seg, m->count, 0};
+    return s;
+}
+
+/* ---- Incremental update (detp_anim_update.c) ------------------------ */
+
+/* Bounding sphere of the mobile at one pose. */
+typedef struct gi_detp_mobile_pose {
+    gi_vec3 c;
+    float r;
+} gi_detp_mobile_pose;
+
+/* The bounding sphere of an object at its current positions: centre = the
+ * centre of its vertices' box, radius = the largest distance to a vertex. */
+gi_detp_mobile_pose gi_detp_object_sphere(const gi_scene *s, uint32_t object);
+
+typedef struct gi_detp_anim_update_in {
+    const gi_detp_segment *prev; /* the previous frame's segments, path-ordered */
+    size_t prev_count;
+    const gi_detp_tracer *tracer; /* rt at the NEW pose, frame = the new frame */
+    uint32_t mobile_first_tri, mobile_tri_count; /* the mobile's global triangles */
+    gi_detp_mobile_pose old_pose, new_pose;
+    RTCScene mobile_scene; /* the mobile alone at the new pose (gi_rt_object_scene) */
+    gi_detp_artifact artifact; /* for gi_detp_set_extent of new segments */
+    float eps;
+} gi_detp_anim_update_in;
+
+typedef struct gi_detp_update_stats {
+    uint64_t paths;          /* paths seen */
+    uint64_t segments;       /* segments tested */
+    uint64_t sphere_passes;  /* bounding-sphere pre-tests passed (new pose, t < t_hit) */
+    uint64_t mobile_tests;   /* exact rays against the mobile-only scene */
+    uint64_t mobile_hits;    /* ... that hit it before t_hit */
+    uint64_t old_hits;       /* segments whose old hit was on the mobile */
+    uint64_t paths_retraced;
+    uint64_t second_tests;   /* rule 1: t_second recomputed (one ray each) */
+    uint64_t second_changed; /* ... and different */
+    uint64_t old_segments, new_segments;
+    double seconds_test;    /* pre-tests and mobile rays */
+    double seconds_retrace; /* retraced suffixes and t_second rays */
+} gi_detp_update_stats;
+
+/* Thesis Fig. 4.2. Appends to `next` the frame's segments (path-ordered),
+ * to old_list the segments dropped and to new_list those added (both
+ * path-ordered, extents set). A path is retraced from its first segment
+ * that hit the mobile at the old pose or meets it at the new pose strictly
+ * before its stored hit; with rule 1 (tracer->second_hit), t_second is
+ * recomputed where the mobile at either pose may lie in [t_hit, t_second].
+ * Stats are added to *st. Returns 0, or -1 if prev is not path-ordered. */
+int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next,
+                        gi_detp_segments *old_list, gi_detp_segments *new_list,
+                        gi_detp_update_stats *st, gi_error *err);
+
+/* The mobile's vertices from scratch (thesis 4.5): one disc per vertex of
+ * `object` at its current pose (radius `radius`), estimated against all of
+ * `segs` by the Sphere Cache rooted at the object's bounding sphere grown
+ * by the radius (sc != NULL; segments missing that sphere are dropped
+ * first), or by Embree Disc Indexing over the discs (sc == NULL, device
+ * given). acc is a fixed-point accumulator indexed by GLOBAL vertex: the
+ * object's entries are cleared and then set; the others are untouched. */
+int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
+                                 const gi_detp_segments *segs, const gi_detp_sc_params *sc,
+                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_error *err);
+
+#endif

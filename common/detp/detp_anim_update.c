@@ -1,0 +1,257 @@
+/* detp_anim_update: the ray set update of thesis Fig. 4.2, and the mobile's
+ * vertices from scratch (thesis 4.5).
+ *
+ * A segment stays valid unless the mobile was its hit at the old pose or
+ * the mobile at the new pose lies before its hit; only then is the rest of
+ * its path retraced against the whole scene. The second test is a
+ * ray/bounding-sphere check first and a ray against the mobile alone
+ * (a scene of a few hundred triangles) only if that passes, so most
+ * segments cost a dot product or two and never touch the full scene. A hit
+ * counts only if strictly closer than the stored one (thesis [IMPL NOTE]). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "detp_anim.h"
+#include "detp_sphere.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+gi_detp_mobile_pose gi_detp_object_sphere(const gi_scene *s, uint32_t object)
+{
+    const gi_object *o = &s->objects[object];
+    const gi_vec3 *p = &s->positions[o->first_vertex];
+    gi_vec3 lo = gi_v3(INFINITY, INFINITY, INFINITY), hi = gi_scale(lo, -1.0f);
+    for (uint32_t i = 0; i < o->vertex_count; i++) {
+        lo = gi_min_v3(lo, p[i]);
+        hi = gi_max_v3(hi, p[i]);
+    }
+    gi_detp_mobile_pose m = {gi_scale(gi_add(lo, hi), 0.5f), 0.0f};
+    if (o->vertex_count == 0)
+        m.c = gi_v3(0, 0, 0);
+    for (uint32_t i = 0; i < o->vertex_count; i++)
+        m.r = gi_maxf(m.r, gi_length(gi_sub(p[i], m.c)));
+    return m;
+}
+
+/* The part [t0, t1] of org + t dir (unit dir; t1 may be infinite) may come
+ * within the sphere. The radius is grown well beyond float error at the
+ * scale of the ray and the sphere: a false pass only costs one exact ray. */
+static int ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mobile_pose m)
+{
+    gi_vec3 oc = gi_sub(m.c, org);
+    float t = gi_dot(oc, dir);
+    t = t < t0 ? t0 : (t > t1 ? t1 : t);
+    gi_vec3 q = gi_sub(oc, gi_scale(dir, t));
+    float scale = fabsf(t) + fabsf(oc.x) + fabsf(oc.y) + fabsf(oc.z) + m.r + 1.0f;
+    float r = m.r + 1e-4f * scale;
+    return gi_dot(q, q) <= r * r;
+}
+
+/* The mobile at its new pose, strictly before the stored hit. */
+static int mobile_hit_before(RTCScene mobile, const gi_detp_segment *g)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    rh.ray.org_x = g->org.x;
+    rh.ray.org_y = g->org.y;
+    rh.ray.org_z = g->org.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.dir_x = g->dir.x;
+    rh.ray.dir_y = g->dir.y;
+    rh.ray.dir_z = g->dir.z;
+    rh.ray.time = 0.0f;
+    rh.ray.tfar = isfinite(g->t_hit) ? g->t_hit : FLT_MAX;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(mobile, &ctx, &rh);
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.ray.tfar < g->t_hit;
+}
+
+/* t_second of a segment that keeps its hit, exactly as the tracer
+ * computes it (detp_photons.c). */
+static float second_distance(const gi_detp_tracer *tr, const gi_detp_segment *g)
+{
+    gi_vec3 p = gi_madd(g->org, g->dir, g->t_hit);
+    gi_vec3 ng = tr->scene->tri_normal[g->hit_tri];
+    gi_vec3 ng_f = gi_dot(ng, g->dir) < 0.0f ? ng : gi_neg(ng);
+    gi_vec3 o2 = gi_rt_offset(p, ng_f, g->dir);
+    gi_hit h2;
+    if (gi_rt_intersect(tr->rt, o2, g->dir, 0.0f, FLT_MAX, &h2))
+        return gi_dot(gi_sub(o2, g->org), g->dir) + h2.t;
+    return INFINITY;
+}
+
+static void append(gi_detp_segments *s, const gi_detp_segment *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        *gi_detp_segments_push(s) = v[i];
+}
+
+/* Room for n more without a doubling realloc's copies (next ends up about
+ * as long as prev). */
+static void reserve(gi_detp_segments *s, size_t n)
+{
+    if (s->cap - s->count < n) {
+        s->cap = s->count + n;
+        s->v = gi_xrealloc(s->v, s->cap * sizeof *s->v);
+    }
+}
+
+static int same_float(float a, float b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next,
+                        gi_detp_segments *old_list, gi_detp_segments *new_list,
+                        gi_detp_update_stats *st, gi_error *err)
+{
+    const gi_detp_tracer *tr = in->tracer;
+    const gi_detp_segment *prev = in->prev;
+    size_t n = in->prev_count;
+    uint32_t m0 = in->mobile_first_tri, mn = in->mobile_tri_count;
+    if (!in->mobile_scene || !tr)
+        return gi_fail(err, GI_EINTERNAL, "animation update: no tracer or mobile scene");
+    double t_start = now(), t_retrace = 0.0;
+    reserve(next, n + n / 16 + 1024);
+    for (size_t i = 0; i < n;) {
+        uint64_t photon = prev[i].photon;
+        size_t j = i + 1;
+        while (j < n && prev[j].photon == photon) {
+            if (prev[j].bounce != prev[j - 1].bounce + 1)
+                return gi_fail(err, GI_EINTERNAL, "animation update: segment %zu breaks its path",
+                               j);
+            j++;
+        }
+        if (j < n && prev[j].photon < photon)
+            return gi_fail(err, GI_EINTERNAL, "animation update: photons out of order at %zu", j);
+        st->paths++;
+        for (size_t k = i; k < j; k++) {
+            const gi_detp_segment *g = &prev[k];
+            st->segments++;
+            int retrace = 0;
+            if (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) {
+                st->old_hits++;
+                retrace = 1;
+            } else if (ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
+                st->sphere_passes++;
+                st->mobile_tests++;
+                retrace = mobile_hit_before(in->mobile_scene, g);
+                st->mobile_hits += (uint64_t)retrace;
+            }
+            if (retrace) {
+                /* Fig. 4.2: the old suffix out, a new one from this segment. */
+                double t0 = now();
+                append(old_list, &prev[k], j - k);
+                size_t s0 = new_list->count;
+                gi_detp_trace_from(tr, photon, g->bounce, g->org, g->dir, g->energy, new_list);
+                gi_detp_segments added = {new_list->v + s0, new_list->count - s0, 0};
+                gi_detp_set_extent(&added, in->artifact, in->eps);
+                append(next, added.v, added.count);
+                st->paths_retraced++;
+                st->old_segments += j - k;
+                st->new_segments += added.count;
+                t_retrace += now() - t0;
+                break;
+            }
+            gi_detp_segment *kept = gi_detp_segments_push(next);
+            *kept = *g;
+            /* Rule 1: the surface behind the hit may be the mobile's, at
+             * either pose. */
+            if (tr->second_hit && isfinite(g->t_hit) &&
+                (ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
+                 ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
+                double t0 = now();
+                st->second_tests++;
+                float t2 = second_distance(tr, g);
+                if (!same_float(t2, g->t_second)) {
+                    st->second_changed++;
+                    *gi_detp_segments_push(old_list) = *g;
+                    kept->t_second = t2;
+                    gi_detp_segments one = {kept, 1, 0};
+                    gi_detp_set_extent(&one, in->artifact, in->eps);
+                    *gi_detp_segments_push(new_list) = *kept;
+                    st->old_segments++;
+                    st->new_segments++;
+                }
+                t_retrace += now() - t0;
+            }
+        }
+        i = j;
+    }
+    st->seconds_retrace += t_retrace;
+    st->seconds_test += now() - t_start - t_retrace;
+    return 0;
+}
+
+int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
+                                 const gi_detp_segments *segs, const gi_detp_sc_params *sc,
+                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_error *err)
+{
+    if (object >= s->object_count || !acc->fixed)
+        return gi_fail(err, GI_EINTERNAL, "mobile estimate: bad object or accumulator");
+    const gi_object *o = &s->objects[object];
+    uint32_t n = o->vertex_count;
+    if ((uint64_t)o->first_vertex + n > acc->count)
+        return gi_fail(err, GI_EINTERNAL, "mobile estimate: accumulator too small");
+    memset(acc->fixed + 3 * (size_t)o->first_vertex, 0, 3 * (size_t)n * sizeof *acc->fixed);
+    memset(acc->hits + o->first_vertex, 0, (size_t)n * sizeof *acc->hits);
+    if (n == 0)
+        return 0;
+    /* The same discs as gi_detp_discs_from_scene's, for this range. */
+    gi_detp_discs d = {n, NULL, radius, radius * radius};
+    d.d = gi_try_calloc(n, sizeof *d.d, err, "mobile discs");
+    if (!d.d)
+        return -1;
+    for (uint32_t i = 0; i < n; i++) {
+        d.d[i].c = s->positions[o->first_vertex + i];
+        d.d[i].n = gi_normalize(s->normals[o->first_vertex + i]);
+    }
+    /* The object's slice of the global accumulator. */
+    gi_detp_accum view = *acc;
+    view.count = n;
+    view.energy = NULL;
+    view.fixed = acc->fixed + 3 * (size_t)o->first_vertex;
+    view.hits = acc->hits + o->first_vertex;
+    view.sign = 1;
+    int rc = 0;
+    if (sc) {
+        gi_detp_mobile_pose b = gi_detp_object_sphere(s, object);
+        float r0 = b.r * 1.0001f + radius;
+        /* Only segments that meet the root can cross a disc (the cache
+         * would drop the others at its first level anyway). */
+        gi_detp_segments near;
+        gi_detp_segments_init(&near);
+        float rr = r0 + gi_detp_sphere_slack(r0);
+        rr *= rr;
+        for (size_t j = 0; j < segs->count; j++)
+            if (gi_detp_segment_meets_sphere(&segs->v[j], b.c, rr))
+                *gi_detp_segments_push(&near) = segs->v[j];
+        uint32_t *order = gi_detp_query_order(&d, sc->order, 0, err);
+        rc = order ? gi_detp_sphere_cache_root(&d, order, &near, sc, b.c, r0, &view, st, err)
+                   : -1;
+        free(order);
+        gi_detp_segments_free(&near);
+    } else {
+        gi_detp_embree_index *x = NULL;
+        rc = gi_detp_embree_build(device, &d, &x, err);
+        if (rc == 0)
+            gi_detp_embree_estimate(x, segs, &view, st);
+        gi_detp_embree_free(x);
+    }
+    free(d.d);
+    return rc;
+}
