@@ -21,7 +21,7 @@
 /* ---- Batch store (detp_store.c) ------------------------------------- */
 
 #define GI_DETP_STORE_MAGIC "GIDS"
-#define GI_DETP_STORE_VERSION 1u
+#define GI_DETP_STORE_VERSION 2u /* 2: kind and prev_base */
 #define GI_DETP_STORE_ENDIAN 0x01020304u /* written natively: a foreign host reads it swapped */
 
 /* The file's first 64 bytes; the records (raw native gi_detp_segment,
@@ -35,10 +35,15 @@ typedef struct gi_detp_store_header {
     uint64_t p0, p1;       /* the batch's photons [p0, p1) */
     uint64_t count;        /* segments */
     uint32_t frame;
+    uint32_t kind;         /* GI_DETP_STORE_BASE or _DELTA (detp_batch.h) */
+    uint32_t prev_base;    /* a base's previous base frame, or GI_DETP_STORE_NO_BASE */
     uint32_t records_crc;  /* CRC32C of the records */
     uint32_t header_crc;   /* CRC32C of the bytes before this field */
-    uint32_t reserved[3];  /* zero */
+    uint32_t reserved;     /* zero */
 } gi_detp_store_header;
+
+enum { GI_DETP_STORE_BASE = 0, GI_DETP_STORE_DELTA = 1 };
+#define GI_DETP_STORE_NO_BASE 0xFFFFFFFFu
 
 typedef struct gi_detp_store_mapping {
     gi_detp_store_header header;
@@ -48,8 +53,10 @@ typedef struct gi_detp_store_mapping {
     size_t len;
 } gi_detp_store_mapping;
 
-/* Writes the segments behind a header (temp name, fsync, rename: a reader
- * sees the old file, no file or the whole new one). */
+/* Writes the segments behind a header (temp name, rename: a reader sees
+ * the old file, no file or the whole new one). The caller fills p0, p1,
+ * frame, kind and prev_base. No fsync: the store is a cache, and a file a
+ * crash tore reads as invalid (CRC), which means "regenerate". */
 int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
                         const gi_detp_segments *s, gi_error *err);
 /* Maps a store file. Returns 1 if it is valid (size, header, CRCs, records
@@ -114,6 +121,15 @@ typedef struct gi_detp_update_stats {
 int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next,
                         gi_detp_segments *old_list, gi_detp_segments *new_list,
                         gi_detp_update_stats *st, gi_error *err);
+
+/* The same for one path (its segments in bounce order): its segments for
+ * the new frame go to `out` - all of them if keep_unchanged, else only if
+ * the path changed (then its whole new run). Returns 1 if it changed. The
+ * caller checks the order; seconds_test is left to the caller. */
+int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_segment *path,
+                             size_t n, int keep_unchanged, gi_detp_segments *out,
+                             gi_detp_segments *old_list, gi_detp_segments *new_list,
+                             gi_detp_update_stats *st);
 
 /* The mobile's vertices from scratch (thesis 4.5): one disc per vertex of
  * `object` at its current pose (radius `radius`), estimated against all of

@@ -118,7 +118,7 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
     strcpy(a->object, object);
     a->frames = (uint32_t)frames;
     a->mobile_estimator = (gi_detp_mobile_estimator)est;
-    a->update = (gi_detp_anim_update)update;
+    a->update = (gi_detp_anim_update_mode)update;
     int n = cJSON_GetArraySize(arr);
     if (n < 1)
         return gi_jv_fail(v, ANIM_PATH ".keyframes", "at least one key is needed");

@@ -37,7 +37,7 @@ extern const char *const gi_detp_mobile_estimator_names[];
 /* How a frame after the first is computed. Both trace the same paths; "full"
  * estimates every vertex from scratch over the frame's segments (for checks
  * and benchmarks: the incremental result must equal it bit for bit). */
-typedef enum { GI_DETP_UPDATE_INCREMENTAL, GI_DETP_UPDATE_FULL } gi_detp_anim_update;
+typedef enum { GI_DETP_UPDATE_INCREMENTAL, GI_DETP_UPDATE_FULL } gi_detp_anim_update_mode;
 
 extern const char *const gi_detp_anim_update_names[];
 
@@ -55,7 +55,7 @@ typedef struct gi_detp_anim_params {
     uint32_t key_count;
     gi_detp_anim_key keys[GI_DETP_ANIM_MAX_KEYS]; /* frames strictly increasing */
     gi_detp_mobile_estimator mobile_estimator;
-    gi_detp_anim_update update;
+    gi_detp_anim_update_mode update;
 
     /* Resolved against the (refined) scene by gi_detp_anim_resolve. */
     uint32_t object_index;

@@ -114,85 +114,100 @@ static int same_float(float a, float b)
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
+int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_segment *path,
+                             size_t n, int keep_unchanged, gi_detp_segments *out,
+                             gi_detp_segments *old_list, gi_detp_segments *new_list,
+                             gi_detp_update_stats *st)
+{
+    const gi_detp_tracer *tr = in->tracer;
+    uint32_t m0 = in->mobile_first_tri, mn = in->mobile_tri_count;
+    int changed = 0;
+    st->paths++;
+    for (size_t k = 0; k < n; k++) {
+        const gi_detp_segment *g = &path[k];
+        st->segments++;
+        int retrace = 0;
+        if (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) {
+            st->old_hits++;
+            retrace = 1;
+        } else if (ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
+            st->sphere_passes++;
+            st->mobile_tests++;
+            retrace = mobile_hit_before(in->mobile_scene, g);
+            st->mobile_hits += (uint64_t)retrace;
+        }
+        if (retrace) {
+            /* Fig. 4.2: the old suffix out, a new one from this segment. */
+            double t0 = now();
+            if (!keep_unchanged && !changed)
+                append(out, path, k); /* the unchanged prefix */
+            append(old_list, &path[k], n - k);
+            size_t s0 = new_list->count;
+            gi_detp_trace_from(tr, g->photon, g->bounce, g->org, g->dir, g->energy, new_list);
+            gi_detp_segments added = {new_list->v + s0, new_list->count - s0, 0};
+            gi_detp_set_extent(&added, in->artifact, in->eps);
+            append(out, added.v, added.count);
+            st->paths_retraced++;
+            st->old_segments += n - k;
+            st->new_segments += added.count;
+            st->seconds_retrace += now() - t0;
+            return 1;
+        }
+        /* Rule 1: the surface behind the hit may be the mobile's, at
+         * either pose. */
+        if (tr->second_hit && isfinite(g->t_hit) &&
+            (ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
+             ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
+            double t0 = now();
+            st->second_tests++;
+            float t2 = second_distance(tr, g);
+            if (!same_float(t2, g->t_second)) {
+                st->second_changed++;
+                if (!keep_unchanged && !changed)
+                    append(out, path, k);
+                changed = 1;
+                *gi_detp_segments_push(old_list) = *g;
+                gi_detp_segment *kept = gi_detp_segments_push(out);
+                *kept = *g;
+                kept->t_second = t2;
+                gi_detp_segments one = {kept, 1, 0};
+                gi_detp_set_extent(&one, in->artifact, in->eps);
+                *gi_detp_segments_push(new_list) = *kept;
+                st->old_segments++;
+                st->new_segments++;
+                st->seconds_retrace += now() - t0;
+                continue;
+            }
+            st->seconds_retrace += now() - t0;
+        }
+        if (keep_unchanged || changed)
+            *gi_detp_segments_push(out) = *g;
+    }
+    return changed;
+}
+
 int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next,
                         gi_detp_segments *old_list, gi_detp_segments *new_list,
                         gi_detp_update_stats *st, gi_error *err)
 {
-    const gi_detp_tracer *tr = in->tracer;
     const gi_detp_segment *prev = in->prev;
     size_t n = in->prev_count;
-    uint32_t m0 = in->mobile_first_tri, mn = in->mobile_tri_count;
-    if (!in->mobile_scene || !tr)
-        return gi_fail(err, GI_EINTERNAL, "animation update: no tracer or mobile scene");
-    double t_start = now(), t_retrace = 0.0;
-    reserve(next, n + n / 16 + 1024);
+    double t_start = now(), retrace0 = st->seconds_retrace;
+    reserve(next, n);
     for (size_t i = 0; i < n;) {
         uint64_t photon = prev[i].photon;
         size_t j = i + 1;
         while (j < n && prev[j].photon == photon) {
             if (prev[j].bounce != prev[j - 1].bounce + 1)
-                return gi_fail(err, GI_EINTERNAL, "animation update: segment %zu breaks its path",
-                               j);
+                return gi_fail(err, GI_EINTERNAL, "animation update: segment %zu breaks its path", j);
             j++;
         }
         if (j < n && prev[j].photon < photon)
             return gi_fail(err, GI_EINTERNAL, "animation update: photons out of order at %zu", j);
-        st->paths++;
-        for (size_t k = i; k < j; k++) {
-            const gi_detp_segment *g = &prev[k];
-            st->segments++;
-            int retrace = 0;
-            if (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) {
-                st->old_hits++;
-                retrace = 1;
-            } else if (ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
-                st->sphere_passes++;
-                st->mobile_tests++;
-                retrace = mobile_hit_before(in->mobile_scene, g);
-                st->mobile_hits += (uint64_t)retrace;
-            }
-            if (retrace) {
-                /* Fig. 4.2: the old suffix out, a new one from this segment. */
-                double t0 = now();
-                append(old_list, &prev[k], j - k);
-                size_t s0 = new_list->count;
-                gi_detp_trace_from(tr, photon, g->bounce, g->org, g->dir, g->energy, new_list);
-                gi_detp_segments added = {new_list->v + s0, new_list->count - s0, 0};
-                gi_detp_set_extent(&added, in->artifact, in->eps);
-                append(next, added.v, added.count);
-                st->paths_retraced++;
-                st->old_segments += j - k;
-                st->new_segments += added.count;
-                t_retrace += now() - t0;
-                break;
-            }
-            gi_detp_segment *kept = gi_detp_segments_push(next);
-            *kept = *g;
-            /* Rule 1: the surface behind the hit may be the mobile's, at
-             * either pose. */
-            if (tr->second_hit && isfinite(g->t_hit) &&
-                (ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
-                 ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
-                double t0 = now();
-                st->second_tests++;
-                float t2 = second_distance(tr, g);
-                if (!same_float(t2, g->t_second)) {
-                    st->second_changed++;
-                    *gi_detp_segments_push(old_list) = *g;
-                    kept->t_second = t2;
-                    gi_detp_segments one = {kept, 1, 0};
-                    gi_detp_set_extent(&one, in->artifact, in->eps);
-                    *gi_detp_segments_push(new_list) = *kept;
-                    st->old_segments++;
-                    st->new_segments++;
-                }
-                t_retrace += now() - t0;
-            }
-        }
+        gi_detp_anim_update_path(in, &prev[i], j - i, 1, next, old_list, new_list, st);
         i = j;
     }
-    st->seconds_retrace += t_retrace;
-    st->seconds_test += now() - t_start - t_retrace;
+    st->seconds_test += now() - t_start - (st->seconds_retrace - retrace0);
     return 0;
 }
 

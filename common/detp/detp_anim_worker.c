@@ -166,10 +166,10 @@ static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
     in->tracer = tr;
     in->mobile_first_tri = o->first_triangle;
     in->mobile_tri_count = o->triangle_count;
-    in->mobile_scene = gi_rt_object_scene(&ctx->rt, a->object);
+    in->mobile_scene = gi_rt_object_scene(&ctx->rt, a->object, err);
     in->artifact = p->artifact;
     in->eps = p->extent_eps;
-    return in->mobile_scene ? 0 : gi_fail(err, GI_EINTERNAL, "detp: no scene of the mobile");
+    return in->mobile_scene ? 0 : -1;
 }
 
 /* A batch the store lacks: frame 0 traced again and updated through
@@ -315,10 +315,10 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     a->changed.count = a->old_list.count = a->new_list.count = a->near.count = 0;
     detp_batch_iter it;
     detp_batch_iter_init(&it, &prev);
-    detp_run run;
+    detp_path run;
     while (detp_batch_next(&it, &run)) {
         size_t c0 = a->changed.count;
-        if (gi_detp_anim_update_path(&in, run.seg, run.count, &a->changed, &a->old_list,
+        if (gi_detp_anim_update_path(&in, run.seg, run.count, 0, &a->changed, &a->old_list,
                                      &a->new_list, &us))
             collect_near(a, nt, a->changed.v + c0, a->changed.count - c0);
         else

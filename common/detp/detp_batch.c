@@ -47,7 +47,7 @@ static int map_file(const char *dir, const detp_batch *b, uint32_t frame, int de
 }
 
 typedef struct aged_run {
-    detp_run run;
+    detp_path run;
     uint32_t age; /* 0: the newest delta */
 } aged_run;
 
@@ -73,7 +73,7 @@ static void build_overrides(detp_batch *b)
             size_t j = i + 1;
             while (j < m->count && m->seg[j].photon == m->seg[i].photon)
                 j++;
-            all[k].run = (detp_run){m->seg[i].photon, &m->seg[i], (uint32_t)(j - i)};
+            all[k].run = (detp_path){m->seg[i].photon, &m->seg[i], (uint32_t)(j - i)};
             all[k++].age = b->delta_count - 1 - d;
             i = j;
         }
@@ -151,7 +151,7 @@ void detp_batch_close(detp_batch *b)
     memset(b, 0, sizeof *b);
 }
 
-int detp_batch_next(detp_batch_iter *it, detp_run *run)
+int detp_batch_next(detp_batch_iter *it, detp_path *run)
 {
     const detp_batch *b = it->b;
     const gi_detp_segment *seg = b->mem ? b->mem->v : b->base.seg;
@@ -167,7 +167,7 @@ int detp_batch_next(detp_batch_iter *it, detp_run *run)
     if (it->o < b->over_count && b->over[it->o].photon == photon)
         *run = b->over[it->o++];
     else
-        *run = (detp_run){photon, &seg[it->i], (uint32_t)(j - it->i)};
+        *run = (detp_path){photon, &seg[it->i], (uint32_t)(j - it->i)};
     it->i = j;
     return 1;
 }
@@ -199,7 +199,7 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
     out->count = 0;
     detp_batch_iter it;
     detp_batch_iter_init(&it, prev);
-    detp_run r;
+    detp_path r;
     size_t c = 0;
     while (detp_batch_next(&it, &r)) {
         while (c < changed->count && changed->v[c].photon < r.photon)
@@ -225,7 +225,7 @@ static int write_file(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
     h.kind = delta ? GI_DETP_STORE_DELTA : GI_DETP_STORE_BASE;
     h.prev_base = prev_base;
     char *path = file_name(dir, batch, frame, delta);
-    int rc = gi_detp_store_write(path, &h, s, 0, err);
+    int rc = gi_detp_store_write(path, &h, s, err);
     free(path);
     return rc;
 }

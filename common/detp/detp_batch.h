@@ -23,11 +23,11 @@
 #include "detp_anim.h"
 
 /* One path: its segments, in bounce order. */
-typedef struct detp_run {
+typedef struct detp_path {
     uint64_t photon;
     const gi_detp_segment *seg;
     uint32_t count;
-} detp_run;
+} detp_path;
 
 typedef struct detp_batch {
     uint32_t batch, frame, base_frame;
@@ -40,7 +40,7 @@ typedef struct detp_batch {
     /* ... or segments in memory (a regenerated batch), not owned. */
     const gi_detp_segments *mem;
     /* The newest run of every path the deltas changed, by photon. */
-    detp_run *over;
+    detp_path *over;
     size_t over_count;
 } detp_batch;
 
@@ -68,7 +68,7 @@ static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b
     it->o = 0;
 }
 /* The next path, or 0 at the end. */
-int detp_batch_next(detp_batch_iter *it, detp_run *run);
+int detp_batch_next(detp_batch_iter *it, detp_path *run);
 /* Segments in the batch (counting each path's newest run). */
 uint64_t detp_batch_segments(const detp_batch *b);
 

@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -55,6 +56,8 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     hd.p0 = h->p0;
     hd.p1 = h->p1;
     hd.frame = h->frame;
+    hd.kind = h->kind;
+    hd.prev_base = h->prev_base;
     hd.count = s->count;
     hd.records_crc = gi_crc32c(0, s->v, s->count * sizeof *s->v);
     hd.header_crc = header_crc(&hd);
@@ -70,7 +73,10 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
         rc = gi_fail(err, GI_EIO, "%s: write: %s", tmp, strerror(errno));
     if (close(fd) != 0 && rc == 0)
         rc = gi_fail(err, GI_EIO, "%s: close: %s", tmp, strerror(errno));
-    rc = gi_temp_finish(tmp, path, rc, err);
+    if (rc == 0 && rename(tmp, path) != 0)
+        rc = gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(errno));
+    if (rc != 0)
+        unlink(tmp);
     free(tmp);
     return rc;
 }
@@ -131,7 +137,8 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
     const char *why = NULL;
     if (memcmp(h.magic, GI_DETP_STORE_MAGIC, 4) != 0)
         why = "bad magic";
-    else if (h.header_crc != header_crc(&h) || h.reserved[0] || h.reserved[1] || h.reserved[2])
+    else if (h.header_crc != header_crc(&h) || h.reserved != 0 ||
+             h.kind > GI_DETP_STORE_DELTA)
         why = "bad header CRC";
     else if (h.version != GI_DETP_STORE_VERSION || h.endian != GI_DETP_STORE_ENDIAN ||
              h.record_bytes != sizeof(gi_detp_segment))
