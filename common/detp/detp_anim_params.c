@@ -99,7 +99,7 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
                                        "update", NULL};
     const char *object = NULL;
     int64_t frames = 0;
-    int est = GI_DETP_MOBILE_SPHERE_CACHE, update = GI_DETP_UPDATE_INCREMENTAL;
+    int est = GI_DETP_MOBILE_EMBREE, update = GI_DETP_UPDATE_INCREMENTAL;
     const cJSON *arr = NULL;
     if (gi_jv_object(v, b, ANIM_PATH) || gi_jv_keys(v, b, ANIM_PATH, keys) ||
         gi_jv_string(v, b, ANIM_PATH, "object", 1, &object))
