@@ -67,8 +67,11 @@ int gi_msg_task_decode(const gi_buf *in, gi_msg_task *out, gi_error *err)
     out->task.cost = gi_get_f64(&r);
     size_t len;
     const uint8_t *p = gi_get_blob(&r, GI_MSG_MAX_TASK, &len);
-    if (!r.failed && r.left > 0)
+    if (!r.failed && r.left > 0) {
         out->task.affinity = gi_get_u64(&r);
+        if (out->task.affinity == 0) /* never written: absent means 0 */
+            return gi_fail(err, GI_EPROTO, "TASK message: explicit affinity 0");
+    }
     if (gi_reader_finish(&r, err))
         return -1;
     gi_buf_init(&out->task.payload);
