@@ -189,6 +189,47 @@ static int describe(gi_farm_job *j, gi_job *parsed)
     return 0;
 }
 
+static int cmp_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* The outputs as written, from the job's out directory: a method may write
+ * more than the job names (an animation writes NAME.0003.exr per frame).
+ * Temporary files (gi_temp_path) and hidden names are not outputs. Keeps
+ * the declared names if the directory holds nothing. */
+static void list_written_outputs(gi_farm_job *j)
+{
+    char path[4300];
+    snprintf(path, sizeof path, "%s/out", j->dir);
+    DIR *d = opendir(path);
+    if (!d)
+        return;
+    char **names = NULL;
+    int n = 0, cap = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        if (e->d_name[0] == '.' || strstr(e->d_name, ".tmp-"))
+            continue;
+        if (n == cap) {
+            cap = cap ? 2 * cap : 16;
+            names = gi_xrealloc(names, (size_t)cap * sizeof *names);
+        }
+        names[n++] = gi_xstrdup(e->d_name);
+    }
+    closedir(d);
+    if (n == 0) {
+        free(names);
+        return;
+    }
+    qsort(names, (size_t)n, sizeof *names, cmp_name);
+    for (int i = 0; i < j->output_count; i++)
+        free(j->outputs[i]);
+    free(j->outputs);
+    j->outputs = names;
+    j->output_count = n;
+}
+
 /* ---- journal ----------------------------------------------------------- */
 
 static int journal(gi_farm *f, const gi_jrec *r)
@@ -322,6 +363,8 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
             j->outputs = gi_xcalloc(1, sizeof *j->outputs);
         }
         gi_job_free(&parsed);
+        if (j->state == GI_FJ_DONE)
+            list_written_outputs(j);
         load_log_tail(j);
         if (!terminal(j))
             unfinished++;
@@ -641,9 +684,10 @@ void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
         gi_farm_job_fail(f, j, &e);
         return;
     }
+    list_written_outputs(j);
     char list[1024] = "";
     size_t k = 0;
-    for (int i = 0; i < j->output_count && k < sizeof list; i++)
+    for (int i = 0; i < j->output_count && k + 16 < sizeof list; i++)
         k += (size_t)snprintf(list + k, sizeof list - k, "%s%s", i ? ", " : "", j->outputs[i]);
     gi_farm_job_log(j, "done: %llu tasks, %llu retries, %llu results this run; outputs: %s",
                     (unsigned long long)j->jr.task_count, (unsigned long long)j->jr.retries,

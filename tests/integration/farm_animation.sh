@@ -1,0 +1,87 @@
+# detp animation on the farm (issue 7): two worker hosts with their own
+# batch stores. Batches stick to the host that holds them; when one host is
+# killed in the middle of the animation its batches move to the other, which
+# regenerates them from their seeds, and every frame is byte-identical to
+# `gi render`. The same across a kill -9 and restart of the coordinator.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+write_job "$TMP/job.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene-mobile.json", "method": "detp", "seed": 11,
+ "image": {"width": 32, "height": 32},
+ "detp": {"photons": 400000, "batch": 50000, "subdivide": 40, "tile": 16, "image_spp": 1,
+          "animation": {"object": "mobile", "frames": 8,
+                        "keyframes": [{"frame": 0, "translate": [212, -218.3, -219.6]},
+                                      {"frame": 7, "translate": [120, -218.3, -130]}]}},
+ "outputs": {"exr": "img.exr", "bin": "v.bin", "json": "report.json"}}
+JOB
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none >/dev/null 2>&1 ||
+    fail "gi render"
+same_as_ref() { # same_as_ref DIR WHAT
+    for f in 0000 0001 0002 0003 0004 0005 0006 0007; do
+        for k in img.$f.exr v.$f.bin; do
+            cmp "$TMP/ref/$k" "$1/$k" || fail "$2: $k differs from gi render"
+        done
+    done
+}
+# wait_merged_tasks ID N: until N tasks are merged (the animation adds each
+# frame's tasks as it goes, so the total grows).
+wait_merged_tasks() {
+    n=0
+    until [ "$(jnum "$1" merged)" -ge "$2" ] 2>/dev/null; do
+        n=$((n + 1))
+        [ $n -lt 1200 ] || fail "job $1 did not reach $2 merged tasks"
+        sleep 0.05
+    done
+    [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
+}
+
+OPTS="--heartbeat 0.2 --lease 3 --dead 3 --checkpoint 0.2"
+LOG="$TMP/farmd.log"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/a.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/ca" --name a
+A_PID=$WORKER_PID
+start_worker "$TMP/b.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cb" --name b
+
+# Frame 0 is 12 tasks (8 batches, 4 tiles), every frame after it too.
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
+wait_merged_tasks "$id" 30
+ls "$TMP"/ca/batches/*/b*.f* >/dev/null 2>&1 || fail "worker a holds no batch files"
+kill -9 "$A_PID"
+wait_state "$id" done 300
+"$GI" fetch "$id" --out "$TMP/killed" >/dev/null || fail "fetch"
+same_as_ref "$TMP/killed" "worker killed"
+grep -q "affinity key .* moves from worker a to worker b" "$LOG" || fail "no batch moved to worker b"
+regen=0
+for r in "$TMP"/killed/report.000*.json; do
+    n=$(sed -n 's/.*"frames_regenerated":[^0-9]*\([0-9]*\).*/\1/p' "$r")
+    regen=$((regen + n))
+done
+[ "$regen" -gt 0 ] || fail "worker b regenerated nothing"
+# The job is over: its batch directories are removed.
+n=0
+while ls "$TMP"/cb/batches/*/b* >/dev/null 2>&1; do
+    n=$((n + 1))
+    [ $n -lt 100 ] || { ls -R "$TMP/cb/batches"; fail "worker b kept the job's batch files"; }
+    sleep 0.1
+done
+
+# The coordinator killed once a checkpoint holds part of the animation.
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 2"; }
+n=0
+until [ "$(jckpt "$id" merged)" -ge 30 ] 2>/dev/null; do
+    n=$((n + 1))
+    [ $n -lt 1200 ] || fail "no checkpoint past 30 tasks"
+    sleep 0.05
+done
+kill -9 "$FARMD_PID"
+wait "$FARMD_PID" 2>/dev/null || true
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" -- $OPTS $PORTS
+wait_state "$id" done 300
+"$GI" fetch "$id" --out "$TMP/restarted" >/dev/null || fail "fetch 2"
+same_as_ref "$TMP/restarted" "coordinator restarted"
+stop_farmd "$LOG"
+echo "animation on the farm identical to gi render after a worker kill ($regen frames regenerated) and a coordinator restart"
