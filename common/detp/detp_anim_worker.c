@@ -316,13 +316,17 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     detp_batch_iter it;
     detp_batch_iter_init(&it, &prev);
     detp_path run;
+    uint64_t segments = 0;
     while (detp_batch_next(&it, &run)) {
         size_t c0 = a->changed.count;
         if (gi_detp_anim_update_path(&in, run.seg, run.count, 0, &a->changed, &a->old_list,
-                                     &a->new_list, &us))
+                                     &a->new_list, &us)) {
             collect_near(a, nt, a->changed.v + c0, a->changed.count - c0);
-        else
+            segments += a->changed.count - c0;
+        } else {
             collect_near(a, nt, run.seg, run.count);
+            segments += run.count;
+        }
     }
     double t2 = detp_now();
     gi_detp_accum_clear(&w->acc);
@@ -346,7 +350,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     double t4 = detp_now();
     if (rc == 0)
         rc = detp_batch_write_frame(dir, &prev, f, &a->changed, err);
-    h->segments = detp_batch_segments(&prev) - us.old_segments + us.new_segments;
+    h->segments = segments;
     detp_batch_close(&prev);
     h->segments_old = us.old_segments;
     h->segments_new = us.new_segments;

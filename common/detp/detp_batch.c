@@ -172,27 +172,6 @@ int detp_batch_next(detp_batch_iter *it, detp_path *run)
     return 1;
 }
 
-uint64_t detp_batch_segments(const detp_batch *b)
-{
-    if (b->mem)
-        return b->mem->count;
-    uint64_t n = b->base.count;
-    /* Runs replaced by deltas: base length out, newest run in. */
-    size_t o = 0;
-    for (size_t i = 0; i < b->base.count && o < b->over_count;) {
-        uint64_t photon = b->base.seg[i].photon;
-        size_t j = i + 1;
-        while (j < b->base.count && b->base.seg[j].photon == photon)
-            j++;
-        while (o < b->over_count && b->over[o].photon < photon)
-            o++;
-        if (o < b->over_count && b->over[o].photon == photon)
-            n = n - (j - i) + b->over[o].count;
-        i = j;
-    }
-    return n;
-}
-
 void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *changed,
                             gi_detp_segments *out)
 {

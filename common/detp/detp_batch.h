@@ -69,8 +69,6 @@ static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b
 }
 /* The next path, or 0 at the end. */
 int detp_batch_next(detp_batch_iter *it, detp_path *run);
-/* Segments in the batch (counting each path's newest run). */
-uint64_t detp_batch_segments(const detp_batch *b);
 
 /* The batch after `prev` with the whole new runs in `changed` (path-ordered)
  * replacing their paths' runs: every segment, path-ordered, into out. */

@@ -81,6 +81,40 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     return rc;
 }
 
+/* Files this process has checked whole (CRC, order, values): an update
+ * maps its batch's base every frame, and checking it again would cost a
+ * good part of the frame. Keyed by what a rewrite changes (a rename gives
+ * a new inode); a small ring, oldest out. */
+typedef struct checked_file {
+    dev_t dev;
+    ino_t ino;
+    off_t size;
+    struct timespec mtime;
+    uint32_t header_crc;
+} checked_file;
+
+#define CHECKED_FILES 64
+static checked_file checked[CHECKED_FILES];
+static unsigned checked_next;
+
+static int was_checked(const struct stat *st, uint32_t header_crc)
+{
+    for (unsigned i = 0; i < CHECKED_FILES; i++) {
+        const checked_file *c = &checked[i];
+        if (c->ino == st->st_ino && c->dev == st->st_dev && c->size == st->st_size &&
+            c->mtime.tv_sec == st->st_mtim.tv_sec && c->mtime.tv_nsec == st->st_mtim.tv_nsec &&
+            c->header_crc == header_crc && c->size > 0)
+            return 1;
+    }
+    return 0;
+}
+
+static void note_checked(const struct stat *st, uint32_t header_crc)
+{
+    checked[checked_next++ % CHECKED_FILES] =
+        (checked_file){st->st_dev, st->st_ino, st->st_size, st->st_mtim, header_crc};
+}
+
 static int finite3(gi_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
 /* The records are what a tracer wrote: path-ordered photons of the batch,
@@ -151,10 +185,14 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
     if (!why) {
         madvise(base, len, MADV_SEQUENTIAL);
         const gi_detp_segment *seg = (const gi_detp_segment *)((const char *)base + sizeof h);
-        if (gi_crc32c(0, seg, h.count * sizeof *seg) != h.records_crc)
-            why = "bad record CRC";
-        else
-            why = records_invalid(&h, seg, h.count);
+        if (!was_checked(&st, h.header_crc)) {
+            if (gi_crc32c(0, seg, h.count * sizeof *seg) != h.records_crc)
+                why = "bad record CRC";
+            else
+                why = records_invalid(&h, seg, h.count);
+            if (!why)
+                note_checked(&st, h.header_crc);
+        }
         if (!why) {
             m->header = h;
             m->seg = seg;
