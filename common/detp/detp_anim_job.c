@@ -205,6 +205,13 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     add_num(o, "frame", a->frame);
     add_num(o, "frames", p->anim.frames);
     cJSON_AddStringToObject(o, "object", p->anim.object);
+    /* The mobile's pose: rows of the 3x4 matrix applied to its vertices
+     * as loaded. */
+    gi_mat4 m;
+    gi_detp_anim_pose(&p->anim, a->frame, &m);
+    cJSON *pose = cJSON_AddArrayToObject(o, "pose");
+    for (int r = 0; r < 3; r++)
+        cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));
     add_num(o, "paths_tested", (double)s->photons);
     add_num(o, "paths_retraced", (double)s->paths_retraced);
     add_num(o, "segments", (double)s->segments);
