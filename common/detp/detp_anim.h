@@ -66,6 +66,14 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
  * frame against what it expects. */
 int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err);
 void gi_detp_store_unmap(gi_detp_store_mapping *m);
+/* Files this process has already checked whole (CRCs, record order,
+ * values): an update maps its batch's base every frame, and checking it
+ * again would cost a good part of the frame. Keyed by what a rewrite
+ * changes (a rename gives a new inode) and the file's header CRC. */
+struct stat;
+int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc);
+void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc);
+
 /* A read-only gi_detp_segments view of a mapping (cap 0: never push). */
 static inline gi_detp_segments gi_detp_store_view(const gi_detp_store_mapping *m)
 {

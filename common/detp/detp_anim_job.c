@@ -123,6 +123,7 @@ int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf 
                        (unsigned long long)t->id, h.frame, h.batch);
     detp_anim_result *s = &a->tot;
     s->photons += h.photons;
+    s->paths_examined += h.paths_examined;
     s->segments += h.segments;
     s->segments_old += h.segments_old;
     s->segments_new += h.segments_new;
@@ -213,6 +214,7 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     for (int r = 0; r < 3; r++)
         cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));
     add_num(o, "paths_tested", (double)s->photons);
+    add_num(o, "paths_examined", (double)s->paths_examined);
     add_num(o, "paths_retraced", (double)s->paths_retraced);
     add_num(o, "segments", (double)s->segments);
     add_num(o, "segments_old", (double)s->segments_old);

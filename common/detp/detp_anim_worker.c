@@ -10,6 +10,7 @@
  * store does not have (another host ran it, the disk lost it) is
  * regenerated: traced at frame 0 and updated through frames 1..f-1, which
  * gives the very same segments (random numbers keyed by frame). */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -27,6 +28,9 @@ typedef struct detp_anim_worker {
     gi_detp_embree_index *static_index;
     gi_detp_segments old_list, new_list, changed, near, regen[2];
     int64_t *sum, *hits; /* the result, per vertex */
+    detp_grid_spec grid;  /* of the stored batches: the box the mobile can reach */
+    uint8_t *mark;        /* per path of a batch: may come near the mobile */
+    size_t mark_cap;
 } detp_anim_worker;
 
 void detp_anim_worker_free(detp_anim_worker *a)
@@ -44,7 +48,28 @@ void detp_anim_worker_free(detp_anim_worker *a)
     gi_detp_segments_free(&a->regen[1]);
     free(a->sum);
     free(a->hits);
+    free(a->mark);
     free(a);
+}
+
+/* The grid of the stored batches (detp_grid.h): over the box that holds
+ * the mobile's bounding sphere at every frame, grown by the disc radius and
+ * margins, in cells about the mobile's size. The same on every host. */
+static void grid_spec(const gi_detp_params *p, gi_detp_mobile_pose as_loaded, float radius,
+                      detp_grid_spec *out)
+{
+    gi_vec3 lo = gi_v3(INFINITY, INFINITY, INFINITY), hi = gi_scale(lo, -1.0f);
+    for (uint32_t f = 0; f < p->anim.frames; f++) {
+        gi_mat4 m;
+        gi_detp_anim_pose(&p->anim, f, &m);
+        double scale = sqrt(m.m[0][0] * m.m[0][0] + m.m[1][0] * m.m[1][0] +
+                            m.m[2][0] * m.m[2][0]);
+        float r = (float)(as_loaded.r * scale * 1.02) + radius + 1e-3f * (float)p->scene_size;
+        gi_vec3 c = gi_mat4_point(&m, as_loaded.c), e = gi_v3(r, r, r);
+        lo = gi_min_v3(lo, gi_sub(c, e));
+        hi = gi_max_v3(hi, gi_add(c, e));
+    }
+    detp_grid_spec_make(lo, hi, as_loaded.r, out);
 }
 
 static int pose_scene(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_error *err);
@@ -70,6 +95,7 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
     a->base_nrm = gi_xmalloc(n * sizeof *a->base_nrm);
     memcpy(a->base_pos, &s->positions[o->first_vertex], o->vertex_count * sizeof *a->base_pos);
     memcpy(a->base_nrm, &s->normals[o->first_vertex], o->vertex_count * sizeof *a->base_nrm);
+    grid_spec(p, gi_detp_object_sphere(s, a->object), p->disc_radius, &a->grid);
     a->sum = gi_try_calloc((size_t)s->vertex_count * 3 + 1, sizeof *a->sum, err, "detp sums");
     a->hits = gi_try_calloc((size_t)s->vertex_count + 1, sizeof *a->hits, err, "detp hits");
     w->anim = a;
@@ -198,7 +224,7 @@ static int regenerate(gi_worker_ctx *ctx, detp_anim_worker *a, const char *dir, 
         nxt = t;
     }
     h->regenerated_frames += (uint64_t)f + 1;
-    int rc = detp_batch_write_base(dir, batch, p0, p1, f, cur, err);
+    int rc = detp_batch_write_base(dir, &a->grid, batch, p0, p1, f, cur, err);
     /* Give the memory back: regeneration is the exception. */
     gi_detp_segments_free(&a->regen[0]);
     gi_detp_segments_free(&a->regen[1]);
@@ -258,7 +284,7 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     if (detp_worker_index(ctx, w, err) || trace_frame0(ctx, a, p0, p1, &w->segs, err))
         return -1;
     double t1 = detp_now();
-    if (detp_batch_write_base(dir, h->batch, p0, p1, 0, &w->segs, err))
+    if (detp_batch_write_base(dir, &a->grid, h->batch, p0, p1, 0, &w->segs, err))
         return -1;
     double t2 = detp_now();
     gi_detp_accum_clear(&w->acc);
@@ -288,7 +314,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     detp_batch prev;
     gi_error miss;
     gi_error_clear(&miss);
-    int found = detp_batch_open(dir, h->batch, p0, p1, f - 1, &prev, &miss);
+    int found = detp_batch_open(dir, &a->grid, h->batch, p0, p1, f - 1, &prev, &miss);
     if (found < 0)
         return gi_fail(err, miss.code, "%s", miss.msg);
     if (!found) {
@@ -296,7 +322,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         if (regenerate(ctx, a, dir, h->batch, p0, p1, f - 1, h, err))
             return -1;
         h->sec_regenerate = detp_now() - tr0;
-        found = detp_batch_open(dir, h->batch, p0, p1, f - 1, &prev, err);
+        found = detp_batch_open(dir, &a->grid, h->batch, p0, p1, f - 1, &prev, err);
         if (found != 1)
             return found < 0 ? -1 : gi_fail(err, GI_EIO, "detp batch %u: stored state lost",
                                             h->batch);
@@ -313,19 +339,35 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     gi_detp_update_stats us;
     memset(&us, 0, sizeof us);
     a->changed.count = a->old_list.count = a->new_list.count = a->near.count = 0;
-    detp_batch_iter it;
-    detp_batch_iter_init(&it, &prev);
-    detp_path run;
-    uint64_t segments = 0;
-    while (detp_batch_next(&it, &run)) {
+    /* Only the paths that may come near the mobile at either pose (the
+     * base's grid, and those the deltas changed) can change or feed its
+     * vertices; the others are not read at all. */
+    size_t np = (size_t)(p1 - p0);
+    if (a->mark_cap < np) {
+        free(a->mark);
+        a->mark = gi_xmalloc(np);
+        a->mark_cap = np;
+    }
+    memset(a->mark, 0, np);
+    float grow = w->discs.radius + 1e-3f * (float)p->scene_size;
+    float ro = in.old_pose.r * 1.01f + grow, rn = in.new_pose.r * 1.01f + grow;
+    gi_vec3 lo = gi_min_v3(gi_sub(in.old_pose.c, gi_v3(ro, ro, ro)),
+                           gi_sub(in.new_pose.c, gi_v3(rn, rn, rn)));
+    gi_vec3 hi = gi_max_v3(gi_add(in.old_pose.c, gi_v3(ro, ro, ro)),
+                           gi_add(in.new_pose.c, gi_v3(rn, rn, rn)));
+    detp_batch_mark_near(&prev, lo, hi, a->mark);
+    uint64_t segments = detp_batch_count(&prev);
+    for (uint32_t i = 0; i < np; i++) {
+        if (!a->mark[i])
+            continue;
+        detp_path run = detp_batch_path(&prev, i);
         size_t c0 = a->changed.count;
         if (gi_detp_anim_update_path(&in, run.seg, run.count, 0, &a->changed, &a->old_list,
                                      &a->new_list, &us)) {
             collect_near(a, nt, a->changed.v + c0, a->changed.count - c0);
-            segments += a->changed.count - c0;
+            segments = segments - run.count + (a->changed.count - c0);
         } else {
             collect_near(a, nt, run.seg, run.count);
-            segments += run.count;
         }
     }
     double t2 = detp_now();
@@ -349,7 +391,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         rc = mobile_vertices(ctx, w, a, &h->stats, err);
     double t4 = detp_now();
     if (rc == 0)
-        rc = detp_batch_write_frame(dir, &prev, f, &a->changed, err);
+        rc = detp_batch_write_frame(dir, &a->grid, &prev, f, &a->changed, err);
     h->segments = segments;
     detp_batch_close(&prev);
     h->segments_old = us.old_segments;
@@ -357,6 +399,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     h->paths_retraced = us.paths_retraced;
     h->segments_repaired = us.second_changed;
     h->bv_passes = us.sphere_passes;
+    h->paths_examined = us.paths;
     h->sec_load = t1 - t0 - h->sec_regenerate;
     h->sec_trace = t2 - t1;
     h->sec_static = t3 - t2;

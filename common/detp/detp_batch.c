@@ -13,11 +13,14 @@
 /* A base counts this many times its deltas before it is rewritten. */
 #define DELTA_SHARE 4
 
-static char *file_name(const char *dir, uint32_t batch, uint32_t frame, int delta)
+enum { FILE_BASE, FILE_DELTA, FILE_GRID };
+
+static char *file_name(const char *dir, uint32_t batch, uint32_t frame, int kind)
 {
+    static const char *const ext[] = {"base", "delta", "grid"};
     size_t n = strlen(dir) + 64;
     char *p = gi_xmalloc(n);
-    snprintf(p, n, "%s/b%u.f%u.%s", dir, batch, frame, delta ? "delta" : "base");
+    snprintf(p, n, "%s/b%u.f%u.%s", dir, batch, frame, ext[kind]);
     return p;
 }
 
@@ -31,7 +34,7 @@ static int exists(const char *path)
 static int map_file(const char *dir, const detp_batch *b, uint32_t frame, int delta,
                     gi_detp_store_mapping *m, gi_error *err)
 {
-    char *path = file_name(dir, b->batch, frame, delta);
+    char *path = file_name(dir, b->batch, frame, delta ? FILE_DELTA : FILE_BASE);
     int rc = gi_detp_store_map(path, m, err);
     if (rc == 1) {
         const gi_detp_store_header *h = &m->header;
@@ -87,8 +90,26 @@ static void build_overrides(detp_batch *b)
     free(all);
 }
 
-int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
-                    detp_batch *b, gi_error *err)
+/* The base's grid, rebuilt if it is missing or stale. */
+static int map_grid(const char *dir, const detp_grid_spec *spec, detp_batch *b, gi_error *err)
+{
+    char *path = file_name(dir, b->batch, b->base_frame, FILE_GRID);
+    int rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, &b->grid, err);
+    if (rc == 0) {
+        gi_detp_segments view = gi_detp_store_view(&b->base);
+        rc = detp_grid_write(path, spec, b->p0, b->p1, b->base_frame, &view, err);
+        if (rc == 0)
+            rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, &b->grid,
+                               err);
+        if (rc == 0)
+            rc = gi_fail(err, GI_EIO, "%s: rewritten but unreadable", path);
+    }
+    free(path);
+    return rc;
+}
+
+int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
+                    uint64_t p1, uint32_t frame, detp_batch *b, gi_error *err)
 {
     memset(b, 0, sizeof *b);
     b->batch = batch;
@@ -98,12 +119,12 @@ int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, u
     /* The newest base at or before the frame. */
     uint32_t g = frame;
     for (;;) {
-        char *path = file_name(dir, batch, g, 0);
+        char *path = file_name(dir, batch, g, FILE_BASE);
         int found = exists(path);
         free(path);
         if (found)
             break;
-        char *dpath = file_name(dir, batch, g, 1);
+        char *dpath = file_name(dir, batch, g, FILE_DELTA);
         int has_delta = exists(dpath);
         free(dpath);
         if (!has_delta || g == 0) {
@@ -116,6 +137,11 @@ int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, u
     int rc = map_file(dir, b, g, 0, &b->base, err);
     if (rc != 1)
         return rc;
+    rc = map_grid(dir, spec, b, err);
+    if (rc != 1) {
+        detp_batch_close(b);
+        return rc;
+    }
     b->deltas = gi_xcalloc((size_t)(frame - g) + 1, sizeof *b->deltas);
     for (uint32_t f = g + 1; f <= frame; f++) {
         rc = map_file(dir, b, f, 1, &b->deltas[b->delta_count], err);
@@ -130,20 +156,10 @@ int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, u
     return 1;
 }
 
-void detp_batch_from_memory(const gi_detp_segments *s, uint32_t batch, uint64_t p0,
-                            uint64_t p1, uint32_t frame, detp_batch *b)
-{
-    memset(b, 0, sizeof *b);
-    b->batch = batch;
-    b->frame = b->base_frame = frame;
-    b->p0 = p0;
-    b->p1 = p1;
-    b->mem = s;
-}
-
 void detp_batch_close(detp_batch *b)
 {
     gi_detp_store_unmap(&b->base);
+    detp_grid_unmap(&b->grid);
     for (uint32_t d = 0; d < b->delta_count; d++)
         gi_detp_store_unmap(&b->deltas[d]);
     free(b->deltas);
@@ -154,8 +170,8 @@ void detp_batch_close(detp_batch *b)
 int detp_batch_next(detp_batch_iter *it, detp_path *run)
 {
     const detp_batch *b = it->b;
-    const gi_detp_segment *seg = b->mem ? b->mem->v : b->base.seg;
-    size_t n = b->mem ? b->mem->count : b->base.count;
+    const gi_detp_segment *seg = b->base.seg;
+    size_t n = b->base.count;
     if (it->i >= n)
         return 0;
     uint64_t photon = seg[it->i].photon;
@@ -193,8 +209,43 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
     }
 }
 
-static int write_file(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
-                      int delta, uint32_t prev_base, const gi_detp_segments *s, gi_error *err)
+void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *mark)
+{
+    detp_grid_mark(&b->grid, lo, hi, mark);
+    for (size_t i = 0; i < b->over_count; i++)
+        mark[b->over[i].photon - b->p0] = 1;
+}
+
+detp_path detp_batch_path(const detp_batch *b, uint32_t i)
+{
+    uint64_t photon = b->p0 + i;
+    size_t lo = 0, hi = b->over_count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (b->over[mid].photon < photon)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo < b->over_count && b->over[lo].photon == photon)
+        return b->over[lo];
+    uint32_t s0 = b->grid.path_start[i], s1 = b->grid.path_start[i + 1];
+    return (detp_path){photon, b->base.seg + s0, s1 - s0};
+}
+
+uint64_t detp_batch_count(const detp_batch *b)
+{
+    uint64_t n = b->base.count;
+    for (size_t k = 0; k < b->over_count; k++) {
+        uint32_t i = (uint32_t)(b->over[k].photon - b->p0);
+        n = n - (b->grid.path_start[i + 1] - b->grid.path_start[i]) + b->over[k].count;
+    }
+    return n;
+}
+
+static int write_file(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
+                      uint64_t p1, uint32_t frame, int delta, uint32_t prev_base,
+                      const gi_detp_segments *s, gi_error *err)
 {
     gi_detp_store_header h;
     memset(&h, 0, sizeof h);
@@ -203,48 +254,55 @@ static int write_file(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
     h.frame = frame;
     h.kind = delta ? GI_DETP_STORE_DELTA : GI_DETP_STORE_BASE;
     h.prev_base = prev_base;
-    char *path = file_name(dir, batch, frame, delta);
+    char *path = file_name(dir, batch, frame, delta ? FILE_DELTA : FILE_BASE);
     int rc = gi_detp_store_write(path, &h, s, err);
     free(path);
+    if (rc == 0 && !delta) {
+        char *gpath = file_name(dir, batch, frame, FILE_GRID);
+        rc = detp_grid_write(gpath, spec, p0, p1, frame, s, err);
+        free(gpath);
+    }
     return rc;
 }
 
-int detp_batch_write_base(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
-                          uint32_t frame, const gi_detp_segments *s, gi_error *err)
+int detp_batch_write_base(const char *dir, const detp_grid_spec *spec, uint32_t batch,
+                          uint64_t p0, uint64_t p1, uint32_t frame, const gi_detp_segments *s,
+                          gi_error *err)
 {
-    return write_file(dir, batch, p0, p1, frame, 0, GI_DETP_STORE_NO_BASE, s, err);
+    return write_file(dir, spec, batch, p0, p1, frame, 0, GI_DETP_STORE_NO_BASE, s, err);
 }
 
-static void remove_file(const char *dir, uint32_t batch, uint32_t frame, int delta)
+static void remove_file(const char *dir, uint32_t batch, uint32_t frame, int kind)
 {
-    char *path = file_name(dir, batch, frame, delta);
+    char *path = file_name(dir, batch, frame, kind);
     unlink(path);
     free(path);
 }
 
-int detp_batch_write_frame(const char *dir, const detp_batch *prev, uint32_t frame,
-                           const gi_detp_segments *changed, gi_error *err)
+int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const detp_batch *prev,
+                           uint32_t frame, const gi_detp_segments *changed, gi_error *err)
 {
     int rc;
-    if (prev->mem || (prev->delta_segments + changed->count) * DELTA_SHARE > prev->base.count) {
+    if ((prev->delta_segments + changed->count) * DELTA_SHARE > prev->base.count) {
         /* A new base: the batch at this frame, whole. */
         gi_detp_segments all;
         gi_detp_segments_init(&all);
         detp_batch_materialize(prev, changed, &all);
-        rc = write_file(dir, prev->batch, prev->p0, prev->p1, frame, 0,
-                        prev->mem ? GI_DETP_STORE_NO_BASE : prev->base_frame, &all, err);
+        rc = write_file(dir, spec, prev->batch, prev->p0, prev->p1, frame, 0,
+                        prev->base_frame, &all, err);
         gi_detp_segments_free(&all);
     } else {
-        rc = write_file(dir, prev->batch, prev->p0, prev->p1, frame, 1, 0, changed, err);
+        rc = write_file(dir, spec, prev->batch, prev->p0, prev->p1, frame, 1, 0, changed, err);
     }
     /* prev stands on a base only: the base before it and the deltas up to
      * it are no longer needed, even by a retry of this frame. */
-    if (rc == 0 && !prev->mem && prev->delta_count == 0 &&
+    if (rc == 0 && prev->delta_count == 0 &&
         prev->base.header.prev_base != GI_DETP_STORE_NO_BASE) {
         uint32_t k = prev->base.header.prev_base;
-        remove_file(dir, prev->batch, k, 0);
+        remove_file(dir, prev->batch, k, FILE_BASE);
+        remove_file(dir, prev->batch, k, FILE_GRID);
         for (uint32_t f = k + 1; f <= prev->base_frame; f++)
-            remove_file(dir, prev->batch, f, 1);
+            remove_file(dir, prev->batch, f, FILE_DELTA);
     }
     return rc;
 }

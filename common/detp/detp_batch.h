@@ -7,8 +7,9 @@
  * holding the whole new path of every path that frame changed (both in the
  * batch store format, detp_store.c):
  *
- *   b000012.f00000.base  b000012.f00001.delta  b000012.f00002.delta ...
+ *   b12.f0.base  b12.f0.grid  b12.f1.delta  b12.f2.delta ...
  *
+ * (a base's grid, detp_grid.h, lists its paths by the cells they cross).
  * The batch at frame f is the base with, for each path, its newest run in
  * the deltas up to f. When the deltas outgrow a quarter of the base, the
  * frame is written as a new base. Files a retry could still need (the
@@ -21,6 +22,7 @@
 #include <stdint.h>
 
 #include "detp_anim.h"
+#include "detp_grid.h"
 
 /* One path: its segments, in bounce order. */
 typedef struct detp_path {
@@ -32,13 +34,11 @@ typedef struct detp_path {
 typedef struct detp_batch {
     uint32_t batch, frame, base_frame;
     uint64_t p0, p1;
-    /* Either mapped files ... */
     gi_detp_store_mapping base;
+    detp_grid grid; /* the base's */
     gi_detp_store_mapping *deltas; /* frames base_frame+1 .. frame */
     uint32_t delta_count;
     uint64_t delta_segments;
-    /* ... or segments in memory (a regenerated batch), not owned. */
-    const gi_detp_segments *mem;
     /* The newest run of every path the deltas changed, by photon. */
     detp_path *over;
     size_t over_count;
@@ -46,12 +46,9 @@ typedef struct detp_batch {
 
 /* Opens batch `batch` (photons [p0, p1)) at `frame` from dir: 1 if found
  * whole, 0 if some file is missing or invalid (err says which; regenerate),
- * -1 on an I/O error. */
-int detp_batch_open(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1, uint32_t frame,
-                    detp_batch *b, gi_error *err);
-/* A batch over segments held in memory (path-ordered). */
-void detp_batch_from_memory(const gi_detp_segments *s, uint32_t batch, uint64_t p0,
-                            uint64_t p1, uint32_t frame, detp_batch *b);
+ * -1 on an I/O error. A base without its grid (spec) gets it rebuilt. */
+int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
+                    uint64_t p1, uint32_t frame, detp_batch *b, gi_error *err);
 void detp_batch_close(detp_batch *b);
 
 /* Iterates the batch's paths in photon order. */
@@ -70,19 +67,29 @@ static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b
 /* The next path, or 0 at the end. */
 int detp_batch_next(detp_batch_iter *it, detp_path *run);
 
+/* The paths that may come near the box [lo, hi]: those the base's grid
+ * lists in the cells the box overlaps, and every path a delta changed.
+ * Sets mark[i] = 1 for photon p0 + i (mark has p1 - p0 entries). */
+void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *mark);
+/* Path i's run (photon p0 + i) as of the batch's frame. */
+detp_path detp_batch_path(const detp_batch *b, uint32_t i);
+/* Segments in the batch at its frame. */
+uint64_t detp_batch_count(const detp_batch *b);
 /* The batch after `prev` with the whole new runs in `changed` (path-ordered)
  * replacing their paths' runs: every segment, path-ordered, into out. */
 void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *changed,
                             gi_detp_segments *out);
 /* Writes frame f of a batch: a delta (the whole new runs of the changed
  * paths, path-ordered, in `changed`) after `prev` (the batch at f-1, still
- * open), or a new base if the deltas would outgrow the base or prev is in
- * memory. Then removes the files older than prev's base. */
-int detp_batch_write_frame(const char *dir, const detp_batch *prev, uint32_t frame,
-                           const gi_detp_segments *changed, gi_error *err);
-/* Writes a whole batch as a base at `frame` (frame 0, or a regeneration). */
-int detp_batch_write_base(const char *dir, uint32_t batch, uint64_t p0, uint64_t p1,
-                          uint32_t frame, const gi_detp_segments *s, gi_error *err);
+ * open), or a new base (with its grid) if the deltas would outgrow the
+ * base. Then removes the files older than prev's base. */
+int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const detp_batch *prev,
+                           uint32_t frame, const gi_detp_segments *changed, gi_error *err);
+/* Writes a whole batch as a base at `frame` (frame 0, or a regeneration),
+ * with its grid. */
+int detp_batch_write_base(const char *dir, const detp_grid_spec *spec, uint32_t batch,
+                          uint64_t p0, uint64_t p1, uint32_t frame, const gi_detp_segments *s,
+                          gi_error *err);
 /* Removes every file of the batch (after its last frame). */
 void detp_batch_remove(const char *dir, uint32_t batch);
 

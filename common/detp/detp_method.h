@@ -54,6 +54,7 @@ int detp_decode_batch(gi_reader *r, uint32_t vertex_count, detp_batch_result *h,
 typedef struct detp_anim_result {
     uint32_t frame, batch;
     uint64_t photons;           /* paths tested */
+    uint64_t paths_examined;    /* paths read: those the grid puts near the mobile */
     uint64_t segments;          /* in the batch after the frame */
     uint64_t segments_old;      /* removed (O^t) */
     uint64_t segments_new;      /* added (N^t) */

@@ -158,6 +158,7 @@ void detp_anim_header_put(const detp_anim_result *h, gi_buf *out)
     gi_buf_put_u32(out, h->frame);
     gi_buf_put_u32(out, h->batch);
     gi_buf_put_u64(out, h->photons);
+    gi_buf_put_u64(out, h->paths_examined);
     gi_buf_put_u64(out, h->segments);
     gi_buf_put_u64(out, h->segments_old);
     gi_buf_put_u64(out, h->segments_new);
@@ -184,6 +185,7 @@ int detp_anim_header_get(gi_reader *r, detp_anim_result *h)
     h->frame = gi_get_u32(r);
     h->batch = gi_get_u32(r);
     h->photons = gi_get_u64(r);
+    h->paths_examined = gi_get_u64(r);
     h->segments = gi_get_u64(r);
     h->segments_old = gi_get_u64(r);
     h->segments_new = gi_get_u64(r);

@@ -81,10 +81,8 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     return rc;
 }
 
-/* Files this process has checked whole (CRC, order, values): an update
- * maps its batch's base every frame, and checking it again would cost a
- * good part of the frame. Keyed by what a rewrite changes (a rename gives
- * a new inode); a small ring, oldest out. */
+/* Files this process has checked whole (detp_anim.h); a small ring, oldest
+ * out. */
 typedef struct checked_file {
     dev_t dev;
     ino_t ino;
@@ -97,7 +95,7 @@ typedef struct checked_file {
 static checked_file checked[CHECKED_FILES];
 static unsigned checked_next;
 
-static int was_checked(const struct stat *st, uint32_t header_crc)
+int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc)
 {
     for (unsigned i = 0; i < CHECKED_FILES; i++) {
         const checked_file *c = &checked[i];
@@ -109,7 +107,7 @@ static int was_checked(const struct stat *st, uint32_t header_crc)
     return 0;
 }
 
-static void note_checked(const struct stat *st, uint32_t header_crc)
+void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc)
 {
     checked[checked_next++ % CHECKED_FILES] =
         (checked_file){st->st_dev, st->st_ino, st->st_size, st->st_mtim, header_crc};
@@ -185,13 +183,13 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
     if (!why) {
         madvise(base, len, MADV_SEQUENTIAL);
         const gi_detp_segment *seg = (const gi_detp_segment *)((const char *)base + sizeof h);
-        if (!was_checked(&st, h.header_crc)) {
+        if (!gi_detp_file_was_checked(&st, h.header_crc)) {
             if (gi_crc32c(0, seg, h.count * sizeof *seg) != h.records_crc)
                 why = "bad record CRC";
             else
                 why = records_invalid(&h, seg, h.count);
             if (!why)
-                note_checked(&st, h.header_crc);
+                gi_detp_file_note_checked(&st, h.header_crc);
         }
         if (!why) {
             m->header = h;

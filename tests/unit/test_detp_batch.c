@@ -3,12 +3,14 @@
  * rewrites of the base; old files go; a missing or foreign file reads as
  * missing. Synthetic paths: the store does not care where they came from. */
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include "detp/detp_batch.h"
+#include "detp/detp_sphere.h"
 #include "gi_rng.h"
 #include "gi_test.h"
 
@@ -64,20 +66,23 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     snprintf(dir, sizeof dir, "%s/batches", gi_test_tmpdir());
     mkdir(dir, 0755);
     gi_error err;
+    detp_grid_spec spec;
+    detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, &spec);
     uint32_t version[PATHS] = {0};
     gi_detp_segments expect, got, changed;
     gi_detp_segments_init(&expect);
     gi_detp_segments_init(&got);
     gi_detp_segments_init(&changed);
     whole(version, &expect);
-    GI_REQUIRE_OK(detp_batch_write_base(dir, 7, P0, P0 + PATHS, 0, &expect, &err));
+    GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, 7, P0, P0 + PATHS, 0, &expect, &err));
     int max_files = 0;
     for (uint32_t f = 1; f <= 40; f++) {
         detp_batch prev;
-        GI_REQUIRE(detp_batch_open(dir, 7, P0, P0 + PATHS, f - 1, &prev, &err) == 1);
+        GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, f - 1, &prev, &err) == 1);
         detp_batch_materialize(&prev, &changed, &got); /* changed is empty here */
         changed.count = 0;
         GI_CHECK_MSG(same_segments(&got, &expect), "frame %u reads back wrong", f - 1);
+        GI_CHECK(detp_batch_count(&prev) == expect.count);
         /* This frame changes a few paths (more in some frames: the base is
          * rewritten now and then). */
         gi_rng r;
@@ -88,14 +93,14 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
                 version[i] = f;
                 make_run(P0 + i, f, &changed);
             }
-        GI_REQUIRE_OK(detp_batch_write_frame(dir, &prev, f, &changed, &err));
+        GI_REQUIRE_OK(detp_batch_write_frame(dir, &spec, &prev, f, &changed, &err));
         detp_batch_close(&prev);
         whole(version, &expect);
         int n = files_in(dir);
         max_files = n > max_files ? n : max_files;
     }
     detp_batch last;
-    GI_REQUIRE(detp_batch_open(dir, 7, P0, P0 + PATHS, 40, &last, &err) == 1);
+    GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 40, &last, &err) == 1);
     gi_detp_segments none = {NULL, 0, 0};
     detp_batch_materialize(&last, &none, &got);
     GI_CHECK(same_segments(&got, &expect));
@@ -108,12 +113,79 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     char path[600];
     snprintf(path, sizeof path, "%s/b7.f40.delta", dir);
     if (remove(path) == 0)
-        GI_CHECK(detp_batch_open(dir, 7, P0, P0 + PATHS, 40, &last, &err) == 0);
+        GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 40, &last, &err) == 0);
     /* Another batch's range under this batch's name is not this batch. */
-    GI_CHECK(detp_batch_open(dir, 7, P0, P0 + PATHS + 1, 39, &last, &err) == 0);
+    GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS + 1, 39, &last, &err) == 0);
     detp_batch_remove(dir, 7);
     GI_CHECK(files_in(dir) == 0);
     gi_detp_segments_free(&expect);
     gi_detp_segments_free(&got);
     gi_detp_segments_free(&changed);
+}
+
+/* The grid lists, for a box, every path with a segment that enters it
+ * (over its extent: up to t_second, or to the grid's edge if it escapes). */
+GI_TEST(test_detp_grid_lists_every_path_near_a_box)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/g.grid", gi_test_tmpdir());
+    gi_detp_segments s;
+    gi_detp_segments_init(&s);
+    gi_rng r;
+    gi_rng_init(&r, 5, 0, 0);
+    const uint64_t p0 = 50, n = 2000;
+    for (uint64_t ph = p0; ph < p0 + n; ph++) {
+        uint32_t k = 1 + gi_rng_u32(&r) % 3;
+        for (uint32_t b = 0; b < k; b++) {
+            gi_detp_segment *g = gi_detp_segments_push(&s);
+            memset(g, 0, sizeof *g);
+            g->org = gi_v3(gi_rng_float(&r) * 100, gi_rng_float(&r) * 100, gi_rng_float(&r) * 100);
+            float a = gi_rng_float(&r) * 6.2831853f, c = 2 * gi_rng_float(&r) - 1;
+            float sn = sqrtf(1 - c * c);
+            g->dir = gi_v3(sn * cosf(a), sn * sinf(a), c);
+            float u = gi_rng_float(&r);
+            g->t_hit = u < 0.1f ? INFINITY : 5 + 80 * u;
+            g->t_second = u < 0.1f ? INFINITY : g->t_hit + 30 * gi_rng_float(&r);
+            g->t_end = g->t_second;
+            g->bounce = b;
+            g->photon = ph;
+        }
+    }
+    detp_grid_spec spec;
+    detp_grid_spec_make(gi_v3(20, 20, 20), gi_v3(80, 80, 80), 7.0f, &spec);
+    gi_error err;
+    GI_REQUIRE_OK(detp_grid_write(path, &spec, p0, p0 + n, 3, &s, &err));
+    detp_grid g;
+    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, &g, &err) == 1);
+    GI_CHECK(detp_grid_map(path, &spec, p0, p0 + n, 4, s.count, &g, &err) == 0 ||
+             (detp_grid_unmap(&g), 0));
+    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, &g, &err) == 1);
+    uint8_t *mark = calloc(n, 1);
+    for (int q = 0; q < 50; q++) {
+        gi_vec3 c = gi_v3(25 + 50 * gi_rng_float(&r), 25 + 50 * gi_rng_float(&r),
+                          25 + 50 * gi_rng_float(&r));
+        float rad = 1 + 8 * gi_rng_float(&r);
+        memset(mark, 0, n);
+        detp_grid_mark(&g, gi_sub(c, gi_v3(rad, rad, rad)), gi_add(c, gi_v3(rad, rad, rad)),
+                       mark);
+        uint32_t listed = 0, near = 0;
+        for (uint64_t i = 0; i < n; i++)
+            listed += mark[i];
+        for (size_t k = 0; k < s.count; k++) {
+            gi_detp_segment x = s.v[k];
+            x.t_end = isfinite(x.t_second) ? x.t_second : INFINITY;
+            if (gi_detp_segment_meets_sphere(&x, c, rad * rad)) {
+                near++;
+                GI_CHECK_MSG(mark[x.photon - p0], "query %d: photon %llu near but not listed", q,
+                             (unsigned long long)x.photon);
+            }
+        }
+        /* A superset, but a useful one: far from every path. */
+        GI_CHECK_MSG(listed < n / 2, "query %d lists %u of %llu paths", q, listed,
+                     (unsigned long long)n);
+        (void)near;
+    }
+    free(mark);
+    detp_grid_unmap(&g);
+    gi_detp_segments_free(&s);
 }
