@@ -59,6 +59,8 @@ typedef struct gi_detp_store_mapping {
  * crash tore reads as invalid (CRC), which means "regenerate". */
 int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
                         const gi_detp_segments *s, gi_error *err);
+/* The records CRC a store file of these segments has. */
+uint32_t gi_detp_store_records_crc(const gi_detp_segments *s);
 /* Maps a store file. Returns 1 if it is valid (size, header, CRCs, records
  * path-ordered within [p0, p1) with finite origins, directions and
  * energies), 0 if it is missing, truncated or invalid (regenerate it; err
@@ -73,6 +75,8 @@ void gi_detp_store_unmap(gi_detp_store_mapping *m);
 struct stat;
 int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc);
 void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc);
+/* Forgets them (fuzzers rewrite one path thousands of times a second). */
+void gi_detp_file_forget_checked(void);
 
 /* A read-only gi_detp_segments view of a mapping (cap 0: never push). */
 static inline gi_detp_segments gi_detp_store_view(const gi_detp_store_mapping *m)

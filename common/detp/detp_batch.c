@@ -94,13 +94,15 @@ static void build_overrides(detp_batch *b)
 static int map_grid(const char *dir, const detp_grid_spec *spec, detp_batch *b, gi_error *err)
 {
     char *path = file_name(dir, b->batch, b->base_frame, FILE_GRID);
-    int rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, &b->grid, err);
+    uint32_t crc = b->base.header.records_crc;
+    int rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, crc, &b->grid,
+                           err);
     if (rc == 0) {
         gi_detp_segments view = gi_detp_store_view(&b->base);
-        rc = detp_grid_write(path, spec, b->p0, b->p1, b->base_frame, &view, err);
+        rc = detp_grid_write(path, spec, b->p0, b->p1, b->base_frame, &view, crc, err);
         if (rc == 0)
-            rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, &b->grid,
-                               err);
+            rc = detp_grid_map(path, spec, b->p0, b->p1, b->base_frame, b->base.count, crc,
+                               &b->grid, err);
         if (rc == 0)
             rc = gi_fail(err, GI_EIO, "%s: rewritten but unreadable", path);
     }
@@ -259,7 +261,7 @@ static int write_file(const char *dir, const detp_grid_spec *spec, uint32_t batc
     free(path);
     if (rc == 0 && !delta) {
         char *gpath = file_name(dir, batch, frame, FILE_GRID);
-        rc = detp_grid_write(gpath, spec, p0, p1, frame, s, err);
+        rc = detp_grid_write(gpath, spec, p0, p1, frame, s, gi_detp_store_records_crc(s), err);
         free(gpath);
     }
     return rc;

@@ -25,11 +25,13 @@ typedef struct grid_header {
     uint64_t entries;
     float lo[3], cell;
     uint32_t n[3], frame;
+    uint32_t base_crc; /* the records CRC of the base it indexes */
     uint32_t body_crc;
+    uint32_t reserved;
     uint32_t header_crc; /* of the bytes before it */
 } grid_header;
 
-_Static_assert(sizeof(grid_header) == 72, "grid header is 72 bytes");
+_Static_assert(sizeof(grid_header) == 80, "grid header is 80 bytes");
 
 void detp_grid_spec_make(gi_vec3 lo, gi_vec3 hi, float cell, detp_grid_spec *out)
 {
@@ -150,7 +152,8 @@ static uint32_t header_crc(const grid_header *h)
 }
 
 int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, uint64_t p1,
-                    uint32_t frame, const gi_detp_segments *base, gi_error *err)
+                    uint32_t frame, const gi_detp_segments *base, uint32_t base_crc,
+                    gi_error *err)
 {
     uint32_t paths = (uint32_t)(p1 - p0);
     size_t cells = cell_count(spec);
@@ -197,6 +200,7 @@ int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, u
         h.cell = spec->cell;
         memcpy(h.n, spec->n, sizeof h.n);
         h.frame = frame;
+        h.base_crc = base_crc;
         uint32_t crc = gi_crc32c(0, path_start, path_bytes(paths));
         crc = gi_crc32c(crc, cell_start, (cells + 1) * sizeof *cell_start);
         h.body_crc = gi_crc32c(crc, list, (size_t)entries * sizeof *list);
@@ -237,7 +241,8 @@ static int same_spec(const grid_header *h, const detp_grid_spec *s)
 }
 
 int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uint64_t p1,
-                  uint32_t frame, uint64_t records, detp_grid *g, gi_error *err)
+                  uint32_t frame, uint64_t records, uint32_t base_crc, detp_grid *g,
+                  gi_error *err)
 {
     memset(g, 0, sizeof *g);
     int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -268,8 +273,9 @@ int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uin
     if (memcmp(h.magic, GRID_MAGIC, 4) != 0 || h.version != GRID_VERSION ||
         h.header_crc != header_crc(&h))
         why = "bad header";
-    else if (h.p0 != p0 || h.p1 != p1 || h.frame != frame || !same_spec(&h, spec))
-        why = "another batch, frame or grid";
+    else if (h.p0 != p0 || h.p1 != p1 || h.frame != frame || h.base_crc != base_crc ||
+             h.reserved != 0 || !same_spec(&h, spec))
+        why = "another batch, base or grid";
     else if (h.entries > (len - sizeof h) / 4 || sizeof h + body + h.entries * 4 != len)
         why = "wrong size";
     if (!why) {

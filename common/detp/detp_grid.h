@@ -13,9 +13,9 @@
  * superset (cells are coarse and each segment is rasterized conservatively);
  * the exact tests decide.
  *
- * File: a 72-byte header (magic "GIDG", version, photon range, frame, the
- * grid's origin, cell size and dimensions, CRC32C of the body and of the
- * header), then per path the index of its first record in the base
+ * File: an 80-byte header (magic "GIDG", version, photon range, frame, the
+ * grid's origin, cell size and dimensions, the base's records CRC, CRC32C
+ * of the body and of the header), then per path the index of its first record in the base
  * (paths + 1 u32, padded to 8 bytes), per cell the start of its list (cells + 1 u64), and the
  * lists (u32 path indices, ascending within a cell). Native byte order:
  * like the store, it never leaves its host. */
@@ -49,14 +49,17 @@ typedef struct detp_grid {
 } detp_grid;
 
 /* Builds the grid of a base (path-ordered segments of photons [p0, p1),
- * every photon with at least one segment) and writes it (temp + rename). */
+ * every photon with at least one segment; base_crc: its store file's
+ * records CRC) and writes it (temp + rename). */
 int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, uint64_t p1,
-                    uint32_t frame, const gi_detp_segments *base, gi_error *err);
-/* Maps a grid file: 1 if valid and made with this spec for this batch and
- * frame and a base of `records` segments, 0 if missing or invalid (err says
- * why), -1 on an I/O error. */
+                    uint32_t frame, const gi_detp_segments *base, uint32_t base_crc,
+                    gi_error *err);
+/* Maps a grid file: 1 if valid and made with this spec for this batch,
+ * frame and base (`records` segments, records CRC base_crc), 0 if missing
+ * or invalid (err says why), -1 on an I/O error. */
 int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uint64_t p1,
-                  uint32_t frame, uint64_t records, detp_grid *g, gi_error *err);
+                  uint32_t frame, uint64_t records, uint32_t base_crc, detp_grid *g,
+                  gi_error *err);
 void detp_grid_unmap(detp_grid *g);
 
 /* Sets mark[i] = 1 for every path i listed in a cell the box [lo, hi]

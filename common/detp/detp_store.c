@@ -29,6 +29,11 @@ static uint32_t header_crc(const gi_detp_store_header *h)
     return gi_crc32c(0, h, offsetof(gi_detp_store_header, header_crc));
 }
 
+uint32_t gi_detp_store_records_crc(const gi_detp_segments *s)
+{
+    return gi_crc32c(0, s->v, s->count * sizeof *s->v);
+}
+
 static int write_all(int fd, const void *data, size_t len)
 {
     const unsigned char *p = data;
@@ -59,7 +64,7 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     hd.kind = h->kind;
     hd.prev_base = h->prev_base;
     hd.count = s->count;
-    hd.records_crc = gi_crc32c(0, s->v, s->count * sizeof *s->v);
+    hd.records_crc = gi_detp_store_records_crc(s);
     hd.header_crc = header_crc(&hd);
     char *tmp = gi_temp_path(path);
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -94,6 +99,11 @@ typedef struct checked_file {
 #define CHECKED_FILES 64
 static checked_file checked[CHECKED_FILES];
 static unsigned checked_next;
+
+void gi_detp_file_forget_checked(void)
+{
+    memset(checked, 0, sizeof checked);
+}
 
 int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc)
 {

@@ -154,12 +154,14 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_box)
     detp_grid_spec spec;
     detp_grid_spec_make(gi_v3(20, 20, 20), gi_v3(80, 80, 80), 7.0f, &spec);
     gi_error err;
-    GI_REQUIRE_OK(detp_grid_write(path, &spec, p0, p0 + n, 3, &s, &err));
+    GI_REQUIRE_OK(detp_grid_write(path, &spec, p0, p0 + n, 3, &s, 77, &err));
     detp_grid g;
-    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, &g, &err) == 1);
-    GI_CHECK(detp_grid_map(path, &spec, p0, p0 + n, 4, s.count, &g, &err) == 0 ||
+    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, 77, &g, &err) == 1);
+    GI_CHECK(detp_grid_map(path, &spec, p0, p0 + n, 4, s.count, 77, &g, &err) == 0 ||
              (detp_grid_unmap(&g), 0));
-    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, &g, &err) == 1);
+    GI_CHECK(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, 78, &g, &err) == 0 ||
+             (detp_grid_unmap(&g), 0));
+    GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, 77, &g, &err) == 1);
     uint8_t *mark = calloc(n, 1);
     for (int q = 0; q < 50; q++) {
         gi_vec3 c = gi_v3(25 + 50 * gi_rng_float(&r), 25 + 50 * gi_rng_float(&r),
