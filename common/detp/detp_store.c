@@ -170,9 +170,9 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
         gi_fail(err, GI_EPROTO, "%s: not a store file (%zu bytes)", path, len);
         return 0;
     }
-    /* Populated at once: faulting the pages in one by one costs more than
-     * the update that reads them. */
-    void *base = mmap(NULL, len, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    /* Not populated: a frame reads only the paths near the mobile
+     * (detp_grid.h), and pages it does not touch stay on disk. */
+    void *base = mmap(NULL, len, PROT_READ, MAP_PRIVATE, fd, 0);
     int e = errno;
     close(fd);
     if (base == MAP_FAILED)
@@ -191,7 +191,6 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
              sizeof h + h.count * sizeof(gi_detp_segment) != len)
         why = "truncated or wrong size";
     if (!why) {
-        madvise(base, len, MADV_SEQUENTIAL);
         const gi_detp_segment *seg = (const gi_detp_segment *)((const char *)base + sizeof h);
         if (!gi_detp_file_was_checked(&st, h.header_crc)) {
             if (gi_crc32c(0, seg, h.count * sizeof *seg) != h.records_crc)
