@@ -84,6 +84,6 @@ done
 "$BIN/bench/anim_frames" row 'tree, torus, "update": "full"' 0 "$FRAMES" $(runs tree-full)
 echo
 "$BIN/bench/anim_frames" phase_header
-for c in 0.025 0.1 0.1-full 0.1-sc tree tree-full; do
+for c in 0.0125 0.025 0.1 0.1-full 0.1-sc 0.5 tree tree-full; do
     "$BIN/bench/anim_frames" phases "$c" "$FRAMES" $(runs "$c")
 done

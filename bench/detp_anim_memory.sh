@@ -11,7 +11,7 @@
 # batch directory is measured); prints the peaks, the per-frame bake wall times
 # (wall_bake of each frame's report) and the whole run's wall time.
 #   bench/detp_anim_memory.sh BUILD_DIR [PHOTONS] [FRAMES] [BATCH]
-# TMPDIR must name a file system with room: about 66 bytes per segment with
+# TMPDIR must name a file system with room: about 70 bytes per segment with
 # the per-frame deltas here (see BENCHMARKS.md); the script prints `df` first.
 set -eu
 BIN=${1:-build/release}
