@@ -19,6 +19,10 @@ echo "== anim_rt: moving the tree scene's torus (update_object, one incremental 
 rm -rf "$TREE"
 echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minutes)"
 sh bench/detp_memory.sh "$BIN" 5000000 50000000
+echo "== detp_anim: thesis Table A.14 + the tree's torus, full vs incremental frame (one worker; ~15 min)"
+sh bench/detp_anim.sh "$BIN" 1000000 250000 6 3
+echo "== detp_anim_memory: 100 M photon paths, moving sphere, 2 workers: peak RSS and batch disk (TMPDIR needs ~13 GB; ~11 min)"
+sh bench/detp_anim_memory.sh "$BIN" 100000000 3 250000
 echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
 sh bench/farm_overhead.sh "$BIN" 5
 echo "== quad_genz: adaptive cubature on Genz's test families (evaluations for 1e-3 and 1e-6)"
