@@ -117,10 +117,10 @@ static inline int gi_detp_crosses(const gi_detp_disc *D, float r2, const gi_detp
  * bit-identical whichever estimator found the pairs.
  *
  * Fixed-point mode (animation, issue 7): `fixed` (3 int64 per disc) instead
- * of `energy`; each crossing adds sign * llround(energy_c * inv_unit). Integer
- * sums do not depend on the order or the split of the segments, so
- * "frame 0 + new - old" equals a recompute over the final segments bit for
- * bit. `hits` then counts modulo 2^32 (a removal adds (uint32_t)-1). Only
+ * of `energy`; each crossing adds sign * gi_detp_fixed_round(energy_c *
+ * inv_unit). Integer sums do not depend on the order or the split of the
+ * segments, so "frame 0 + new - old" equals a recompute over the final
+ * segments bit for bit. `hits` then counts modulo 2^32 (a removal adds (uint32_t)-1). Only
  * the estimators that go through gi_detp_accum_add (basic, Sphere Cache,
  * multilist, octree, Embree DI) support it: impact count and the photon map
  * write irradiance to `energy` themselves. */
@@ -142,14 +142,24 @@ int gi_detp_accum_init_fixed(gi_detp_accum *a, uint32_t count, double unit, gi_e
 double gi_detp_fixed_unit(double total_power, uint64_t photons_total);
 void gi_detp_accum_clear(gi_detp_accum *a);
 void gi_detp_accum_free(gi_detp_accum *a);
+/* A contribution in fixed-point units, rounded half away from zero: one
+ * add and one truncating conversion (llround is a library call, and this
+ * runs once per disc crossing). Segment energies are at most a few photon
+ * powers, far below 2^53 units, so the conversion is exact and the same
+ * on every host. */
+static inline int64_t gi_detp_fixed_round(double x)
+{
+    return (int64_t)(x < 0.0 ? x - 0.5 : x + 0.5);
+}
+
 static inline void gi_detp_accum_add(gi_detp_accum *a, uint32_t disc, const gi_detp_segment *s)
 {
     if (__builtin_expect(a->fixed != NULL, 0)) {
         int64_t *f = &a->fixed[3 * (size_t)disc];
         int64_t sg = a->sign;
-        f[0] += sg * (int64_t)llround((double)s->energy.x * a->inv_unit);
-        f[1] += sg * (int64_t)llround((double)s->energy.y * a->inv_unit);
-        f[2] += sg * (int64_t)llround((double)s->energy.z * a->inv_unit);
+        f[0] += sg * gi_detp_fixed_round((double)s->energy.x * a->inv_unit);
+        f[1] += sg * gi_detp_fixed_round((double)s->energy.y * a->inv_unit);
+        f[2] += sg * gi_detp_fixed_round((double)s->energy.z * a->inv_unit);
         a->hits[disc] += (uint32_t)sg;
         return;
     }

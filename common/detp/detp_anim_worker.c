@@ -25,7 +25,12 @@ typedef struct detp_anim_worker {
     gi_vec3 *base_pos, *base_nrm; /* the mobile's vertices as loaded */
     int scene_posed, rt_posed;
     uint32_t scene_frame, rt_frame;
+    /* The static discs alone (the mobile's vertex range left out: its
+     * discs would only slow the static update down), their index and
+     * fixed-point sums. */
+    gi_detp_discs static_discs;
     gi_detp_embree_index *static_index;
+    gi_detp_accum static_acc;
     gi_detp_segments old_list, new_list, changed, near, regen[2];
     int64_t *sum, *hits; /* the result, per vertex */
     detp_grid_spec grid;  /* of the stored batches: the box the mobile can reach */
@@ -40,6 +45,8 @@ void detp_anim_worker_free(detp_anim_worker *a)
     free(a->base_pos);
     free(a->base_nrm);
     gi_detp_embree_free(a->static_index);
+    gi_detp_discs_free(&a->static_discs);
+    gi_detp_accum_free(&a->static_acc);
     gi_detp_segments_free(&a->old_list);
     gi_detp_segments_free(&a->new_list);
     gi_detp_segments_free(&a->changed);
@@ -104,11 +111,46 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
     /* The discs (and any index over them) at pose 0, where frame 0's
      * estimate needs the mobile's; later frames recompute the mobile's
      * vertices on their own and use only the static discs' entries. */
-    if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err) ||
-        gi_detp_embree_build(ctx->rt.device, &w->discs, &a->static_index, err))
+    if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err))
+        return -1;
+    gi_detp_discs *sd = &a->static_discs;
+    sd->count = w->discs.count - o->vertex_count;
+    sd->radius = w->discs.radius;
+    sd->r2 = w->discs.r2;
+    sd->d = gi_try_malloc(((size_t)sd->count + 1) * sizeof *sd->d, err, "static discs");
+    if (!sd->d)
+        return -1;
+    memcpy(sd->d, w->discs.d, o->first_vertex * sizeof *sd->d);
+    memcpy(sd->d + o->first_vertex, w->discs.d + o->first_vertex + o->vertex_count,
+           (sd->count - o->first_vertex) * sizeof *sd->d);
+    if (gi_detp_accum_init_fixed(&a->static_acc, sd->count,
+                                 gi_detp_fixed_unit(s->total_power, p->photon_count), err) ||
+        gi_detp_embree_build(ctx->rt.device, sd, &a->static_index, err))
         return -1;
     *out = a;
     return 0;
+}
+
+/* Eq. 4.4 for the static vertices: the sums of the new segments minus
+ * those of the old, into the global accumulator (the mobile's range is
+ * left for mobile_vertices). */
+static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a,
+                          gi_detp_stats *st)
+{
+    const gi_object *o = &ctx->job.scene.objects[a->object];
+    gi_detp_accum *sa = &a->static_acc;
+    gi_detp_accum_clear(sa);
+    sa->sign = -1;
+    gi_detp_embree_estimate(a->static_index, &a->old_list, sa, st);
+    sa->sign = 1;
+    gi_detp_embree_estimate(a->static_index, &a->new_list, sa, st);
+    /* Static disc i is vertex i below the mobile's range, i + n above. */
+    size_t v0 = o->first_vertex, n = o->vertex_count;
+    memcpy(w->acc.fixed, sa->fixed, 3 * v0 * sizeof *sa->fixed);
+    memcpy(w->acc.hits, sa->hits, v0 * sizeof *sa->hits);
+    memcpy(w->acc.fixed + 3 * (v0 + n), sa->fixed + 3 * v0,
+           3 * (sa->count - v0) * sizeof *sa->fixed);
+    memcpy(w->acc.hits + v0 + n, sa->hits + v0, (sa->count - v0) * sizeof *sa->hits);
 }
 
 /* The scene's mobile at `frame` (vertices, normals, bounds), without the
@@ -380,11 +422,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         w->acc.sign = 1;
         rc = detp_worker_estimate(ctx, w, &h->stats, err);
     } else {
-        /* Eq. 4.4 for the static vertices: minus the old, plus the new. */
-        w->acc.sign = -1;
-        gi_detp_embree_estimate(a->static_index, &a->old_list, &w->acc, &h->stats);
-        w->acc.sign = 1;
-        gi_detp_embree_estimate(a->static_index, &a->new_list, &w->acc, &h->stats);
+        static_update(ctx, w, a, &h->stats);
     }
     double t3 = detp_now();
     if (rc == 0)
