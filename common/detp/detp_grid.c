@@ -66,10 +66,12 @@ static void cell_range(const detp_grid_spec *s, int a, float x0, float x1, uint3
     *c1 = f1 < 0.0f ? 0u : (f1 > top ? s->n[a] - 1 : (uint32_t)f1);
 }
 
-/* Calls add(cell) for every cell a segment may touch over the part of it
- * that can matter: up to its second hit, its disc extent or its hit, and
- * to the grid's edge if it escapes. Each piece of at most a cell's length
- * adds the cells of its box grown by a margin: a superset, never fewer. */
+/* Adds a path to the cells one of its segments crosses, over the part of
+ * the segment that can matter (up to its second hit, its disc extent or
+ * its hit, and to the grid's edge if it escapes): a 3-D DDA (Amanatides and
+ * Woo) over the part inside the grid's box. Rounding can only misplace a
+ * crossing at a cell boundary, by far less than the margins the queries
+ * add around the mobile (detp_anim_worker.c). */
 typedef struct raster {
     uint32_t *count; /* pass 1: entries per cell */
     uint64_t *fill;  /* pass 2: next free slot per cell */
@@ -100,42 +102,52 @@ static void rasterize(const detp_grid_spec *s, const gi_detp_segment *g, uint32_
     if (!isfinite(g->t_hit) || !(t1 > 0.0f))
         t1 = INFINITY;
     float t0 = 0.0f;
-    /* Clip to the grid's box (slabs), with a margin of a cell. */
+    float o[3] = {g->org.x, g->org.y, g->org.z}, d[3] = {g->dir.x, g->dir.y, g->dir.z};
+    float lo[3] = {s->lo.x, s->lo.y, s->lo.z};
+    /* Clip to the grid's box (slabs). */
     for (int a = 0; a < 3; a++) {
-        float o = axis(g->org, a), d = axis(g->dir, a);
-        float lo = axis(s->lo, a) - s->cell, hi = axis(s->lo, a) + s->cell * (float)(s->n[a] + 1);
-        if (fabsf(d) < 1e-30f) {
-            if (o < lo || o > hi)
+        float hi = lo[a] + s->cell * (float)s->n[a];
+        if (fabsf(d[a]) < 1e-30f) {
+            if (o[a] < lo[a] || o[a] > hi)
                 return;
             continue;
         }
-        float ta = (lo - o) / d, tb = (hi - o) / d;
-        if (ta > tb) {
-            float x = ta;
-            ta = tb;
-            tb = x;
-        }
-        t0 = fmaxf(t0, ta);
-        t1 = fminf(t1, tb);
+        float ta = (lo[a] - o[a]) / d[a], tb = (hi - o[a]) / d[a];
+        t0 = fmaxf(t0, fminf(ta, tb));
+        t1 = fminf(t1, fmaxf(ta, tb));
     }
     if (!(t1 >= t0))
         return;
-    float len = t1 - t0, step = 0.5f * s->cell;
-    uint32_t pieces = (uint32_t)fminf(ceilf(len / step), 1e6f);
-    if (pieces == 0)
-        pieces = 1;
-    float margin = 1e-3f * s->cell;
-    for (uint32_t i = 0; i < pieces; i++) {
-        float ta = t0 + len * (float)i / (float)pieces, tb = t0 + len * (float)(i + 1) / (float)pieces;
-        gi_vec3 a = gi_madd(g->org, g->dir, ta), b = gi_madd(g->org, g->dir, tb);
-        uint32_t c0[3], c1[3];
-        for (int k = 0; k < 3; k++)
-            cell_range(s, k, fminf(axis(a, k), axis(b, k)) - margin,
-                       fmaxf(axis(a, k), axis(b, k)) + margin, &c0[k], &c1[k]);
-        for (uint32_t z = c0[2]; z <= c1[2]; z++)
-            for (uint32_t y = c0[1]; y <= c1[1]; y++)
-                for (uint32_t x = c0[0]; x <= c1[0]; x++)
-                    add_cell(r, ((size_t)z * s->n[1] + y) * s->n[0] + x, path);
+    int32_t c[3], step[3], n[3];
+    float tmax[3], tdelta[3];
+    for (int a = 0; a < 3; a++) {
+        n[a] = (int32_t)s->n[a];
+        float x = (o[a] + d[a] * t0 - lo[a]) / s->cell;
+        float f = floorf(x);
+        c[a] = f < 0.0f ? 0 : (f >= (float)n[a] ? n[a] - 1 : (int32_t)f);
+        if (d[a] > 0.0f) {
+            step[a] = 1;
+            tmax[a] = (lo[a] + s->cell * (float)(c[a] + 1) - o[a]) / d[a];
+            tdelta[a] = s->cell / d[a];
+        } else if (d[a] < 0.0f) {
+            step[a] = -1;
+            tmax[a] = (lo[a] + s->cell * (float)c[a] - o[a]) / d[a];
+            tdelta[a] = -s->cell / d[a];
+        } else {
+            step[a] = 0;
+            tmax[a] = INFINITY;
+            tdelta[a] = INFINITY;
+        }
+    }
+    for (;;) {
+        add_cell(r, ((size_t)c[2] * s->n[1] + (size_t)c[1]) * s->n[0] + (size_t)c[0], path);
+        int a = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
+        if (!(tmax[a] <= t1))
+            return;
+        c[a] += step[a];
+        if (c[a] < 0 || c[a] >= n[a])
+            return;
+        tmax[a] += tdelta[a];
     }
 }
 

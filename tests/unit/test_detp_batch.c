@@ -163,13 +163,16 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_box)
              (detp_grid_unmap(&g), 0));
     GI_REQUIRE(detp_grid_map(path, &spec, p0, p0 + n, 3, s.count, 77, &g, &err) == 1);
     uint8_t *mark = calloc(n, 1);
-    for (int q = 0; q < 50; q++) {
-        gi_vec3 c = gi_v3(25 + 50 * gi_rng_float(&r), 25 + 50 * gi_rng_float(&r),
-                          25 + 50 * gi_rng_float(&r));
+    for (int q = 0; q < 400; q++) {
+        /* Spheres inside the grid's box, as the mobile's always are. */
+        gi_vec3 c = gi_v3(32 + 36 * gi_rng_float(&r), 32 + 36 * gi_rng_float(&r),
+                          32 + 36 * gi_rng_float(&r));
         float rad = 1 + 8 * gi_rng_float(&r);
         memset(mark, 0, n);
-        detp_grid_mark(&g, gi_sub(c, gi_v3(rad, rad, rad)), gi_add(c, gi_v3(rad, rad, rad)),
-                       mark);
+        /* With a margin, as the worker queries (rounding at cell
+         * boundaries stays far below it). */
+        float m = rad + 0.05f;
+        detp_grid_mark(&g, gi_sub(c, gi_v3(m, m, m)), gi_add(c, gi_v3(m, m, m)), mark);
         uint32_t listed = 0, near = 0;
         for (uint64_t i = 0; i < n; i++)
             listed += mark[i];
