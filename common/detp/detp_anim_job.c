@@ -102,8 +102,7 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
     return 0;
 }
 
-int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf *result,
-                    gi_error *err)
+int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err)
 {
     detp_anim_state *a = st->anim;
     gi_reader pr;
@@ -117,7 +116,6 @@ int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf 
     detp_anim_result h;
     if (detp_decode_anim(&r, st->nv, &h, a->sum, a->hits, err))
         return -1;
-    (void)job;
     if (h.frame != frame || h.batch != batch)
         return gi_fail(err, GI_EPROTO, "detp task %llu: result of frame %u batch %u",
                        (unsigned long long)t->id, h.frame, h.batch);
@@ -172,11 +170,10 @@ int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err)
     return 0;
 }
 
-int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
+int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q)
 {
     const gi_detp_params *p = job->params;
     detp_anim_state *a = st->anim;
-    (void)err;
     if (a->frame + 1 >= p->anim.frames)
         return 0;
     a->frame++;

@@ -184,7 +184,7 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
     case DETP_TASK_ANIM_UPDATE:
         if (!st->anim)
             return gi_fail(err, GI_EPROTO, "unexpected detp animation result");
-        return detp_anim_merge(job, st, t, result, err);
+        return detp_anim_merge(st, t, result, err);
     case DETP_TASK_TILE:
     case DETP_TASK_ANIM_TILE: {
         gi_reader pr;
@@ -274,7 +274,7 @@ static int write_frame(gi_job *job, detp_state *st, const detp_vertex_data *v,
 {
     if (detp_write_outputs(job, st, v, err))
         return -1;
-    if (st->anim && detp_anim_next_frame(job, st, fq, err)) {
+    if (st->anim && detp_anim_next_frame(job, st, fq)) {
         job->frame = detp_anim_frame(st);
         st->phase = DETP_PHASE_BAKE;
         return 0;

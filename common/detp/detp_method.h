@@ -121,13 +121,13 @@ int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data
 /* Animations, coordinator side (detp_anim_job.c). The frame's state lives
  * in st->anim; st's per-frame counters and irr/hits are filled from it. */
 int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
-int detp_anim_merge(gi_job *job, detp_state *st, const gi_task *t, const gi_buf *result,
-                    gi_error *err);
+/* Adds a batch's result; a malformed one fails the job (EPROTO). */
+int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err);
 /* Before a frame's outputs: irr and hits from the exact sums, and the
  * coordinator's scene posed for the frame. */
 int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err);
 /* After a frame's outputs: plans the next frame; 0 if there is none. */
-int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
+int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q);
 /* The frame's part of the report. */
 cJSON *detp_anim_report(const gi_job *job, const detp_state *st);
 void detp_anim_save(const detp_state *st, gi_buf *out);
