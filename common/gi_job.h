@@ -54,6 +54,7 @@ struct gi_job {
     /* Written outputs, for the summary: "kind path" lines. */
     char *written[GI_JOB_MAX_OUTPUTS * 2];
     int written_count;
+    int written_more; /* outputs written but not listed (an animation's frames) */
 };
 
 /* Parses and validates a job document. `file` names it in messages. Does not

@@ -82,6 +82,8 @@ static void print_summary(const gi_job *job, const gi_local_summary *s)
     printf("\n");
     for (int i = 0; i + 1 < job->written_count; i += 2)
         printf("  %-4s %s\n", job->written[i], job->written[i + 1]);
+    if (job->written_more)
+        printf("  ... and %d more in %s\n", job->written_more, job->out_dir ? job->out_dir : ".");
 }
 
 static int cmd_render(int argc, char **argv)
