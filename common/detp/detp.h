@@ -57,16 +57,6 @@ void gi_detp_segments_init(gi_detp_segments *s);
 void gi_detp_segments_free(gi_detp_segments *s);
 gi_detp_segment *gi_detp_segments_push(gi_detp_segments *s);
 
-/* Compact binary form of segments (explicit little-endian fields, 60 bytes
- * each, no padding): what a batch cache on disk or on the wire holds. The
- * extent t_end is not stored: it is derived (gi_detp_set_extent). */
-#define GI_DETP_SEGMENT_BYTES 60
-void gi_detp_segments_encode(const gi_detp_segments *s, gi_buf *out);
-/* Appends the segments in `in` to `out`; fails on a truncated record or a
- * non-finite direction. */
-int gi_detp_segments_decode(gi_reader *in, size_t count, gi_detp_segments *out,
-                            gi_error *err);
-
 /* Artifact control (thesis 1.5): which part of a segment can feed a disc. */
 typedef enum {
     GI_DETP_AC_NONE,         /* origin to the first hit */

@@ -1,4 +1,4 @@
-/* detp_segments: the segment record (container, binary form, disc extent),
+/* detp_segments: the segment record (container, disc extent),
  * per-disc accumulators and estimator statistics. */
 #include <math.h>
 #include <stdlib.h>
@@ -23,62 +23,6 @@ gi_detp_segment *gi_detp_segments_push(gi_detp_segments *s)
     gi_detp_segment *g = &s->v[s->count++];
     memset(g, 0, sizeof *g);
     return g;
-}
-
-static void put_v3(gi_buf *b, gi_vec3 v)
-{
-    gi_buf_put_f32(b, v.x);
-    gi_buf_put_f32(b, v.y);
-    gi_buf_put_f32(b, v.z);
-}
-
-static gi_vec3 get_v3(gi_reader *r)
-{
-    gi_vec3 v;
-    v.x = gi_get_f32(r);
-    v.y = gi_get_f32(r);
-    v.z = gi_get_f32(r);
-    return v;
-}
-
-void gi_detp_segments_encode(const gi_detp_segments *s, gi_buf *out)
-{
-    gi_buf_reserve(out, s->count * GI_DETP_SEGMENT_BYTES);
-    for (size_t i = 0; i < s->count; i++) {
-        const gi_detp_segment *g = &s->v[i];
-        gi_buf_put_u64(out, g->photon);
-        gi_buf_put_u32(out, g->bounce);
-        gi_buf_put_u32(out, g->hit_tri);
-        put_v3(out, g->org);
-        put_v3(out, g->dir);
-        gi_buf_put_f32(out, g->t_hit);
-        gi_buf_put_f32(out, g->t_second);
-        put_v3(out, g->energy);
-    }
-}
-
-int gi_detp_segments_decode(gi_reader *in, size_t count, gi_detp_segments *out, gi_error *err)
-{
-    if (count > in->left / GI_DETP_SEGMENT_BYTES)
-        return gi_fail(err, GI_EPROTO, "%s: %zu segments announced, %zu bytes left", in->what,
-                       count, in->left);
-    for (size_t i = 0; i < count; i++) {
-        gi_detp_segment *g = gi_detp_segments_push(out);
-        g->photon = gi_get_u64(in);
-        g->bounce = gi_get_u32(in);
-        g->hit_tri = gi_get_u32(in);
-        g->org = get_v3(in);
-        g->dir = get_v3(in);
-        g->t_hit = gi_get_f32(in);
-        g->t_second = gi_get_f32(in);
-        g->energy = get_v3(in);
-        g->t_end = g->t_hit;
-        if (!isfinite(g->dir.x) || !isfinite(g->dir.y) || !isfinite(g->dir.z) ||
-            !isfinite(g->org.x) || !isfinite(g->org.y) || !isfinite(g->org.z) ||
-            isnan(g->t_hit) || isnan(g->t_second))
-            return gi_fail(err, GI_EPROTO, "%s: segment %zu is not finite", in->what, i);
-    }
-    return in->failed ? gi_fail(err, GI_EPROTO, "%s: truncated segments", in->what) : 0;
 }
 
 void gi_detp_set_extent(gi_detp_segments *s, gi_detp_artifact ac, float eps)

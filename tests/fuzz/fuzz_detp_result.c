@@ -1,7 +1,6 @@
-/* fuzz_detp_result: libFuzzer target for what detp decodes from workers and
- * batch caches: photon batch results (dense and sparse forms), animation
- * frame results (exact integer sums) and the binary segment records. The
- * first byte picks the decoder. Any input must
+/* fuzz_detp_result: libFuzzer target for what detp decodes from workers:
+ * photon batch results (dense and sparse forms) and animation frame results
+ * (exact integer sums). The first byte picks the decoder. Any input must
  * decode or fail with GI_EPROTO; never crash, leak or hang. */
 #include <stdint.h>
 #include <stdlib.h>
@@ -20,13 +19,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_reader r;
     gi_reader_init(&r, data + 1, size - 1, "fuzz");
     int rc;
-    if (data[0] & 1) {
-        gi_detp_segments s;
-        gi_detp_segments_init(&s);
-        size_t count = (size - 1) / GI_DETP_SEGMENT_BYTES + (data[0] >> 1 & 1);
-        rc = gi_detp_segments_decode(&r, count, &s, &err);
-        gi_detp_segments_free(&s);
-    } else if (data[0] & 2) {
+    if (data[0] & 2) {
         int64_t sum[3 * VERTICES] = {0}, hits[VERTICES] = {0};
         detp_anim_result h;
         rc = detp_decode_anim(&r, VERTICES, &h, sum, hits, &err);

@@ -62,24 +62,6 @@ GI_TEST(test_detp_paths_depend_only_on_the_photon_index)
     gi_detp_trace_photon(&tr2, 100, &one);
     GI_CHECK(!same_segment(&one.v[0], &batch.v[0]));
 
-    /* The binary form holds every field. */
-    gi_buf b;
-    gi_buf_init(&b);
-    gi_detp_segments_encode(&batch, &b);
-    GI_CHECK(b.len == batch.count * GI_DETP_SEGMENT_BYTES);
-    gi_reader r;
-    gi_reader_init(&r, b.data, b.len, "segments");
-    gi_detp_segments back;
-    gi_detp_segments_init(&back);
-    GI_REQUIRE_OK(gi_detp_segments_decode(&r, batch.count, &back, &err));
-    GI_CHECK(r.left == 0 && back.count == batch.count);
-    for (size_t k = 0; k < back.count; k++)
-        mismatches += !same_segment(&back.v[k], &batch.v[k]);
-    GI_CHECK(mismatches == 0);
-    gi_reader_init(&r, b.data, b.len - 1, "segments");
-    GI_CHECK(gi_detp_segments_decode(&r, batch.count, &back, &err) == -1);
-    gi_buf_free(&b);
-    gi_detp_segments_free(&back);
     gi_detp_segments_free(&batch);
     gi_detp_segments_free(&one);
     gi_rt_free(&rt);
