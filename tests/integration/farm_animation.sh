@@ -44,6 +44,7 @@ PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/a.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/ca" --name a
 A_PID=$WORKER_PID
 start_worker "$TMP/b.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cb" --name b
+wait_workers 2
 
 # Frame 0 is 12 tasks (8 batches, 4 tiles), every frame after it too.
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }

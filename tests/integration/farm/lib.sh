@@ -65,6 +65,17 @@ start_worker() {
     FARM_PIDS="$FARM_PIDS $WORKER_PID"
 }
 
+# wait_workers N: until N workers are connected and active (a test that
+# needs work spread over hosts must not submit before they are all there).
+wait_workers() {
+    n=0
+    until [ "$("$GI" workers 2>/dev/null | grep -c ' active ')" -ge "$1" ]; do
+        n=$((n + 1))
+        [ $n -lt 300 ] || { "$GI" workers; fail "$1 workers did not connect"; }
+        sleep 0.1
+    done
+}
+
 # api PATH [curl options]: an authenticated API call (prints the body).
 api() {
     path=$1
