@@ -69,9 +69,9 @@ start_worker() {
 # needs work spread over hosts must not submit before they are all there).
 wait_workers() {
     n=0
-    until [ "$("$GI" workers 2>/dev/null | grep -c ' active ')" -ge "$1" ]; do
+    until [ "$(${FARM_EXEC:-} "$GI" workers 2>/dev/null | grep -c ' active ')" -ge "$1" ]; do
         n=$((n + 1))
-        [ $n -lt 300 ] || { "$GI" workers; fail "$1 workers did not connect"; }
+        [ $n -lt 300 ] || { ${FARM_EXEC:-} "$GI" workers; fail "$1 workers did not connect"; }
         sleep 0.1
     done
 }
@@ -166,6 +166,7 @@ netns_farm() {
         start_worker "$TMP/w$i.log" ip netns exec "$P-w$i" -- --connect "$C:7071" --procs 1 \
             --cache "$TMP/cache$i" --name "host$i"
     done
+    wait_workers 3
 }
 
 # cornell_job FILE SEED WIDTH HEIGHT SPP [PASS_SPP]: a Cornell box pt job
