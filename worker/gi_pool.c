@@ -190,11 +190,12 @@ int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
     return rc;
 }
 
-int gi_pool_pollfds(const gi_pool *p, struct pollfd *fds, int *child_of)
+int gi_pool_pollfds(gi_pool *p, struct pollfd *fds, int *child_of)
 {
     int n = 0;
     for (int i = 0; i < p->count; i++)
         if (p->kids[i].fd >= 0) {
+            p->kids[i].polled_pid = p->kids[i].pid;
             fds[n].fd = p->kids[i].fd;
             fds[n].events = POLLIN;
             fds[n].revents = 0;
@@ -314,7 +315,8 @@ static void child_readable(gi_pool *p, int i, const gi_pool_events *ev)
 {
     gi_pool_child *k = &p->kids[i];
     uint8_t buf[65536];
-    ssize_t n = read(k->fd, buf, sizeof buf);
+    /* Never blocks: a stale readiness report must not stall the loop. */
+    ssize_t n = recv(k->fd, buf, sizeof buf, MSG_DONTWAIT);
     if (n < 0 && (errno == EINTR || errno == EAGAIN))
         return;
     if (n <= 0) {
@@ -347,7 +349,8 @@ void gi_pool_dispatch(gi_pool *p, const struct pollfd *fds, const int *child_of,
 {
     for (int j = 0; j < n; j++) {
         int i = child_of[j];
-        if (!fds[j].revents || p->kids[i].fd != fds[j].fd)
+        const gi_pool_child *k = &p->kids[i];
+        if (!fds[j].revents || k->fd != fds[j].fd || k->pid != k->polled_pid)
             continue;
         child_readable(p, i, ev);
     }

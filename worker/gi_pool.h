@@ -27,6 +27,9 @@ typedef struct gi_pool_child {
     uint32_t attempt;
     uint64_t jobs_sent[8]; /* recent jobs whose JOB this child has */
     int jobs_sent_count;
+    /* The process whose descriptor the last gi_pool_pollfds listed: a child
+     * replaced since (same slot, same fd number) must not get its events. */
+    pid_t polled_pid;
 } gi_pool_child;
 
 typedef struct gi_pool_events {
@@ -84,7 +87,7 @@ void gi_pool_reply_asset(gi_pool *p, int i, const char *hash, const gi_buf *byte
 /* For event loops that also watch other descriptors: fills pollfds for the
  * living children (returns how many, at most p->count), then dispatches what
  * poll() reported. */
-int gi_pool_pollfds(const gi_pool *p, struct pollfd *fds, int *child_of);
+int gi_pool_pollfds(gi_pool *p, struct pollfd *fds, int *child_of);
 void gi_pool_dispatch(gi_pool *p, const struct pollfd *fds, const int *child_of, int n,
                       const gi_pool_events *ev);
 /* poll() on the children alone, then dispatch. Returns poll's result. */
