@@ -1,7 +1,11 @@
 # Sourced by integration tests. The runner sets GI (ASan build of gi),
 # GI_RELEASE (optimized build), IMGTOOL, SRC (source tree), TMP (scratch).
 set -eu
+# FAIL_LOGS: logs whose last lines a failure shows (what a CI run keeps).
 fail() {
+    for l in ${FAIL_LOGS:-}; do
+        [ -f "$l" ] && { echo "--- last lines of $l"; tail -n 40 "$l"; }
+    done
     echo "FAIL: $*"
     exit 1
 }
