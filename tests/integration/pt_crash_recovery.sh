@@ -28,7 +28,7 @@ grep -q "task 5 failed 4 times" "$TMP/dead.log" || { cat "$TMP/dead.log"; fail "
 [ ! -e "$TMP/dead/img.exr" ] || fail "a failed job left an output"
 
 # SIGKILL of a real child from outside, mid-render (slower job: release build).
-sed 's/"spp": 16/"spp": 256/' "$TMP/job.json" >"$TMP/long.json"
+sed 's/"spp": 16/"spp": 1024/' "$TMP/job.json" >"$TMP/long.json"
 "$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long-ref" --progress none >/dev/null 2>&1 ||
     fail "long reference"
 render_killing_a_child "$TMP/long.json" "$TMP/long-kill" 0.3
