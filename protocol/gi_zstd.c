@@ -4,8 +4,15 @@
 #include <stdlib.h>
 #include <zstd.h>
 
+/* One context of each kind per thread, kept: a fresh one per call spent
+ * most of a small payload's time allocating and clearing its tables. */
+static _Thread_local ZSTD_CCtx *cctx;
+static _Thread_local ZSTD_DCtx *dctx;
+
 int gi_zstd_compress(gi_buf *out, const void *src, size_t n, int level, gi_error *err)
 {
+    if (!cctx && !(cctx = ZSTD_createCCtx()))
+        return gi_fail(err, GI_EINTERNAL, "zstd: cannot create a compression context");
     size_t bound = ZSTD_compressBound(n);
     if (ZSTD_isError(bound))
         return gi_fail(err, GI_EINTERNAL, "zstd: cannot compress %zu bytes: %s", n,
@@ -13,7 +20,7 @@ int gi_zstd_compress(gi_buf *out, const void *src, size_t n, int level, gi_error
     gi_buf_reserve(out, bound);
     /* ZSTD_compress() writes the content size into the frame header, which
      * the receiver requires. */
-    size_t r = ZSTD_compress(out->data + out->len, bound, src, n, level);
+    size_t r = ZSTD_compressCCtx(cctx, out->data + out->len, bound, src, n, level);
     if (ZSTD_isError(r))
         return gi_fail(err, GI_EINTERNAL, "zstd: compressing %zu bytes failed: %s", n,
                        ZSTD_getErrorName(r));
@@ -47,10 +54,12 @@ int gi_zstd_decompress(gi_buf *out, const void *src, size_t n, uint64_t max_size
     if (csize != n)
         return gi_fail(err, GI_EPROTO, "%s: %zu bytes follow the zstd frame", what, n - csize);
 
+    if (!dctx && !(dctx = ZSTD_createDCtx()))
+        return gi_fail(err, GI_ENOMEM, "%s: cannot create a zstd decompression context", what);
     uint8_t *dst = gi_try_malloc((size_t)size, err, what);
     if (!dst)
         return -1;
-    size_t r = ZSTD_decompress(dst, (size_t)size, src, n);
+    size_t r = ZSTD_decompressDCtx(dctx, dst, (size_t)size, src, n);
     if (ZSTD_isError(r)) {
         free(dst);
         return gi_fail(err, GI_EPROTO, "%s: zstd: %s", what, ZSTD_getErrorName(r));
