@@ -15,6 +15,7 @@
 
 #include "gi_args.h"
 #include "gi_auth.h"
+#include "gi_blas_threads.h"
 #include "gi_farm.h"
 #include "gi_log.h"
 #include "gi_version.h"
@@ -130,6 +131,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
 int main(int argc, char **argv)
 {
     gi_log_init("gi-farmd");
+    gi_blas_single_thread();
     if (!getenv("GI_LOG"))
         gi_log_set_level(GI_LOG_INFO);
     gi_farm_config cfg;

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "gi_args.h"
+#include "gi_blas_threads.h"
 #include "gi_client.h"
 #include "gi_fs.h"
 #include "gi_job.h"
@@ -183,6 +184,7 @@ static int cmd_methods(void)
 int main(int argc, char **argv)
 {
     gi_log_init("gi");
+    gi_blas_single_thread();
     if (argc < 2) {
         usage(stderr);
         return 2;

@@ -14,6 +14,7 @@
 
 #include "gi_args.h"
 #include "gi_auth.h"
+#include "gi_blas_threads.h"
 #include "gi_farm_worker.h"
 #include "gi_log.h"
 #include "gi_version.h"
@@ -57,6 +58,7 @@ static char *default_cache(void)
 int main(int argc, char **argv)
 {
     gi_log_init("gi-worker");
+    gi_blas_single_thread();
     if (!getenv("GI_LOG"))
         gi_log_set_level(GI_LOG_INFO);
     gi_worker_opts o;
