@@ -21,7 +21,8 @@
 #include "gi_progress.h"
 
 #define MAX_JSON_BODY ((uint64_t)64 << 20)
-#define POLL_S 0.1
+#define POLL_S 0.1     /* the longest wait between two looks at a job */
+#define POLL_MIN_S 0.01 /* the shortest, once the job is about to end */
 
 const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
@@ -208,6 +209,15 @@ static void sleep_s(double s)
     nanosleep(&ts, NULL);
 }
 
+/* The wait before the next look at a job: shorter as its end nears (the
+ * client's latency adds to every job's wall time), never a busy loop. */
+static double poll_wait(const cJSON *job, double last)
+{
+    const cJSON *eta = cJSON_GetObjectItemCaseSensitive(job, "eta_seconds");
+    double next = cJSON_IsNumber(eta) ? 0.5 * eta->valuedouble : 2.0 * last;
+    return next < POLL_MIN_S ? POLL_MIN_S : next > POLL_S ? POLL_S : next;
+}
+
 /* Exit status for a job that ended without success. */
 static int job_failed(uint64_t id, const cJSON *job)
 {
@@ -245,6 +255,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     sa.sa_handler = on_sigint;
     sigaction(SIGINT, &sa, &old);
     int rc;
+    double wait = POLL_MIN_S;
     for (;;) {
         cJSON *job = NULL;
         if ((rc = get_job(c, id, &job)) != 0)
@@ -276,6 +287,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
             cJSON_Delete(job);
             break;
         }
+        wait = poll_wait(job, wait);
         cJSON_Delete(job);
         if (interrupted) {
             if (started)
@@ -285,7 +297,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
             rc = 130;
             break;
         }
-        sleep_s(POLL_S);
+        sleep_s(wait);
     }
     sigaction(SIGINT, &old, NULL);
     return rc;
