@@ -17,8 +17,9 @@
 
 /* Level 1: result payloads are float and double arrays with noisy low
  * mantissa bits; a simulated pt result (per-pixel sums of 16 noisy samples)
- * came out 5.7% smaller at level 1 and at level 3 alike, and level 3 took twice the CPU in a worker's relay, CPU taken
- * from the renderers on the same host. */
+ * came out 5.7% smaller at level 1 and at level 3 alike, and level 3 took
+ * twice the CPU in a worker's relay, CPU taken from the renderers on the
+ * same host. */
 #define GI_ZSTD_LEVEL 1
 
 /* Appends one zstd frame holding src[0..n) (content size recorded) to out.
