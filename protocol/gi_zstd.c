@@ -18,7 +18,7 @@ int gi_zstd_compress(gi_buf *out, const void *src, size_t n, int level, gi_error
         return gi_fail(err, GI_EINTERNAL, "zstd: cannot compress %zu bytes: %s", n,
                        ZSTD_getErrorName(bound));
     gi_buf_reserve(out, bound);
-    /* ZSTD_compress() writes the content size into the frame header, which
+    /* ZSTD_compressCCtx() writes the content size into the frame header, which
      * the receiver requires. */
     size_t r = ZSTD_compressCCtx(cctx, out->data + out->len, bound, src, n, level);
     if (ZSTD_isError(r))
