@@ -6,7 +6,6 @@
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
 LOG="$TMP/farmd.log"
-FAIL_LOGS="$LOG $TMP/w1.log $TMP/w2.log"
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10
 job() { # NAME SEED SPP [SIZE]
     write_job "$TMP/$1.json" <<JOB

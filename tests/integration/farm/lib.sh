@@ -24,6 +24,12 @@ make_secrets() {
     export GI_FARM_SECRET_FILE="$TMP/secret" GI_FARM_TOKEN_FILE="$TMP/token"
 }
 
+# show_on_failure LOG: fail() shows its last lines (once, however often the
+# process behind it is restarted).
+show_on_failure() {
+    case " ${FAIL_LOGS:-} " in *" $1 "*) ;; *) FAIL_LOGS="${FAIL_LOGS:-} $1" ;; esac
+}
+
 # start_farmd STATE LOG [prefix command...] -- [gi-farmd options...]
 # Loopback on kernel-chosen ports unless options say otherwise; sets
 # FARMD_PID, API (host:port) and WADDR (host:port).
@@ -35,6 +41,7 @@ start_farmd() {
     while [ $# -gt 0 ] && [ "$1" != "--" ]; do pre="$pre $1"; shift; done
     [ $# -gt 0 ] && shift
     rm -f "$state/addresses"
+    show_on_failure "$log"
     # shellcheck disable=SC2086
     $pre "$FARMD" --state "$state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 "$@" \
         >>"$log" 2>&1 &
@@ -59,6 +66,7 @@ start_worker() {
     pre=""
     while [ $# -gt 0 ] && [ "$1" != "--" ]; do pre="$pre $1"; shift; done
     [ $# -gt 0 ] && shift
+    show_on_failure "$log"
     # shellcheck disable=SC2086
     $pre "$WORKER" --backoff-max 0.5 "$@" >>"$log" 2>&1 &
     WORKER_PID=$!
