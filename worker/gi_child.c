@@ -26,11 +26,10 @@ typedef struct child {
     const char *batch_root;
 } child;
 
-/* Uncompressed: the parent is on the same host, where copying is cheaper
- * than compressing (a farm worker compresses once, for the network). */
 static int send_msg(child *c, uint16_t type, const gi_buf *b, gi_error *err)
 {
-    return gi_frame_send(c->fd, type, b ? b->data : NULL, b ? b->len : 0, 0, err);
+    return gi_frame_send(c->fd, type, b ? b->data : NULL, b ? b->len : 0,
+                         GI_CHILD_LINK_COMPRESS, err);
 }
 
 /* Asks the parent for an asset and waits for it (the parent answers

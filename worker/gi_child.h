@@ -9,6 +9,11 @@
 #ifndef GI_CHILD_H
 #define GI_CHILD_H
 
+/* Frames between a parent and its children, both ways, are not compressed:
+ * they share a host, where copying is cheaper than zstd (a farm worker
+ * compresses once, for the network). */
+#define GI_CHILD_LINK_COMPRESS 0
+
 /* Runs until BYE or the parent goes away; returns the exit status.
  * batch_root (NULL: none): where the host keeps per-job batch directories
  * (gi_batch_dir.h); each loaded job's ctx.batch_dir lies below it. */

@@ -166,7 +166,7 @@ int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
     int rc = 0;
     if (!child_has_job(k, job_id)) {
         gi_msg_job_encode(&b, job_id, job_file, job_text, manifest);
-        rc = gi_frame_send(k->fd, GI_MSG_JOB, b.data, b.len, 1, err);
+        rc = gi_frame_send(k->fd, GI_MSG_JOB, b.data, b.len, GI_CHILD_LINK_COMPRESS, err);
         if (rc == 0) {
             if (k->jobs_sent_count == (int)GI_ARRAY_LEN(k->jobs_sent)) {
                 memmove(k->jobs_sent, k->jobs_sent + 1, sizeof k->jobs_sent - sizeof k->jobs_sent[0]);
@@ -178,7 +178,7 @@ int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
     if (rc == 0) {
         gi_buf_reset(&b);
         gi_msg_task_encode(&b, job_id, task);
-        rc = gi_frame_send(k->fd, GI_MSG_TASK, b.data, b.len, 1, err);
+        rc = gi_frame_send(k->fd, GI_MSG_TASK, b.data, b.len, GI_CHILD_LINK_COMPRESS, err);
     }
     gi_buf_free(&b);
     /* Busy even if the send failed: the child's death is then reported with
@@ -236,7 +236,7 @@ static int send_asset(int fd, const char *hash, const gi_buf *bytes, const gi_er
     int rc;
     if (bytes) {
         gi_msg_asset_put_encode(&b, hash, bytes->data, bytes->len);
-        rc = gi_frame_send(fd, GI_MSG_ASSET_PUT, b.data, b.len, 1, err);
+        rc = gi_frame_send(fd, GI_MSG_ASSET_PUT, b.data, b.len, GI_CHILD_LINK_COMPRESS, err);
     } else {
         gi_msg_error_encode(&b, why);
         rc = gi_frame_send(fd, GI_MSG_ERROR, b.data, b.len, 0, err);
