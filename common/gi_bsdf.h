@@ -34,13 +34,28 @@ static inline float gi_bsdf_pdf(const gi_bsdf *b, gi_vec3 wi)
     return c > 0.0f ? c * (float)GI_INV_PI : 0.0f;
 }
 
+/* A BSDF sample's random numbers (u1, u2) mapped ahead of the sampling
+ * (their square roots and polynomials), so that a batch of paths can do
+ * that for all its vertices together. */
+static inline gi_polar gi_bsdf_map(float u1, float u2) { return gi_polar_map(u1, u2); }
+
+/* Samples wi from mapped numbers; returns the weight f * cos / pdf (= rho
+ * for diffuse). */
+static inline gi_vec3 gi_bsdf_sample_mapped(const gi_bsdf *b, gi_polar q, gi_vec3 *wi,
+                                            float *pdf)
+{
+    gi_vec3 w = gi_cosine_dir(b->n, q); /* in registers, not read back through wi */
+    float p = gi_bsdf_pdf(b, w);
+    *wi = w;
+    *pdf = p;
+    return p > 0.0f ? b->rho : gi_v3(0, 0, 0);
+}
+
 /* Samples wi; returns the weight f * cos / pdf (= rho for diffuse). */
 static inline gi_vec3 gi_bsdf_sample(const gi_bsdf *b, float u1, float u2, gi_vec3 *wi,
                                      float *pdf)
 {
-    *wi = gi_sample_cosine(b->n, u1, u2);
-    *pdf = gi_bsdf_pdf(b, *wi);
-    return *pdf > 0.0f ? b->rho : gi_v3(0, 0, 0);
+    return gi_bsdf_sample_mapped(b, gi_bsdf_map(u1, u2), wi, pdf);
 }
 
 #endif

@@ -52,14 +52,31 @@ static inline void gi_sincos_turn(float u, float *s, float *c)
 /* Cosine-weighted direction around unit n; pdf = cos(theta) / pi.
  * Malley's method on the polar disc map (r = sqrt(u1), phi = 2 pi u2): the
  * three transcendentals are independent, so they overlap in the CPU (the
- * concentric map chains a division, a polynomial and a square root). */
-static inline gi_vec3 gi_sample_cosine(gi_vec3 n, float u1, float u2)
+ * concentric map chains a division, a polynomial and a square root).
+ * gi_polar_map is the transcendental half, gi_cosine_dir the rest: callers
+ * with many samples map them all first. */
+typedef struct gi_polar {
+    float r, z; /* disc radius sqrt(u1); hemisphere height sqrt(1 - u1) */
+    float s, c; /* sin and cos of phi */
+} gi_polar;
+
+static inline gi_polar gi_polar_map(float u1, float u2)
 {
-    float r = sqrtf(u1), z = sqrtf(1.0f - u1), s, c;
-    gi_sincos_turn(u2, &s, &c);
+    gi_polar q = {sqrtf(u1), sqrtf(1.0f - u1), 0.0f, 0.0f};
+    gi_sincos_turn(u2, &q.s, &q.c);
+    return q;
+}
+
+static inline gi_vec3 gi_cosine_dir(gi_vec3 n, gi_polar q)
+{
     gi_vec3 t, bt;
     gi_onb(n, &t, &bt);
-    return gi_add(gi_add(gi_scale(t, r * c), gi_scale(bt, r * s)), gi_scale(n, z));
+    return gi_add(gi_add(gi_scale(t, q.r * q.c), gi_scale(bt, q.r * q.s)), gi_scale(n, q.z));
+}
+
+static inline gi_vec3 gi_sample_cosine(gi_vec3 n, float u1, float u2)
+{
+    return gi_cosine_dir(n, gi_polar_map(u1, u2));
 }
 
 /* Uniform point on triangle (a, b, c) (Turk's square-root map). */

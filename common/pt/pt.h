@@ -78,8 +78,9 @@ void gi_pt_path_start(gi_pt_path *P, gi_vec3 org, gi_vec3 dir, const gi_rng *rng
  * estimation, the next ray. Returns GI_PT_SHADOW | GI_PT_CONTINUE flags. */
 int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_shadow *sh);
 /* Advances n paths to their ends breadth first: all rays of a bounce, then
- * all shading, then all shadow rays. Same result bits as gi_pt_radiance per
- * path; independent paths give the CPU room to overlap their latencies. */
+ * all shading (a batch of vertices at a time, stage by stage), then all
+ * shadow rays. Same result bits as gi_pt_radiance per path; independent
+ * paths give the CPU room to overlap their latencies. */
 void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n);
 
 void gi_pt_params_default(gi_pt_params *p);

@@ -6,43 +6,91 @@
 #include "gi_light.h"
 #include "pt.h"
 
-/* Next-event estimation: a point on an emitter, and the shadow ray that
- * decides whether its (weighted) radiance counts. Written for few divisions
- * and square roots: this runs once per vertex. Returns 0 if the sample
- * cannot contribute. */
-static int sample_light(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 ng_f, const gi_bsdf *bsdf,
-                        gi_rng *rng, gi_pt_shadow *sh)
+/* A vertex of a path between the stages of its shading: what the first
+ * stage (vertex_open) found and drew, the square roots and divisions
+ * (vertex_roots), and what the last stage (vertex_close) needs of them.
+ * Split so that a batch of paths runs each stage in turn: the long
+ * latencies of independent vertices then overlap in the CPU. Every vertex
+ * goes through the same three functions, so the arithmetic is the same
+ * whether one path or many advance. */
+typedef struct pt_shade {
+    gi_vec3 p, ng_f;
+    gi_bsdf bsdf;
+    int has_light;        /* a point on an emitter was drawn (next-event estimation) */
+    double light_pick;    /* the light sample's numbers (if has_light) */
+    float light_u1, light_u2;
+    gi_light_sample ls;   /* and the point they pick */
+    gi_vec3 to_light;     /* ls.p - p */
+    float dist2, dist, inv_dist;
+    float u1, u2;         /* the BSDF sample's numbers */
+    gi_vec3 bsdf_wi, bsdf_weight; /* the BSDF sample */
+    float bsdf_pdf;
+} pt_shade;
+
+/* The small steps below are inlined into each stage's loop: a call per
+ * vertex and step cost ~3% of the tracer's time. */
+#define PT_INLINE static inline __attribute__((always_inline))
+
+/* Draws the numbers of the vertex's light sample (next-event estimation,
+ * unless the strategy is BSDF sampling alone), then of its BSDF sample: a
+ * path's order of random numbers is fixed. */
+PT_INLINE void vertex_draw(const gi_pt_tracer *tr, gi_rng *rng, pt_shade *v)
 {
-    const gi_scene *s = tr->scene;
-    double us = gi_rng_double(rng);
-    float u1 = gi_rng_float(rng), u2 = gi_rng_float(rng);
-    gi_light_sample ls;
-    gi_light_sample_point(s, us, u1, u2, &ls);
-    gi_vec3 d = gi_sub(ls.p, p);
-    float dist2 = gi_dot(d, d);
-    if (!(dist2 > 0.0f))
+    v->has_light = tr->params->strategy != GI_PT_BSDF;
+    v->dist2 = 0.0f;
+    if (v->has_light) {
+        v->light_pick = gi_rng_double(rng);
+        v->light_u1 = gi_rng_float(rng);
+        v->light_u2 = gi_rng_float(rng);
+    }
+    v->u1 = gi_rng_float(rng);
+    v->u2 = gi_rng_float(rng);
+}
+
+/* The light sample's point and distance, and the BSDF sample. */
+PT_INLINE void vertex_roots(const gi_pt_tracer *tr, pt_shade *v)
+{
+    if (v->has_light) {
+        gi_light_sample_point(tr->scene, v->light_pick, v->light_u1, v->light_u2, &v->ls);
+        v->to_light = gi_sub(v->ls.p, v->p);
+        v->dist2 = gi_dot(v->to_light, v->to_light);
+    }
+    v->dist = sqrtf(v->dist2);
+    v->inv_dist = 1.0f / v->dist;
+    v->bsdf_weight = gi_bsdf_sample_mapped(&v->bsdf, gi_bsdf_map(v->u1, v->u2), &v->bsdf_wi,
+                                           &v->bsdf_pdf);
+}
+
+/* Next-event estimation, second half: the shadow ray that decides whether
+ * the emitter point's radiance counts, and *contrib, what it adds (MIS
+ * weighted, before the path's throughput). Written for few divisions: this
+ * runs once per vertex. Returns 0 if the sample cannot contribute. */
+PT_INLINE int light_shadow(const gi_pt_tracer *tr, const pt_shade *v, gi_pt_shadow *sh,
+                           gi_vec3 *contrib)
+{
+    const gi_light_sample *ls = &v->ls;
+    if (!(v->dist2 > 0.0f))
         return 0;
-    float dist = sqrtf(dist2), inv_dist = 1.0f / dist;
-    gi_vec3 wi = gi_scale(d, inv_dist);
-    float cos_s = gi_dot(bsdf->n, wi);
-    if (cos_s <= 0.0f || gi_dot(ng_f, wi) <= 0.0f)
+    gi_vec3 wi = gi_scale(v->to_light, v->inv_dist);
+    float cos_s = gi_dot(v->bsdf.n, wi);
+    if (cos_s <= 0.0f || gi_dot(v->ng_f, wi) <= 0.0f)
         return 0;
-    const gi_material *lm = gi_scene_tri_material(s, ls.tri);
-    float cos_l = -gi_dot(ls.n, wi);
+    const gi_material *lm = gi_scene_tri_material(tr->scene, ls->tri);
+    float cos_l = -gi_dot(ls->n, wi);
     if (cos_l == 0.0f || (cos_l < 0.0f && !lm->two_sided))
         return 0;
     float inv_cos_l = 1.0f / fabsf(cos_l);
-    float pdf_light = ls.pdf_area * dist2 * inv_cos_l; /* per solid angle */
-    if (!gi_rt_shadow_segment(p, ng_f, ls.p, dist, inv_cos_l, &sh->org, &sh->tfar))
+    float pdf_light = ls->pdf_area * v->dist2 * inv_cos_l; /* per solid angle */
+    if (!gi_rt_shadow_segment(v->p, v->ng_f, ls->p, v->dist, inv_cos_l, &sh->org, &sh->tfar))
         return 0;
     sh->dir = wi;
-    gi_vec3 fl = gi_mul(gi_bsdf_eval(bsdf, wi), lm->emission);
+    gi_vec3 fl = gi_mul(gi_bsdf_eval(&v->bsdf, wi), lm->emission);
     if (tr->params->strategy != GI_PT_MIS) {
-        sh->contrib = gi_scale(fl, cos_s / pdf_light);
+        *contrib = gi_scale(fl, cos_s / pdf_light);
     } else {
         /* Power heuristic folded in: f Le cos / p_l * p_l^2 / (p_l^2 + p_b^2). */
-        float pdf_bsdf = gi_bsdf_pdf(bsdf, wi);
-        sh->contrib =
+        float pdf_bsdf = gi_bsdf_pdf(&v->bsdf, wi);
+        *contrib =
             gi_scale(fl, cos_s * pdf_light / (pdf_light * pdf_light + pdf_bsdf * pdf_bsdf));
     }
     return 1;
@@ -59,7 +107,10 @@ void gi_pt_path_start(gi_pt_path *P, gi_vec3 org, gi_vec3 dir, const gi_rng *rng
     P->rng = *rng;
 }
 
-int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_shadow *sh)
+/* The vertex where the path's ray hit (h): emission gathered, and, unless
+ * the path ends here (returns 0), the random numbers of its light and BSDF
+ * samples drawn into *v. */
+static int vertex_open(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, pt_shade *v)
 {
     const gi_scene *s = tr->scene;
     const gi_pt_params *prm = tr->params;
@@ -67,11 +118,10 @@ int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_s
     gi_vec3 ng = s->tri_normal[h->tri];
     /* org + t dir is off the plane by ~1e-7 t: far below the 2e-5 relative
      * offset every new ray starts with. */
-    gi_vec3 p = gi_madd(P->org, P->dir, h->t);
+    v->p = gi_madd(P->org, P->dir, h->t);
     gi_vec3 wo = gi_neg(P->dir);
     float cos_o = gi_dot(ng, wo);
-    gi_vec3 ng_f = cos_o >= 0.0f ? ng : gi_neg(ng);
-    int flags = 0;
+    v->ng_f = cos_o >= 0.0f ? ng : gi_neg(ng);
 
     if (!gi_is_black(m->emission)) {
         gi_vec3 le = gi_light_emitted(m, ng, wo);
@@ -88,31 +138,52 @@ int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_s
     }
     if ((prm->max_bounces >= 0 && P->bounce >= prm->max_bounces) || gi_is_black(m->diffuse))
         return 0;
-    gi_bsdf bsdf = gi_bsdf_at(m, gi_scene_shading_normal(s, h->tri, h->u, h->v, ng_f));
+    v->bsdf = gi_bsdf_at(m, gi_scene_shading_normal(s, h->tri, h->u, h->v, v->ng_f));
+    vertex_draw(tr, &P->rng, v);
+    return 1;
+}
 
-    if (prm->strategy != GI_PT_BSDF && sample_light(tr, p, ng_f, &bsdf, &P->rng, sh)) {
-        sh->contrib = gi_mul(P->beta, sh->contrib);
+/* The rest of an opened vertex: the shadow ray of next-event estimation
+ * and the next ray. Returns GI_PT_SHADOW | GI_PT_CONTINUE flags. */
+static int vertex_close(const gi_pt_tracer *tr, gi_pt_path *P, const pt_shade *v,
+                        gi_pt_shadow *sh)
+{
+    const gi_pt_params *prm = tr->params;
+    int flags = 0;
+    gi_vec3 contrib;
+    if (v->has_light && light_shadow(tr, v, sh, &contrib)) {
+        sh->contrib = gi_mul(P->beta, contrib);
         flags |= GI_PT_SHADOW;
     }
-
-    gi_vec3 wi;
-    float pdf;
-    float u1 = gi_rng_float(&P->rng), u2 = gi_rng_float(&P->rng);
-    gi_vec3 weight = gi_bsdf_sample(&bsdf, u1, u2, &wi, &pdf);
-    if (!(pdf > 0.0f) || gi_dot(wi, ng_f) <= 0.0f)
+    gi_vec3 wi = v->bsdf_wi;
+    float pdf = v->bsdf_pdf;
+    if (!(pdf > 0.0f) || gi_dot(wi, v->ng_f) <= 0.0f)
         return flags;
-    P->beta = gi_mul(P->beta, weight);
+    P->beta = gi_mul(P->beta, v->bsdf_weight);
+    /* Russian roulette without a branch on its coin (a branch would be
+     * mispredicted at every other toss): a path that stops still gets the
+     * next ray's fields (and beta may become inf for q = 0), but only its
+     * L is read after it ends. */
+    int go_on = 1;
     if (P->bounce + 1 >= prm->rr_depth) {
         float q = gi_minf(0.95f, gi_max3(P->beta));
-        if (!(gi_rng_float(&P->rng) < q))
-            return flags;
+        go_on = gi_rng_float(&P->rng) < q;
         P->beta = gi_scale(P->beta, 1.0f / q);
     }
     P->prev_pdf = pdf;
-    P->org = gi_rt_offset(p, ng_f, wi);
+    P->org = gi_rt_offset(v->p, v->ng_f, wi);
     P->dir = wi;
     P->bounce++;
-    return flags | GI_PT_CONTINUE;
+    return flags | (go_on ? GI_PT_CONTINUE : 0);
+}
+
+int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_shadow *sh)
+{
+    pt_shade v;
+    if (!vertex_open(tr, P, h, &v))
+        return 0;
+    vertex_roots(tr, &v);
+    return vertex_close(tr, P, &v, sh);
 }
 
 static inline int trace(const gi_pt_tracer *tr, const gi_pt_path *P, gi_hit *h)
@@ -161,13 +232,15 @@ gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *r
     gi_vec3 L = gi_v3(0, 0, 0);
     if (tr->params->max_bounces == 0)
         return L;
+    pt_shade v = {.p = p, .ng_f = n, .bsdf = white};
+    vertex_draw(tr, rng, &v);
+    vertex_roots(tr, &v);
     gi_pt_shadow sh;
-    if (tr->params->strategy != GI_PT_BSDF && sample_light(tr, p, n, &white, rng, &sh) &&
-        !blocked(tr, &sh))
-        L = sh.contrib;
-    float u1 = gi_rng_float(rng), u2 = gi_rng_float(rng), pdf;
-    gi_vec3 wi;
-    gi_bsdf_sample(&white, u1, u2, &wi, &pdf);
+    gi_vec3 contrib;
+    if (v.has_light && light_shadow(tr, &v, &sh, &contrib) && !blocked(tr, &sh))
+        L = contrib;
+    gi_vec3 wi = v.bsdf_wi;
+    float pdf = v.bsdf_pdf;
     if (pdf > 0.0f) {
         gi_pt_path P;
         gi_pt_path_start(&P, gi_rt_offset(p, n, wi), wi, rng);
@@ -180,12 +253,18 @@ gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *r
     return gi_scale(L, (float)GI_PI);
 }
 
+/* Vertices shaded together: enough independent work to fill the CPU's
+ * window, little enough to stay in the first-level cache. */
+#define PT_SHADE_BATCH 32
+
 void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n)
 {
     uint32_t *live = gi_xmalloc(n * sizeof *live), *owner = gi_xmalloc(n * sizeof *owner);
     gi_hit *hits = gi_xmalloc(n * sizeof *hits);
     uint8_t *hit_ok = gi_xmalloc(n);
     gi_pt_shadow *sh = gi_xmalloc(n * sizeof *sh);
+    pt_shade shade[PT_SHADE_BATCH];
+    uint32_t opened[PT_SHADE_BATCH];
     size_t nlive = n;
     for (size_t i = 0; i < n; i++)
         live[i] = (uint32_t)i;
@@ -193,21 +272,32 @@ void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n)
         for (size_t k = 0; k < nlive; k++)
             hit_ok[k] = (uint8_t)trace(tr, &paths[live[k]], &hits[k]);
         size_t nsh = 0, next = 0;
-        for (size_t k = 0; k < nlive; k++) {
-            if (!hit_ok[k])
-                continue;
-            uint32_t i = live[k];
-            int flags = gi_pt_vertex(tr, &paths[i], &hits[k], &sh[nsh]);
-            if (flags & GI_PT_SHADOW)
-                owner[nsh++] = i;
-            if (flags & GI_PT_CONTINUE)
-                live[next++] = i;
+        /* Shading, a batch of vertices at a time, each stage over the whole
+         * batch. live[] is rewritten behind the batch being read. */
+        for (size_t k0 = 0; k0 < nlive; k0 += PT_SHADE_BATCH) {
+            size_t k1 = k0 + PT_SHADE_BATCH < nlive ? k0 + PT_SHADE_BATCH : nlive, m = 0;
+            for (size_t k = k0; k < k1; k++)
+                if (hit_ok[k] && vertex_open(tr, &paths[live[k]], &hits[k], &shade[m]))
+                    opened[m++] = live[k];
+            for (size_t j = 0; j < m; j++)
+                vertex_roots(tr, &shade[j]);
+            for (size_t j = 0; j < m; j++) {
+                uint32_t i = opened[j];
+                int flags = vertex_close(tr, &paths[i], &shade[j], &sh[nsh]);
+                /* Branch-free appends: these flags are coin tosses. */
+                owner[nsh] = i;
+                nsh += (flags & GI_PT_SHADOW) != 0;
+                live[next] = i;
+                next += (flags & GI_PT_CONTINUE) != 0;
+            }
         }
         /* A path's shadow ray of this bounce is settled before its next
          * emission is added: the same order of additions as one at a time. */
-        for (size_t j = 0; j < nsh; j++)
-            if (!blocked(tr, &sh[j]))
-                paths[owner[j]].L = gi_add(paths[owner[j]].L, sh[j].contrib);
+        for (size_t j = 0; j < nsh; j++) {
+            /* L + 0 is L (L >= 0): no branch on the ray's outcome. */
+            gi_vec3 add = blocked(tr, &sh[j]) ? gi_v3(0, 0, 0) : sh[j].contrib;
+            paths[owner[j]].L = gi_add(paths[owner[j]].L, add);
+        }
         nlive = next;
     }
     free(live);
