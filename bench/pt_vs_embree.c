@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "gi_assets.h"
+#include "gi_blas_threads.h"
 #include "gi_camera.h"
 #include "gi_rt.h"
 #include "pt/pt.h"
@@ -116,6 +117,7 @@ int main(int argc, char **argv)
     const char *scene_path = argc > 1 ? argv[1] : "scenes/cornell-box/scene.json";
     int w = argc > 2 ? atoi(argv[2]) : 256, spp = argc > 3 ? atoi(argv[3]) : 8;
     int repeats = argc > 4 ? atoi(argv[4]) : 9;
+    gi_blas_single_thread(); /* its idle threads would share the machine with both loops */
     gi_error err;
     gi_dir_source ds;
     gi_dir_source_init(&ds, ".");
