@@ -11,8 +11,8 @@
  *
  * (a base's grid, detp_grid.h, lists its paths by the cells they cross).
  * The batch at frame f is the base with, for each path, its newest run in
- * the deltas up to f. When the deltas outgrow a quarter of the base, the
- * frame is written as a new base. Files a retry could still need (the
+ * the deltas up to f. When the deltas outgrow the base (or would number
+ * more than DETP_BATCH_MAX_DELTAS), the frame is written as a new base. Files a retry could still need (the
  * frame before the newest) are kept; older ones are removed. The files are
  * a cache: they are not fsync'ed; a torn or missing file is regenerated
  * from the seed range (detp_anim_worker.c). */
@@ -23,6 +23,8 @@
 
 #include "detp_anim.h"
 #include "detp_grid.h"
+
+#define DETP_BATCH_MAX_DELTAS 64
 
 /* One path: its segments, in bounce order. */
 typedef struct detp_path {

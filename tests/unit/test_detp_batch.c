@@ -75,19 +75,26 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     gi_detp_segments_init(&changed);
     whole(version, &expect);
     GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, 7, P0, P0 + PATHS, 0, &expect, &err));
+    /* Frames 1-100 change one path each: the deltas stay far smaller than
+     * the base, and their count makes the rewrites. Frames 101-130 change
+     * a third of the paths each: their size does. */
     int max_files = 0;
-    for (uint32_t f = 1; f <= 40; f++) {
+    uint32_t base_at_100 = 0, late_bases = 0;
+    for (uint32_t f = 1; f <= 130; f++) {
         detp_batch prev;
         GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, f - 1, &prev, &err) == 1);
         detp_batch_materialize(&prev, &changed, &got); /* changed is empty here */
         changed.count = 0;
         GI_CHECK_MSG(same_segments(&got, &expect), "frame %u reads back wrong", f - 1);
         GI_CHECK(detp_batch_count(&prev) == expect.count);
-        /* This frame changes a few paths (more in some frames: the base is
-         * rewritten now and then). */
+        GI_CHECK_MSG(prev.delta_count <= DETP_BATCH_MAX_DELTAS, "frame %u: %u deltas", f - 1,
+                     prev.delta_count);
+        if (f - 1 == 100)
+            base_at_100 = prev.base_frame;
+        late_bases += f - 1 > 100 && prev.base_frame == f - 1;
         gi_rng r;
         gi_rng_init(&r, 99, f, 0);
-        uint32_t k = f % 9 == 0 ? 60 : 5;
+        uint32_t k = f <= 100 ? 1 : PATHS / 3;
         for (uint32_t i = 0; i < PATHS; i++)
             if (gi_rng_u32(&r) % PATHS < k) {
                 version[i] = f;
@@ -100,22 +107,24 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
         max_files = n > max_files ? n : max_files;
     }
     detp_batch last;
-    GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 40, &last, &err) == 1);
+    GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 130, &last, &err) == 1);
     gi_detp_segments none = {NULL, 0, 0};
     detp_batch_materialize(&last, &none, &got);
     GI_CHECK(same_segments(&got, &expect));
-    GI_CHECK_MSG(last.base_frame > 0, "the base was never rewritten");
+    GI_CHECK_MSG(base_at_100 > 0, "many small deltas never made a new base");
+    /* ~250 segments a frame against a base of ~750: a new base every few. */
+    GI_CHECK_MSG(late_bases >= 5, "large deltas made %u new bases in 30 frames", late_bases);
     detp_batch_close(&last);
-    /* Old bases and deltas go: far fewer files than frames. */
-    GI_CHECK_MSG(max_files < 20, "%d files at once", max_files);
+    /* Old bases and deltas go: at most two bases' worth of files. */
+    GI_CHECK_MSG(max_files <= 2 * (DETP_BATCH_MAX_DELTAS + 2), "%d files at once", max_files);
 
-    /* A missing delta: frame 40 cannot be read (regenerate). */
+    /* A missing delta: frame 130 cannot be read (regenerate). */
     char path[600];
-    snprintf(path, sizeof path, "%s/b7.f40.delta", dir);
+    snprintf(path, sizeof path, "%s/b7.f130.delta", dir);
     if (remove(path) == 0)
-        GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 40, &last, &err) == 0);
+        GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 130, &last, &err) == 0);
     /* Another batch's range under this batch's name is not this batch. */
-    GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS + 1, 39, &last, &err) == 0);
+    GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS + 1, 129, &last, &err) == 0);
     detp_batch_remove(dir, 7);
     GI_CHECK(files_in(dir) == 0);
     gi_detp_segments_free(&expect);
