@@ -10,14 +10,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* A base is rewritten once its deltas hold more segments than it does, or
- * once it has DETP_BATCH_MAX_DELTAS of them. Rewriting sooner costs more
- * than it saves: with a quarter of the base as the limit, the 10% sphere of
- * bench/detp_anim.sh (24 frames) spent 0.13 s of its 0.40 s per frame on
- * rewrites; with the whole base, 0.03 s of 0.31 s (reading the longer
- * deltas costs 0.01 s more). The count bounds the files a frame opens when
- * the mobile is small. */
-
 enum { FILE_BASE, FILE_DELTA, FILE_GRID };
 
 static char *file_name(const char *dir, uint32_t batch, uint32_t frame, int kind)
@@ -290,6 +282,13 @@ int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const de
                            uint32_t frame, const gi_detp_segments *changed, gi_error *err)
 {
     int rc;
+    /* A base is rewritten once its deltas would hold more segments than it
+     * does, or number more than DETP_BATCH_MAX_DELTAS. Rewriting sooner
+     * costs more than it saves: with a quarter of the base as the limit,
+     * the 10% sphere of bench/detp_anim.sh (24 frames) spent 0.13 s of its
+     * 0.40 s per frame on rewrites; with the whole base, 0.03 s of 0.31 s
+     * (reading the longer deltas costs 0.01 s more). The count bounds the
+     * files a frame opens when the mobile is small. */
     if (prev->delta_segments + changed->count > prev->base.count ||
         prev->delta_count + 1 > DETP_BATCH_MAX_DELTAS) {
         /* A new base: the batch at this frame, whole. */

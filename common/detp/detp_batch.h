@@ -12,10 +12,11 @@
  * (a base's grid, detp_grid.h, lists its paths by the cells they cross).
  * The batch at frame f is the base with, for each path, its newest run in
  * the deltas up to f. When the deltas outgrow the base (or would number
- * more than DETP_BATCH_MAX_DELTAS), the frame is written as a new base. Files a retry could still need (the
- * frame before the newest) are kept; older ones are removed. The files are
- * a cache: they are not fsync'ed; a torn or missing file is regenerated
- * from the seed range (detp_anim_worker.c). */
+ * more than DETP_BATCH_MAX_DELTAS), the frame is written as a new base.
+ * Files a retry could still need (the frame before the newest) are kept;
+ * older ones are removed. The files are a cache: they are not fsync'ed; a
+ * torn or missing file is regenerated from the seed range
+ * (detp_anim_worker.c). */
 #ifndef GI_DETP_BATCH_H
 #define GI_DETP_BATCH_H
 
@@ -24,6 +25,8 @@
 #include "detp_anim.h"
 #include "detp_grid.h"
 
+/* The most deltas a base gets before it is rewritten (detp_batch.c says
+ * why the rewrites wait). */
 #define DETP_BATCH_MAX_DELTAS 64
 
 /* One path: its segments, in bounce order. */

@@ -114,15 +114,17 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     GI_CHECK_MSG(base_at_100 > 0, "many small deltas never made a new base");
     /* ~250 segments a frame against a base of ~750: a new base every few. */
     GI_CHECK_MSG(late_bases >= 5, "large deltas made %u new bases in 30 frames", late_bases);
+    const char *newest = last.base_frame == 130 ? "base" : "delta";
     detp_batch_close(&last);
     /* Old bases and deltas go: at most two bases' worth of files. */
     GI_CHECK_MSG(max_files <= 2 * (DETP_BATCH_MAX_DELTAS + 2), "%d files at once", max_files);
 
-    /* A missing delta: frame 130 cannot be read (regenerate). */
+    /* A missing file (frame 130's delta or base): frame 130 cannot be read
+     * (regenerate). */
     char path[600];
-    snprintf(path, sizeof path, "%s/b7.f130.delta", dir);
-    if (remove(path) == 0)
-        GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 130, &last, &err) == 0);
+    snprintf(path, sizeof path, "%s/b7.f130.%s", dir, newest);
+    GI_CHECK(remove(path) == 0);
+    GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 130, &last, &err) == 0);
     /* Another batch's range under this batch's name is not this batch. */
     GI_CHECK(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS + 1, 129, &last, &err) == 0);
     detp_batch_remove(dir, 7);
