@@ -71,10 +71,14 @@ void gi_detp_store_unmap(gi_detp_store_mapping *m);
 /* Files this process has already checked whole (CRCs, record order,
  * values): an update maps its batch's base every frame, and checking it
  * again would cost a good part of the frame. Keyed by what a rewrite
- * changes (a rename gives a new inode) and the file's header CRC. */
+ * changes (a rename gives a new inode) and the file's header CRC
+ * (detp_checked.c). */
 struct stat;
 int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc);
 void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc);
+/* Notes a file this process has just written whole and renamed into
+ * place: frame 1 need not read back what frame 0 wrote. */
+void gi_detp_file_note_written(const char *path, uint32_t header_crc);
 /* Forgets them (fuzzers rewrite one path thousands of times a second). */
 void gi_detp_file_forget_checked(void);
 

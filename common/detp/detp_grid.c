@@ -234,6 +234,8 @@ int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, u
             rc = gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(errno));
         if (rc)
             unlink(tmp);
+        else
+            gi_detp_file_note_written(path, h.header_crc);
         free(tmp);
         gi_buf_free(&b);
     }

@@ -49,6 +49,29 @@ static int write_all(int fd, const void *data, size_t len)
     return 0;
 }
 
+static int finite3(gi_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* The records are what a tracer wrote: path-ordered photons of the batch,
+ * usable geometry (a CRC only says the bytes are the ones written). NULL if
+ * so, else why not. */
+static const char *records_invalid(const gi_detp_store_header *h, const gi_detp_segment *v,
+                                   size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        const gi_detp_segment *g = &v[i];
+        if (g->photon < h->p0 || g->photon >= h->p1)
+            return "a record's photon is outside the batch";
+        int first = i == 0 || v[i - 1].photon != g->photon;
+        if (first ? (i > 0 && v[i - 1].photon > g->photon) || g->bounce != 0
+                  : g->bounce != v[i - 1].bounce + 1)
+            return "records not path-ordered";
+        if (!finite3(g->org) || !finite3(g->dir) || !finite3(g->energy) ||
+            isnan(g->t_hit) || isnan(g->t_second) || isnan(g->t_end))
+            return "a record has non-finite values";
+    }
+    return NULL;
+}
+
 int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
                         const gi_detp_segments *s, gi_error *err)
 {
@@ -82,68 +105,10 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
         rc = gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(errno));
     if (rc != 0)
         unlink(tmp);
+    else if (!records_invalid(&hd, s->v, s->count))
+        gi_detp_file_note_written(path, hd.header_crc); /* what a map would check */
     free(tmp);
     return rc;
-}
-
-/* Files this process has checked whole (detp_anim.h); a small ring, oldest
- * out. */
-typedef struct checked_file {
-    dev_t dev;
-    ino_t ino;
-    off_t size;
-    struct timespec mtime;
-    uint32_t header_crc;
-} checked_file;
-
-#define CHECKED_FILES 64
-static checked_file checked[CHECKED_FILES];
-static unsigned checked_next;
-
-void gi_detp_file_forget_checked(void)
-{
-    memset(checked, 0, sizeof checked);
-}
-
-int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc)
-{
-    for (unsigned i = 0; i < CHECKED_FILES; i++) {
-        const checked_file *c = &checked[i];
-        if (c->ino == st->st_ino && c->dev == st->st_dev && c->size == st->st_size &&
-            c->mtime.tv_sec == st->st_mtim.tv_sec && c->mtime.tv_nsec == st->st_mtim.tv_nsec &&
-            c->header_crc == header_crc && c->size > 0)
-            return 1;
-    }
-    return 0;
-}
-
-void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc)
-{
-    checked[checked_next++ % CHECKED_FILES] =
-        (checked_file){st->st_dev, st->st_ino, st->st_size, st->st_mtim, header_crc};
-}
-
-static int finite3(gi_vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
-
-/* The records are what a tracer wrote: path-ordered photons of the batch,
- * usable geometry (a CRC only says the bytes are the ones written). NULL if
- * so, else why not. */
-static const char *records_invalid(const gi_detp_store_header *h, const gi_detp_segment *v,
-                                   size_t n)
-{
-    for (size_t i = 0; i < n; i++) {
-        const gi_detp_segment *g = &v[i];
-        if (g->photon < h->p0 || g->photon >= h->p1)
-            return "a record's photon is outside the batch";
-        int first = i == 0 || v[i - 1].photon != g->photon;
-        if (first ? (i > 0 && v[i - 1].photon > g->photon) || g->bounce != 0
-                  : g->bounce != v[i - 1].bounce + 1)
-            return "records not path-ordered";
-        if (!finite3(g->org) || !finite3(g->dir) || !finite3(g->energy) ||
-            isnan(g->t_hit) || isnan(g->t_second) || isnan(g->t_end))
-            return "a record has non-finite values";
-    }
-    return NULL;
 }
 
 int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
