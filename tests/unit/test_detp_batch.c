@@ -205,3 +205,46 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_box)
     detp_grid_unmap(&g);
     gi_detp_segments_free(&s);
 }
+
+/* The files a process has checked (detp_checked.c): all of them are
+ * remembered, however many (a frame opens a base, a grid and up to 64
+ * deltas per batch); a change of size, time or header CRC, or a new file
+ * on a reused inode, is not taken for the checked one. */
+GI_TEST(test_detp_checked_files_remember_many_and_see_changes)
+{
+    enum { N = 3000 };
+    static struct stat st[N];
+    gi_detp_file_forget_checked();
+    for (uint32_t i = 0; i < N; i++) {
+        memset(&st[i], 0, sizeof st[i]);
+        st[i].st_dev = 3 + i % 2;
+        st[i].st_ino = 1000 + 7 * (ino_t)i;
+        st[i].st_size = 64 + i;
+        st[i].st_mtim.tv_sec = 1700000000 + i;
+        st[i].st_mtim.tv_nsec = i;
+        gi_detp_file_note_checked(&st[i], i);
+    }
+    uint32_t missed = 0;
+    for (uint32_t i = 0; i < N; i++)
+        missed += !gi_detp_file_was_checked(&st[i], i);
+    GI_CHECK_MSG(missed == 0, "%u of %u checked files forgotten", missed, N);
+    struct stat s = st[5];
+    s.st_size++;
+    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
+    s = st[5];
+    s.st_mtim.tv_nsec++;
+    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
+    GI_CHECK(!gi_detp_file_was_checked(&st[5], 6));
+    s = st[5];
+    s.st_dev = 9;
+    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
+    /* Inode 5 reused by another file. */
+    s = st[5];
+    s.st_size = 12345;
+    gi_detp_file_note_checked(&s, 77);
+    GI_CHECK(gi_detp_file_was_checked(&s, 77));
+    GI_CHECK(!gi_detp_file_was_checked(&st[5], 5));
+    GI_CHECK(gi_detp_file_was_checked(&st[6], 6));
+    gi_detp_file_forget_checked();
+    GI_CHECK(!gi_detp_file_was_checked(&st[6], 6));
+}
