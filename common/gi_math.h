@@ -48,13 +48,16 @@ static inline float gi_luminance(gi_vec3 c)
     return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
 }
 static inline int gi_is_black(gi_vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
+/* Per-component min/max for bounding boxes, lo = gi_min_v3(lo, p): a NaN
+ * in b is passed over (like fminf), in one instruction per component
+ * (fminf is a library call at -O2: 2% of a small animation frame). */
 static inline gi_vec3 gi_min_v3(gi_vec3 a, gi_vec3 b)
 {
-    return gi_v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z));
+    return gi_v3(gi_minf(b.x, a.x), gi_minf(b.y, a.y), gi_minf(b.z, a.z));
 }
 static inline gi_vec3 gi_max_v3(gi_vec3 a, gi_vec3 b)
 {
-    return gi_v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z));
+    return gi_v3(gi_maxf(b.x, a.x), gi_maxf(b.y, a.y), gi_maxf(b.z, a.z));
 }
 static inline float gi_v3_get(gi_vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
 

@@ -94,11 +94,11 @@ static void rasterize(const detp_grid_spec *s, const gi_detp_segment *g, uint32_
 {
     float t1 = -INFINITY;
     if (isfinite(g->t_hit))
-        t1 = fmaxf(t1, g->t_hit);
+        t1 = gi_maxf(t1, g->t_hit);
     if (isfinite(g->t_second))
-        t1 = fmaxf(t1, g->t_second);
+        t1 = gi_maxf(t1, g->t_second);
     if (isfinite(g->t_end))
-        t1 = fmaxf(t1, g->t_end);
+        t1 = gi_maxf(t1, g->t_end);
     if (!isfinite(g->t_hit) || !(t1 > 0.0f))
         t1 = INFINITY;
     float t0 = 0.0f;
@@ -112,9 +112,10 @@ static void rasterize(const detp_grid_spec *s, const gi_detp_segment *g, uint32_
                 return;
             continue;
         }
+        /* |d| >= 1e-30: ta and tb are numbers or infinities, never NaN. */
         float ta = (lo[a] - o[a]) / d[a], tb = (hi - o[a]) / d[a];
-        t0 = fmaxf(t0, fminf(ta, tb));
-        t1 = fminf(t1, fmaxf(ta, tb));
+        t0 = gi_maxf(t0, gi_minf(ta, tb));
+        t1 = gi_minf(t1, gi_maxf(ta, tb));
     }
     if (!(t1 >= t0))
         return;
