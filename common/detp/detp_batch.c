@@ -46,45 +46,66 @@ static int map_file(const char *dir, const detp_batch *b, uint32_t frame, int de
     return rc;
 }
 
-typedef struct aged_run {
-    detp_path run;
+/* A delta's runs in photon order, as a cursor of the merge below. */
+typedef struct delta_cursor {
+    const gi_detp_segment *seg;
+    size_t i, n;  /* the next run starts at seg[i] */
     uint32_t age; /* 0: the newest delta */
-} aged_run;
+} delta_cursor;
 
-static int cmp_aged(const void *a, const void *b)
+static int cursor_before(const delta_cursor *x, const delta_cursor *y)
 {
-    const aged_run *x = a, *y = b;
-    if (x->run.photon != y->run.photon)
-        return x->run.photon < y->run.photon ? -1 : 1;
-    return x->age < y->age ? -1 : x->age > y->age;
+    uint64_t px = x->seg[x->i].photon, py = y->seg[y->i].photon;
+    return px != py ? px < py : x->age < y->age;
 }
 
-/* The newest run of each path the deltas hold, by photon. */
+static void sift_down(delta_cursor *h, size_t n, size_t k)
+{
+    for (;;) {
+        size_t c = 2 * k + 1;
+        if (c >= n)
+            return;
+        if (c + 1 < n && cursor_before(&h[c + 1], &h[c]))
+            c++;
+        if (!cursor_before(&h[c], &h[k]))
+            return;
+        delta_cursor t = h[k];
+        h[k] = h[c];
+        h[c] = t;
+        k = c;
+    }
+}
+
+/* The newest run of each path the deltas hold, by photon: a merge of the
+ * deltas (each photon-ordered), the newest first among equal photons. */
 static void build_overrides(detp_batch *b)
 {
-    size_t n = 0;
-    for (uint32_t d = 0; d < b->delta_count; d++)
-        n += b->deltas[d].count; /* an upper bound on the runs */
-    aged_run *all = gi_xmalloc((n + 1) * sizeof *all);
-    size_t k = 0;
+    size_t total = 0, n = 0;
+    delta_cursor *h = gi_xmalloc((b->delta_count + 1) * sizeof *h);
     for (uint32_t d = 0; d < b->delta_count; d++) {
-        const gi_detp_store_mapping *m = &b->deltas[d];
-        for (size_t i = 0; i < m->count;) {
-            size_t j = i + 1;
-            while (j < m->count && m->seg[j].photon == m->seg[i].photon)
-                j++;
-            all[k].run = (detp_path){m->seg[i].photon, &m->seg[i], (uint32_t)(j - i)};
-            all[k++].age = b->delta_count - 1 - d;
-            i = j;
-        }
+        total += b->deltas[d].count; /* an upper bound on the runs */
+        if (b->deltas[d].count)
+            h[n++] = (delta_cursor){b->deltas[d].seg, 0, b->deltas[d].count,
+                                    b->delta_count - 1 - d};
     }
-    qsort(all, k, sizeof *all, cmp_aged);
-    b->over = gi_xmalloc((k + 1) * sizeof *b->over);
+    for (size_t k = n / 2; k-- > 0;)
+        sift_down(h, n, k);
+    b->over = gi_xmalloc((total + 1) * sizeof *b->over);
     b->over_count = 0;
-    for (size_t i = 0; i < k; i++)
-        if (i == 0 || all[i].run.photon != all[i - 1].run.photon)
-            b->over[b->over_count++] = all[i].run;
-    free(all);
+    while (n) {
+        delta_cursor *c = &h[0];
+        size_t j = c->i + 1;
+        while (j < c->n && c->seg[j].photon == c->seg[c->i].photon)
+            j++;
+        uint64_t photon = c->seg[c->i].photon;
+        if (b->over_count == 0 || b->over[b->over_count - 1].photon != photon)
+            b->over[b->over_count++] = (detp_path){photon, &c->seg[c->i], (uint32_t)(j - c->i)};
+        c->i = j;
+        if (j == c->n)
+            h[0] = h[--n];
+        sift_down(h, n, 0);
+    }
+    free(h);
 }
 
 /* The base's grid, rebuilt if it is missing or stale. */
