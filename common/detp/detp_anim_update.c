@@ -211,6 +211,13 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
     return 0;
 }
 
+/* Disc radius, as a fraction of the mobile's bounding radius, from which
+ * its discs are tested in lanes rather than through Embree: measured at
+ * the Cornell box's 12.4 mm discs, lanes took 0.016 s a frame against
+ * Embree's 0.026 s on a 13.9 mm sphere (ratio 0.9), 0.036 against 0.030 s
+ * on a 27.8 mm one (0.45). */
+#define MOBILE_LANES_RADIUS 0.7f
+
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
                                  const gi_detp_segments *segs, const gi_detp_sc_params *sc,
                                  RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
@@ -260,6 +267,11 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
                    : -1;
         free(order);
         gi_detp_segments_free(&near);
+    } else if (radius >= MOBILE_LANES_RADIUS * gi_detp_object_sphere(s, object).r) {
+        /* Discs about the mobile's size: a segment near it crosses most of
+         * them, and testing all in lanes beats the index's per-candidate
+         * cost (bench/BENCHMARKS.md). */
+        gi_detp_lanes_estimate(&d, segs, &view, st);
     } else {
         gi_detp_embree_index *x = NULL;
         rc = gi_detp_embree_build(device, &d, &x, err);
