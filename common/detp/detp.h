@@ -258,8 +258,8 @@ uint32_t *gi_detp_query_order(const gi_detp_discs *d, gi_detp_order order, uint6
 /* Basic DETP (detp_basic.c): every disc against every segment, O(n_R n_P). */
 void gi_detp_basic(const gi_detp_discs *d, const gi_detp_segments *s, gi_detp_accum *acc,
                    gi_detp_stats *st);
-/* The same pairs, the discs four at a time (detp_lanes.c): for a few
- * hundred discs, faster than any index. */
+/* The same pairs, the discs four at a time (detp_lanes.c): faster than an
+ * index when a segment crosses most of the discs (a small mobile's). */
 void gi_detp_lanes_estimate(const gi_detp_discs *d, const gi_detp_segments *s,
                             gi_detp_accum *acc, gi_detp_stats *st);
 
