@@ -21,7 +21,7 @@ typedef struct pt_shade {
     float light_u1, light_u2;
     gi_light_sample ls;   /* and the point they pick */
     gi_vec3 to_light;     /* ls.p - p */
-    float dist2, dist, inv_dist;
+    float dist2, dist, inv_dist; /* of to_light (if has_light) */
     float u1, u2;         /* the BSDF sample's numbers */
     gi_vec3 bsdf_wi, bsdf_weight; /* the BSDF sample */
     float bsdf_pdf;
@@ -37,7 +37,6 @@ typedef struct pt_shade {
 PT_INLINE void vertex_draw(const gi_pt_tracer *tr, gi_rng *rng, pt_shade *v)
 {
     v->has_light = tr->params->strategy != GI_PT_BSDF;
-    v->dist2 = 0.0f;
     if (v->has_light) {
         v->light_pick = gi_rng_double(rng);
         v->light_u1 = gi_rng_float(rng);
@@ -54,9 +53,9 @@ PT_INLINE void vertex_roots(const gi_pt_tracer *tr, pt_shade *v)
         gi_light_sample_point(tr->scene, v->light_pick, v->light_u1, v->light_u2, &v->ls);
         v->to_light = gi_sub(v->ls.p, v->p);
         v->dist2 = gi_dot(v->to_light, v->to_light);
+        v->dist = sqrtf(v->dist2);
+        v->inv_dist = 1.0f / v->dist;
     }
-    v->dist = sqrtf(v->dist2);
-    v->inv_dist = 1.0f / v->dist;
     v->bsdf_weight = gi_bsdf_sample_mapped(&v->bsdf, gi_bsdf_map(v->u1, v->u2), &v->bsdf_wi,
                                            &v->bsdf_pdf);
 }
