@@ -351,24 +351,26 @@ static void check_animation(anim *a, const char *what)
         gi_detp_accum_free(&full);
 
         /* The mobile's vertices from scratch at the new pose: Sphere Cache,
-         * Embree DI (or lanes, as the sizes decide) and lanes against basic
-         * DETP over discs of the ball. */
+         * Embree DI (or lanes, as the sizes decide) and lanes of each width
+         * the CPU has against basic DETP over discs of the ball. */
         gi_detp_discs md;
         GI_REQUIRE_OK(gi_detp_discs_from_scene(&a->s, a->radius, &md, &err));
-        gi_detp_accum ref, sc, em, ln;
+        gi_detp_accum ref, sc, em, ln[3];
         GI_REQUIRE_OK(gi_detp_accum_init_fixed(&ref, md.count, unit, &err));
         GI_REQUIRE_OK(gi_detp_accum_init_fixed(&sc, md.count, unit, &err));
         GI_REQUIRE_OK(gi_detp_accum_init_fixed(&em, md.count, unit, &err));
-        GI_REQUIRE_OK(gi_detp_accum_init_fixed(&ln, md.count, unit, &err));
         gi_detp_discs only = {mo->vertex_count, md.d + mo->first_vertex, md.radius, md.r2};
         gi_detp_accum refv = ref;
         refv.fixed += 3 * (size_t)mo->first_vertex;
         refv.hits += mo->first_vertex;
         gi_detp_basic(&only, &next, &refv, &est);
-        gi_detp_accum lnv = ln; /* the discs in lanes (detp_lanes.c) */
-        lnv.fixed += 3 * (size_t)mo->first_vertex;
-        lnv.hits += mo->first_vertex;
-        gi_detp_lanes_estimate(&only, &next, &lnv, &est);
+        for (int w = 0; w < 3; w++) { /* the discs in 4, 8, 16 lanes (detp_lanes.c) */
+            GI_REQUIRE_OK(gi_detp_accum_init_fixed(&ln[w], md.count, unit, &err));
+            gi_detp_accum lnv = ln[w];
+            lnv.fixed += 3 * (size_t)mo->first_vertex;
+            lnv.hits += mo->first_vertex;
+            gi_detp_lanes_estimate_width(&only, &next, &lnv, &est, 4u << w);
+        }
         gi_detp_sc_params scp = {2.0 / 3.0, 20, 16, GI_DETP_ORDER_HILBERT, 1, 0};
         size_t other = 3 * (size_t)(md.count - 1); /* not the ball's: must stay */
         GI_REQUIRE(!is_mobile_vertex(a, md.count - 1));
@@ -381,16 +383,19 @@ static void check_animation(anim *a, const char *what)
         for (uint32_t v = mo->first_vertex; v < mo->first_vertex + mo->vertex_count; v++) {
             mobile_bad += memcmp(&ref.fixed[3 * (size_t)v], &sc.fixed[3 * (size_t)v], 24) != 0 ||
                           memcmp(&ref.fixed[3 * (size_t)v], &em.fixed[3 * (size_t)v], 24) != 0 ||
-                          memcmp(&ref.fixed[3 * (size_t)v], &ln.fixed[3 * (size_t)v], 24) != 0 ||
-                          ref.hits[v] != sc.hits[v] || ref.hits[v] != em.hits[v] ||
-                          ref.hits[v] != ln.hits[v];
+                          ref.hits[v] != sc.hits[v] || ref.hits[v] != em.hits[v];
+            for (int w = 0; w < 3; w++)
+                mobile_bad += memcmp(&ref.fixed[3 * (size_t)v], &ln[w].fixed[3 * (size_t)v],
+                                     24) != 0 ||
+                              ref.hits[v] != ln[w].hits[v];
             lit += ref.hits[v];
         }
         GI_CHECK(lit > 0 && sc.fixed[other] == 12345);
         gi_detp_accum_free(&ref);
         gi_detp_accum_free(&sc);
         gi_detp_accum_free(&em);
-        gi_detp_accum_free(&ln);
+        for (int w = 0; w < 3; w++)
+            gi_detp_accum_free(&ln[w]);
         gi_detp_discs_free(&md);
 
         gi_detp_store_unmap(&m);
