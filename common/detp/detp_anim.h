@@ -101,6 +101,14 @@ typedef struct gi_detp_mobile_pose {
  * centre of its vertices' box, radius = the largest distance to a vertex. */
 gi_detp_mobile_pose gi_detp_object_sphere(const gi_scene *s, uint32_t object);
 
+/* A radius about b.c (the object's sphere) that holds every point of every
+ * disc of the object's vertices (radius `radius`, in each vertex's tangent
+ * plane), with a margin for rounding: no segment that stays farther from
+ * b.c can cross one. For a sphere mesh it is sqrt(R^2 + radius^2), not
+ * R + radius. */
+float gi_detp_object_disc_reach(const gi_scene *s, uint32_t object, gi_detp_mobile_pose b,
+                                float radius);
+
 typedef struct gi_detp_anim_update_in {
     const gi_detp_segment *prev; /* the previous frame's segments, path-ordered */
     size_t prev_count;

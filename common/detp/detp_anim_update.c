@@ -41,6 +41,27 @@ gi_detp_mobile_pose gi_detp_object_sphere(const gi_scene *s, uint32_t object)
     return m;
 }
 
+float gi_detp_object_disc_reach(const gi_scene *s, uint32_t object, gi_detp_mobile_pose b,
+                                float radius)
+{
+    const gi_object *o = &s->objects[object];
+    double reach2 = 0.0;
+    for (uint32_t i = 0; i < o->vertex_count; i++) {
+        /* The disc point farthest from b.c: out from the centre along the
+         * in-plane part of (vertex - b.c). */
+        gi_vec3 v = s->positions[o->first_vertex + i];
+        gi_vec3 n = gi_normalize(s->normals[o->first_vertex + i]);
+        double dx = (double)v.x - b.c.x, dy = (double)v.y - b.c.y, dz = (double)v.z - b.c.z;
+        double dn = dx * n.x + dy * n.y + dz * n.z;
+        double d2 = dx * dx + dy * dy + dz * dz;
+        double dt = sqrt(fmax(d2 - dn * dn, 0.0)) + radius;
+        reach2 = fmax(reach2, dn * dn + dt * dt);
+    }
+    /* A relative margin far above the disc test's rounding; never beyond
+     * the plain bound. */
+    return gi_minf((float)(sqrt(reach2) * 1.0001), b.r * 1.0001f + radius);
+}
+
 /* The part [t0, t1] of org + t dir (unit dir; t1 may be infinite) may come
  * within the sphere. The radius is grown well beyond float error at the
  * scale of the ray and the sphere: a false pass only costs one exact ray. */

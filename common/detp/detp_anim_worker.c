@@ -36,6 +36,8 @@ typedef struct detp_anim_worker {
     detp_grid_spec grid;  /* of the stored batches: the box the mobile can reach */
     uint8_t *mark;        /* per path of a batch: may come near the mobile */
     size_t mark_cap;
+    detp_path *runs;      /* the marked paths' runs */
+    size_t runs_cap;
 } detp_anim_worker;
 
 void detp_anim_worker_free(detp_anim_worker *a)
@@ -56,6 +58,7 @@ void detp_anim_worker_free(detp_anim_worker *a)
     free(a->sum);
     free(a->hits);
     free(a->mark);
+    free(a->runs);
     free(a);
 }
 
@@ -283,7 +286,7 @@ typedef struct near_test {
 static near_test near_sphere(const gi_scene *s, uint32_t object, float radius)
 {
     gi_detp_mobile_pose b = gi_detp_object_sphere(s, object);
-    float r0 = b.r * 1.0001f + radius;
+    float r0 = gi_detp_object_disc_reach(s, object, b, radius);
     float rr = r0 + gi_detp_sphere_slack(r0);
     return (near_test){b.c, rr * rr};
 }
@@ -391,18 +394,20 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         a->mark_cap = np;
     }
     memset(a->mark, 0, np);
-    float grow = w->discs.radius + 1e-3f * (float)p->scene_size;
-    float ro = in.old_pose.r * 1.01f + grow, rn = in.new_pose.r * 1.01f + grow;
+    /* The update tests segments against the mobile at both poses; the
+     * mobile's estimate needs those that reach its discs at the new one. */
+    float margin = 1e-3f * (float)p->scene_size;
+    float ro = in.old_pose.r * 1.01f + margin;
+    float rn = gi_maxf(in.new_pose.r * 1.01f, sqrtf(nt.rr)) + margin;
     gi_vec3 lo = gi_min_v3(gi_sub(in.old_pose.c, gi_v3(ro, ro, ro)),
                            gi_sub(in.new_pose.c, gi_v3(rn, rn, rn)));
     gi_vec3 hi = gi_max_v3(gi_add(in.old_pose.c, gi_v3(ro, ro, ro)),
                            gi_add(in.new_pose.c, gi_v3(rn, rn, rn)));
     detp_batch_mark_near(&prev, lo, hi, a->mark);
     uint64_t segments = detp_batch_count(&prev);
-    for (uint32_t i = 0; i < np; i++) {
-        if (!a->mark[i])
-            continue;
-        detp_path run = detp_batch_path(&prev, i);
+    size_t nrun = detp_batch_marked(&prev, a->mark, &a->runs, &a->runs_cap);
+    for (size_t k = 0; k < nrun; k++) {
+        detp_path run = a->runs[k];
         size_t c0 = a->changed.count;
         if (gi_detp_anim_update_path(&in, run.seg, run.count, 0, &a->changed, &a->old_list,
                                      &a->new_list, &us)) {

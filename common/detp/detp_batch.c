@@ -236,21 +236,29 @@ void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *
         mark[b->over[i].photon - b->p0] = 1;
 }
 
-detp_path detp_batch_path(const detp_batch *b, uint32_t i)
+size_t detp_batch_marked(const detp_batch *b, const uint8_t *mark, detp_path **runs,
+                         size_t *cap)
 {
-    uint64_t photon = b->p0 + i;
-    size_t lo = 0, hi = b->over_count;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (b->over[mid].photon < photon)
-            lo = mid + 1;
-        else
-            hi = mid;
+    size_t n = 0, o = 0, np = (size_t)(b->p1 - b->p0);
+    for (size_t i = 0; i < np; i++) {
+        if (!mark[i])
+            continue;
+        if (n == *cap) {
+            *cap = *cap ? 2 * *cap : 1024;
+            *runs = gi_xrealloc(*runs, *cap * sizeof **runs);
+        }
+        /* Both in photon order: a cursor, not a search, finds the override. */
+        uint64_t photon = b->p0 + i;
+        while (o < b->over_count && b->over[o].photon < photon)
+            o++;
+        if (o < b->over_count && b->over[o].photon == photon) {
+            (*runs)[n++] = b->over[o];
+        } else {
+            uint32_t s0 = b->grid.path_start[i], s1 = b->grid.path_start[i + 1];
+            (*runs)[n++] = (detp_path){photon, b->base.seg + s0, s1 - s0};
+        }
     }
-    if (lo < b->over_count && b->over[lo].photon == photon)
-        return b->over[lo];
-    uint32_t s0 = b->grid.path_start[i], s1 = b->grid.path_start[i + 1];
-    return (detp_path){photon, b->base.seg + s0, s1 - s0};
+    return n;
 }
 
 uint64_t detp_batch_count(const detp_batch *b)

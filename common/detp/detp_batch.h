@@ -76,8 +76,11 @@ int detp_batch_next(detp_batch_iter *it, detp_path *run);
  * lists in the cells the box overlaps, and every path a delta changed.
  * Sets mark[i] = 1 for photon p0 + i (mark has p1 - p0 entries). */
 void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *mark);
-/* Path i's run (photon p0 + i) as of the batch's frame. */
-detp_path detp_batch_path(const detp_batch *b, uint32_t i);
+/* The runs of the marked paths (mark[i]: photon p0 + i) as of the batch's
+ * frame, in photon order, into *runs (grown as needed, *cap its room).
+ * Returns how many. */
+size_t detp_batch_marked(const detp_batch *b, const uint8_t *mark, detp_path **runs,
+                         size_t *cap);
 /* Segments in the batch at its frame. */
 uint64_t detp_batch_count(const detp_batch *b);
 /* The batch after `prev` with the whole new runs in `changed` (path-ordered)

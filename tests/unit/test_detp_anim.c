@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "detp/detp_anim.h"
+#include "detp/detp_sphere.h"
 #include "gi_fs.h"
 #include "gi_rt.h"
 #include "gi_test.h"
@@ -437,6 +438,91 @@ GI_TEST(test_detp_anim_incremental_update_is_exact)
     anim_free(&a);
     GI_REQUIRE_OK(anim_load_panel(&a, &err));
     check_animation(&a, "panel");
+    anim_free(&a);
+}
+
+/* A uniform direction from two numbers in [0, 1). */
+static gi_vec3 any_direction(float u1, float u2)
+{
+    float z = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    float phi = 6.2831853f * u2;
+    return gi_v3(r * cosf(phi), r * sinf(phi), z);
+}
+
+/* Every segment that crosses one of the mobile's discs comes within
+ * gi_detp_object_disc_reach of its centre: lines shot at the ball with
+ * discs nearly its size (where the reach is well under R + radius, and
+ * segments that miss the ball still cross discs that stick out of it)
+ * count the same pairs whether or not the far ones are dropped. */
+GI_TEST(test_detp_anim_disc_reach_holds_every_crossing)
+{
+    gi_error err;
+    anim a;
+    GI_REQUIRE_OK(anim_load(&a, &err));
+    const gi_object *mo = &a.s.objects[a.mob];
+    float radius = 50.0f;
+    gi_detp_mobile_pose b = gi_detp_object_sphere(&a.s, a.mob);
+    float reach = gi_detp_object_disc_reach(&a.s, a.mob, b, radius);
+    float tangent = sqrtf(b.r * b.r + radius * radius);
+    GI_CHECK_MSG(reach >= tangent * 0.999f && reach < tangent * 1.01f && reach < b.r + radius,
+                 "reach %g: a sphere of radius %g with discs of %g", reach, b.r, radius);
+    gi_detp_discs md;
+    GI_REQUIRE_OK(gi_detp_discs_from_scene(&a.s, radius, &md, &err));
+    gi_detp_discs only = {mo->vertex_count, md.d + mo->first_vertex, md.radius, md.r2};
+    gi_detp_segments all, near;
+    gi_detp_segments_init(&all);
+    gi_detp_segments_init(&near);
+    uint64_t x = 0x9e3779b97f4a7c15ull;
+    for (int k = 0; k < 20000; k++) {
+        float u[5];
+        for (int i = 0; i < 5; i++) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            u[i] = (float)(x >> 40) / (float)(1 << 24);
+        }
+        /* From a sphere of 4R towards a point within 1.5 reach of the centre. */
+        gi_vec3 from = any_direction(u[0], u[1]), to = any_direction(u[2], u[3]);
+        gi_detp_segment *g = gi_detp_segments_push(&all);
+        memset(g, 0, sizeof *g);
+        g->org = gi_madd(b.c, from, 4.0f * b.r);
+        gi_vec3 aim = gi_madd(b.c, to, 1.5f * reach * u[4]);
+        g->dir = gi_normalize(gi_sub(aim, g->org));
+        g->t_hit = g->t_second = g->t_end = 8.0f * b.r;
+        g->energy = gi_v3(1.0f, 0.5f, 0.25f);
+        g->hit_tri = GI_DETP_NO_HIT;
+        g->photon = (uint64_t)k;
+    }
+    float rr = reach + gi_detp_sphere_slack(reach);
+    size_t outside = 0; /* crossing segments that miss the ball's sphere */
+    for (size_t j = 0; j < all.count; j++) {
+        if (gi_detp_segment_meets_sphere(&all.v[j], b.c, rr * rr))
+            *gi_detp_segments_push(&near) = all.v[j];
+        if (gi_detp_segment_meets_sphere(&all.v[j], b.c, b.r * b.r))
+            continue;
+        for (uint32_t i = 0; i < only.count; i++)
+            if (gi_detp_crosses(&only.d[i], only.r2, &all.v[j])) {
+                outside++;
+                break;
+            }
+    }
+    gi_detp_accum ref, cut;
+    double unit = gi_detp_fixed_unit(1e4, 1000);
+    GI_REQUIRE_OK(gi_detp_accum_init_fixed(&ref, only.count, unit, &err));
+    GI_REQUIRE_OK(gi_detp_accum_init_fixed(&cut, only.count, unit, &err));
+    gi_detp_stats st;
+    memset(&st, 0, sizeof st);
+    gi_detp_basic(&only, &all, &ref, &st);
+    uint64_t crossings = st.crossings;
+    gi_detp_basic(&only, &near, &cut, &st);
+    GI_CHECK_MSG(outside > 100 && near.count < all.count, "%zu outside, %zu of %zu near",
+                 outside, near.count, all.count);
+    GI_CHECK(crossings > 0 && st.crossings == 2 * crossings);
+    GI_CHECK(memcmp(ref.fixed, cut.fixed, 3 * (size_t)only.count * sizeof *ref.fixed) == 0 &&
+             memcmp(ref.hits, cut.hits, (size_t)only.count * sizeof *ref.hits) == 0);
+    gi_detp_accum_free(&ref);
+    gi_detp_accum_free(&cut);
+    gi_detp_segments_free(&all);
+    gi_detp_segments_free(&near);
+    gi_detp_discs_free(&md);
     anim_free(&a);
 }
 
