@@ -233,11 +233,12 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
 }
 
 /* Disc radius, as a fraction of the mobile's bounding radius, from which
- * its discs are tested in lanes rather than through Embree: measured at
- * the Cornell box's 12.4 mm discs, lanes took 0.016 s a frame against
- * Embree's 0.026 s on a 13.9 mm sphere (ratio 0.9), 0.036 against 0.030 s
- * on a 27.8 mm one (0.45). */
-#define MOBILE_LANES_RADIUS 0.7f
+ * its discs are tested in lanes rather than through Embree. Measured on
+ * the Cornell box's 12.7 mm discs and spheres of 642 vertices (24 or 6
+ * frames, AVX-512 lanes): seconds a frame, lanes against Embree, 0.010 /
+ * 0.026 at a ratio of 0.46 (the 5% sphere), 0.029 / 0.037 at 0.23,
+ * 0.072 / 0.069 at 0.15, 0.12 / 0.10 at 0.11, 0.48 / 0.23 at 0.09. */
+#define MOBILE_LANES_RADIUS 0.18f
 
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
                                  const gi_detp_segments *segs, const gi_detp_sc_params *sc,
@@ -289,9 +290,9 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
         free(order);
         gi_detp_segments_free(&near);
     } else if (radius >= MOBILE_LANES_RADIUS * gi_detp_object_sphere(s, object).r) {
-        /* Discs about the mobile's size: a segment near it crosses most of
-         * them, and testing all in lanes beats the index's per-candidate
-         * cost (bench/BENCHMARKS.md). */
+        /* Discs not much smaller than the mobile: a segment near it
+         * crosses many of them, and testing all in lanes beats the index's
+         * per-candidate cost (bench/BENCHMARKS.md). */
         gi_detp_lanes_estimate(&d, segs, &view, st);
     } else {
         gi_detp_embree_index *x = NULL;
