@@ -51,6 +51,7 @@ typedef struct gi_detp_store_mapping {
     size_t count;
     void *base; /* mapping (NULL if none) */
     size_t len;
+    uint64_t dev, ino; /* the file mapped */
 } gi_detp_store_mapping;
 
 /* Writes the segments behind a header (temp name, rename: a reader sees

@@ -16,6 +16,7 @@
 
 #include "detp_anim.h"
 #include "detp_batch.h"
+#include "detp_batch_shelf.h"
 #include "detp_method.h"
 #include "detp_sphere.h"
 #include "gi_worker_ctx.h"
@@ -38,7 +39,14 @@ typedef struct detp_anim_worker {
     size_t mark_cap;
     detp_path *runs;      /* the marked paths' runs */
     size_t runs_cap;
+    detp_batch_shelf shelf; /* batches kept open for their next frame */
 } detp_anim_worker;
+
+/* Mapped batch files a process keeps open between frames (the shelf's
+ * budget): the four 30 MB batches of a million photons fit; pages of them
+ * count in the process's RSS only once read, and are the kernel's to
+ * reclaim. */
+#define SHELF_BYTES ((size_t)256 << 20)
 
 void detp_anim_worker_free(detp_anim_worker *a)
 {
@@ -59,6 +67,7 @@ void detp_anim_worker_free(detp_anim_worker *a)
     free(a->hits);
     free(a->mark);
     free(a->runs);
+    detp_batch_shelf_free(&a->shelf);
     free(a);
 }
 
@@ -106,6 +115,7 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
     memcpy(a->base_pos, &s->positions[o->first_vertex], o->vertex_count * sizeof *a->base_pos);
     memcpy(a->base_nrm, &s->normals[o->first_vertex], o->vertex_count * sizeof *a->base_nrm);
     grid_spec(p, gi_detp_object_sphere(s, a->object), p->disc_radius, &a->grid);
+    a->shelf.budget = SHELF_BYTES;
     a->sum = gi_try_calloc((size_t)s->vertex_count * 3 + 1, sizeof *a->sum, err, "detp sums");
     a->hits = gi_try_calloc((size_t)s->vertex_count + 1, sizeof *a->hits, err, "detp hits");
     w->anim = a;
@@ -359,7 +369,9 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     detp_batch prev;
     gi_error miss;
     gi_error_clear(&miss);
-    int found = detp_batch_open(dir, &a->grid, h->batch, p0, p1, f - 1, &prev, &miss);
+    int found = detp_batch_shelf_take(&a->shelf, dir, h->batch, p0, p1, f - 1, &prev);
+    if (!found)
+        found = detp_batch_open(dir, &a->grid, h->batch, p0, p1, f - 1, &prev, &miss);
     if (found < 0)
         return gi_fail(err, miss.code, "%s", miss.msg);
     if (!found) {
@@ -436,6 +448,14 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     if (rc == 0)
         rc = detp_batch_write_frame(dir, &a->grid, &prev, f, &a->changed, err);
     h->segments = segments;
+    if (rc >= 0) {
+        /* Keep the batch open at this frame for the next; if that fails,
+         * the next frame opens it from the files. */
+        gi_error ignored;
+        if (detp_batch_advance(dir, &a->grid, &prev, f, rc, &ignored) == 1)
+            detp_batch_shelf_put(&a->shelf, &prev);
+        rc = 0;
+    }
     detp_batch_close(&prev);
     h->segments_old = us.old_segments;
     h->segments_new = us.new_segments;
@@ -484,8 +504,10 @@ int detp_anim_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
         return -1;
     h.rays = ctx->rt.rays - rays0;
     /* The batch's last frame: its files are of no more use. */
-    if (h.frame + 1 == p->anim.frames)
+    if (h.frame + 1 == p->anim.frames) {
+        detp_batch_shelf_drop(&a->shelf, h.batch);
         detp_batch_remove(dir, h.batch);
+    }
     encode_result(w, a, &h, result);
     ctx->stats.samples = h.photons;
     return 0;

@@ -108,6 +108,31 @@ static void build_overrides(detp_batch *b)
     free(h);
 }
 
+/* The overrides after one more delta d (the newest): a merge of two
+ * photon-ordered lists, d's run winning. */
+static void merge_delta(detp_batch *b, const gi_detp_store_mapping *d)
+{
+    detp_path *out = gi_xmalloc((b->over_count + d->count + 1) * sizeof *out);
+    size_t n = 0, o = 0, i = 0;
+    while (i < d->count) {
+        uint64_t photon = d->seg[i].photon;
+        size_t j = i + 1;
+        while (j < d->count && d->seg[j].photon == photon)
+            j++;
+        while (o < b->over_count && b->over[o].photon < photon)
+            out[n++] = b->over[o++];
+        if (o < b->over_count && b->over[o].photon == photon)
+            o++;
+        out[n++] = (detp_path){photon, &d->seg[i], (uint32_t)(j - i)};
+        i = j;
+    }
+    while (o < b->over_count)
+        out[n++] = b->over[o++];
+    free(b->over);
+    b->over = out;
+    b->over_count = n;
+}
+
 /* The base's grid, rebuilt if it is missing or stale. */
 static int map_grid(const char *dir, const detp_grid_spec *spec, detp_batch *b, gi_error *err)
 {
@@ -174,6 +199,49 @@ int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch,
     }
     build_overrides(b);
     return 1;
+}
+
+int detp_batch_advance(const char *dir, const detp_grid_spec *spec, detp_batch *b,
+                       uint32_t frame, int as_base, gi_error *err)
+{
+    if (as_base || frame != b->frame + 1) {
+        uint32_t batch = b->batch;
+        uint64_t p0 = b->p0, p1 = b->p1;
+        detp_batch_close(b);
+        return detp_batch_open(dir, spec, batch, p0, p1, frame, b, err);
+    }
+    b->deltas = gi_xrealloc(b->deltas, ((size_t)b->delta_count + 1) * sizeof *b->deltas);
+    gi_detp_store_mapping *d = &b->deltas[b->delta_count];
+    int rc = map_file(dir, b, frame, 1, d, err);
+    if (rc != 1) {
+        detp_batch_close(b);
+        return rc;
+    }
+    b->delta_count++;
+    b->delta_segments += d->count;
+    b->frame = frame;
+    merge_delta(b, d);
+    return 1;
+}
+
+/* The file at the path is still the one mapped. */
+static int still_there(const char *dir, const detp_batch *b, uint32_t frame, int kind,
+                       const gi_detp_store_mapping *m)
+{
+    char *path = file_name(dir, b->batch, frame, kind);
+    struct stat sb;
+    int ok = stat(path, &sb) == 0 && (uint64_t)sb.st_dev == m->dev &&
+             (uint64_t)sb.st_ino == m->ino;
+    free(path);
+    return ok;
+}
+
+int detp_batch_files_present(const char *dir, const detp_batch *b)
+{
+    if (!still_there(dir, b, b->base_frame, FILE_BASE, &b->base))
+        return 0;
+    return b->delta_count == 0 ||
+           still_there(dir, b, b->frame, FILE_DELTA, &b->deltas[b->delta_count - 1]);
 }
 
 void detp_batch_close(detp_batch *b)
@@ -310,7 +378,7 @@ static void remove_file(const char *dir, uint32_t batch, uint32_t frame, int kin
 int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const detp_batch *prev,
                            uint32_t frame, const gi_detp_segments *changed, gi_error *err)
 {
-    int rc;
+    int rc, base = 0;
     /* A base is rewritten once its deltas would hold more segments than it
      * does, or number more than DETP_BATCH_MAX_DELTAS. Rewriting sooner
      * costs more than it saves: with a quarter of the base as the limit,
@@ -327,6 +395,7 @@ int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const de
         rc = write_file(dir, spec, prev->batch, prev->p0, prev->p1, frame, 0,
                         prev->base_frame, &all, err);
         gi_detp_segments_free(&all);
+        base = 1;
     } else {
         rc = write_file(dir, spec, prev->batch, prev->p0, prev->p1, frame, 1, 0, changed, err);
     }
@@ -340,7 +409,7 @@ int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const de
         for (uint32_t f = k + 1; f <= prev->base_frame; f++)
             remove_file(dir, prev->batch, f, FILE_DELTA);
     }
-    return rc;
+    return rc ? rc : base;
 }
 
 void detp_batch_remove(const char *dir, uint32_t batch)

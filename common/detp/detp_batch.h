@@ -55,6 +55,15 @@ typedef struct detp_batch {
 int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
                     uint64_t p1, uint32_t frame, detp_batch *b, gi_error *err);
 void detp_batch_close(detp_batch *b);
+/* The files of an open batch are still on disk (its base and newest
+ * delta, by inode): a batch kept open must not outlive them. */
+int detp_batch_files_present(const char *dir, const detp_batch *b);
+/* Brings b, open at frame f-1, to frame f once detp_batch_write_frame has
+ * written f (as_base: its return value): maps the new delta and merges its
+ * runs into the overrides, without touching the rest; or reopens b on the
+ * new base. Returns like detp_batch_open (b is closed unless 1). */
+int detp_batch_advance(const char *dir, const detp_grid_spec *spec, detp_batch *b,
+                       uint32_t frame, int as_base, gi_error *err);
 
 /* Iterates the batch's paths in photon order. */
 typedef struct detp_batch_iter {
@@ -90,7 +99,8 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
 /* Writes frame f of a batch: a delta (the whole new runs of the changed
  * paths, path-ordered, in `changed`) after `prev` (the batch at f-1, still
  * open), or a new base (with its grid) if the deltas would outgrow the
- * base. Then removes the files older than prev's base. */
+ * base. Then removes the files older than prev's base. Returns 0 (a delta
+ * was written), 1 (a base) or -1. */
 int detp_batch_write_frame(const char *dir, const detp_grid_spec *spec, const detp_batch *prev,
                            uint32_t frame, const gi_detp_segments *changed, gi_error *err);
 /* Writes a whole batch as a base at `frame` (frame 0, or a regeneration),

@@ -171,6 +171,8 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
             m->count = h.count;
             m->base = base;
             m->len = len;
+            m->dev = (uint64_t)st.st_dev;
+            m->ino = (uint64_t)st.st_ino;
             return 1;
         }
     }

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 
 #include "detp/detp_batch.h"
+#include "detp/detp_batch_shelf.h"
 #include "detp/detp_sphere.h"
 #include "gi_rng.h"
 #include "gi_test.h"
@@ -79,14 +80,24 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
      * the base, and their count makes the rewrites. Frames 101-130 change
      * a third of the paths each: their size does. */
     int max_files = 0;
-    uint32_t base_at_100 = 0, late_bases = 0;
+    uint32_t base_at_100 = 0, late_bases = 0, advanced_bases = 0;
+    /* `kept` is opened once and then only advanced frame to frame
+     * (detp_batch_advance); it must read like the batch opened afresh. */
+    detp_batch kept;
+    GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, 0, &kept, &err) == 1);
     for (uint32_t f = 1; f <= 130; f++) {
         detp_batch prev;
         GI_REQUIRE(detp_batch_open(dir, &spec, 7, P0, P0 + PATHS, f - 1, &prev, &err) == 1);
         detp_batch_materialize(&prev, &changed, &got); /* changed is empty here */
-        changed.count = 0;
         GI_CHECK_MSG(same_segments(&got, &expect), "frame %u reads back wrong", f - 1);
         GI_CHECK(detp_batch_count(&prev) == expect.count);
+        detp_batch_materialize(&kept, &changed, &got);
+        GI_CHECK_MSG(same_segments(&got, &expect) && kept.frame == f - 1 &&
+                         kept.base_frame == prev.base_frame &&
+                         kept.over_count == prev.over_count &&
+                         detp_batch_count(&kept) == expect.count,
+                     "frame %u: the batch kept open reads back wrong", f - 1);
+        changed.count = 0;
         GI_CHECK_MSG(prev.delta_count <= DETP_BATCH_MAX_DELTAS, "frame %u: %u deltas", f - 1,
                      prev.delta_count);
         if (f - 1 == 100)
@@ -100,7 +111,10 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
                 version[i] = f;
                 make_run(P0 + i, f, &changed);
             }
-        GI_REQUIRE_OK(detp_batch_write_frame(dir, &spec, &prev, f, &changed, &err));
+        int as_base = detp_batch_write_frame(dir, &spec, &prev, f, &changed, &err);
+        GI_REQUIRE(as_base == 0 || as_base == 1);
+        advanced_bases += (uint32_t)as_base;
+        GI_REQUIRE(detp_batch_advance(dir, &spec, &kept, f, as_base, &err) == 1);
         detp_batch_close(&prev);
         whole(version, &expect);
         int n = files_in(dir);
@@ -112,6 +126,8 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     detp_batch_materialize(&last, &none, &got);
     GI_CHECK(same_segments(&got, &expect));
     GI_CHECK_MSG(base_at_100 > 0, "many small deltas never made a new base");
+    GI_CHECK(advanced_bases >= 5 && kept.frame == 130);
+    detp_batch_close(&kept);
     /* ~250 segments a frame against a base of ~750: a new base every few. */
     GI_CHECK_MSG(late_bases >= 5, "large deltas made %u new bases in 30 frames", late_bases);
     const char *newest = last.base_frame == 130 ? "base" : "delta";
@@ -132,6 +148,68 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     gi_detp_segments_free(&expect);
     gi_detp_segments_free(&got);
     gi_detp_segments_free(&changed);
+}
+
+/* The shelf hands a batch back only at the frame it was kept at, keeps
+ * one entry per batch, and closes the oldest past its budget. */
+GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
+{
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/shelf", gi_test_tmpdir());
+    mkdir(dir, 0755);
+    gi_error err;
+    detp_grid_spec spec;
+    detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, &spec);
+    uint32_t version[PATHS] = {0};
+    gi_detp_segments segs;
+    gi_detp_segments_init(&segs);
+    whole(version, &segs);
+    for (uint32_t batch = 0; batch < 3; batch++)
+        GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, batch, P0, P0 + PATHS, 4, &segs, &err));
+    detp_batch_shelf shelf = {NULL, 0, 0, 0, (size_t)1 << 30};
+    detp_batch b;
+    for (uint32_t batch = 0; batch < 3; batch++) {
+        GI_REQUIRE(detp_batch_open(dir, &spec, batch, P0, P0 + PATHS, 4, &b, &err) == 1);
+        detp_batch_shelf_put(&shelf, &b);
+        GI_CHECK(b.base.seg == NULL); /* the shelf owns it now */
+    }
+    GI_CHECK(shelf.count == 3);
+    /* Another frame or photon range: not handed out, and closed. */
+    GI_CHECK(detp_batch_shelf_take(&shelf, dir, 1, P0, P0 + PATHS, 5, &b) == 0 && shelf.count == 2);
+    GI_CHECK(detp_batch_shelf_take(&shelf, dir, 2, P0, P0 + PATHS + 1, 4, &b) == 0 &&
+             shelf.count == 1);
+    GI_REQUIRE(detp_batch_shelf_take(&shelf, dir, 0, P0, P0 + PATHS, 4, &b) == 1);
+    GI_CHECK(shelf.count == 0 && shelf.bytes == 0 && b.batch == 0 && b.frame == 4 &&
+             detp_batch_count(&b) == segs.count);
+    /* Put twice: one entry. Then a budget of one batch: the oldest goes. */
+    detp_batch again;
+    GI_REQUIRE(detp_batch_open(dir, &spec, 0, P0, P0 + PATHS, 4, &again, &err) == 1);
+    detp_batch_shelf_put(&shelf, &b);
+    detp_batch_shelf_put(&shelf, &again);
+    GI_CHECK(shelf.count == 1);
+    shelf.budget = shelf.bytes;
+    GI_REQUIRE(detp_batch_open(dir, &spec, 1, P0, P0 + PATHS, 4, &b, &err) == 1);
+    detp_batch_shelf_put(&shelf, &b);
+    GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 1);
+    detp_batch_shelf_drop(&shelf, 1);
+    GI_CHECK(shelf.count == 0 && shelf.bytes == 0);
+    /* A batch whose base was rewritten (a new inode) or removed since it
+     * was put is not handed out. */
+    GI_REQUIRE(detp_batch_open(dir, &spec, 2, P0, P0 + PATHS, 4, &b, &err) == 1);
+    detp_batch_shelf_put(&shelf, &b);
+    GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, 2, P0, P0 + PATHS, 4, &segs, &err));
+    GI_CHECK(detp_batch_shelf_take(&shelf, dir, 2, P0, P0 + PATHS, 4, &b) == 0);
+    GI_REQUIRE(detp_batch_open(dir, &spec, 2, P0, P0 + PATHS, 4, &b, &err) == 1);
+    detp_batch_shelf_put(&shelf, &b);
+    GI_CHECK(detp_batch_shelf_take(&shelf, dir, 2, P0, P0 + PATHS, 4, &b) == 1);
+    detp_batch_shelf_put(&shelf, &b);
+    detp_batch_remove(dir, 2);
+    GI_CHECK(detp_batch_shelf_take(&shelf, dir, 2, P0, P0 + PATHS, 4, &b) == 0);
+    GI_CHECK(shelf.count == 0);
+    detp_batch_shelf_free(&shelf);
+    for (uint32_t batch = 0; batch < 3; batch++)
+        detp_batch_remove(dir, batch);
+    gi_detp_segments_free(&segs);
 }
 
 /* The grid lists, for a box, every path with a segment that enters it

@@ -1,0 +1,71 @@
+/* detp_batch_shelf: the batches a worker process keeps open between frames
+ * (see detp_batch_shelf.h). */
+#include "detp_batch_shelf.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static size_t mapped_bytes(const detp_batch *b)
+{
+    size_t n = b->base.len + b->grid.len;
+    for (uint32_t d = 0; d < b->delta_count; d++)
+        n += b->deltas[d].len;
+    return n;
+}
+
+/* Removes entry i, closing it unless it is handed out. */
+static void remove_at(detp_batch_shelf *s, size_t i, detp_batch *out)
+{
+    s->bytes -= mapped_bytes(&s->b[i]);
+    if (out)
+        *out = s->b[i];
+    else
+        detp_batch_close(&s->b[i]);
+    memmove(&s->b[i], &s->b[i + 1], (s->count - i - 1) * sizeof *s->b);
+    s->count--;
+}
+
+int detp_batch_shelf_take(detp_batch_shelf *s, const char *dir, uint32_t batch, uint64_t p0,
+                          uint64_t p1, uint32_t frame, detp_batch *out)
+{
+    for (size_t i = 0; i < s->count; i++) {
+        if (s->b[i].batch != batch)
+            continue;
+        int match = s->b[i].frame == frame && s->b[i].p0 == p0 && s->b[i].p1 == p1 &&
+                    detp_batch_files_present(dir, &s->b[i]);
+        remove_at(s, i, match ? out : NULL);
+        return match;
+    }
+    return 0;
+}
+
+void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b)
+{
+    detp_batch_shelf_drop(s, b->batch);
+    if (s->count == s->cap) {
+        s->cap = s->cap ? 2 * s->cap : 8;
+        s->b = gi_xrealloc(s->b, s->cap * sizeof *s->b);
+    }
+    s->b[s->count++] = *b;
+    s->bytes += mapped_bytes(b);
+    memset(b, 0, sizeof *b);
+    while (s->count > 1 && s->bytes > s->budget)
+        remove_at(s, 0, NULL);
+}
+
+void detp_batch_shelf_drop(detp_batch_shelf *s, uint32_t batch)
+{
+    for (size_t i = 0; i < s->count; i++)
+        if (s->b[i].batch == batch) {
+            remove_at(s, i, NULL);
+            return;
+        }
+}
+
+void detp_batch_shelf_free(detp_batch_shelf *s)
+{
+    while (s->count)
+        remove_at(s, s->count - 1, NULL);
+    free(s->b);
+    memset(s, 0, sizeof *s);
+}

@@ -1,0 +1,37 @@
+/* detp_batch_shelf: the batches a worker process keeps open between frames.
+ *
+ * A batch's next frame usually comes back to the same process (the farm
+ * sends it to the host that holds its files, and one pool process often
+ * runs every batch of a frame). Opening the batch from its files every
+ * frame maps the base and every delta again, merges all the deltas'
+ * runs, and faults the pages of the paths it reads in again; a batch kept
+ * open only needs the delta its frame wrote (detp_batch_advance). The
+ * shelf holds batches up to a budget of mapped bytes (the oldest go
+ * first); the files stay the truth: a batch not on the shelf at the frame
+ * asked for, or whose files were removed or replaced meanwhile, is opened
+ * from them (or regenerated). */
+#ifndef GI_DETP_BATCH_SHELF_H
+#define GI_DETP_BATCH_SHELF_H
+
+#include "detp_batch.h"
+
+typedef struct detp_batch_shelf {
+    detp_batch *b; /* oldest first */
+    size_t count, cap;
+    size_t bytes, budget; /* mapped bytes on the shelf, and the most kept */
+} detp_batch_shelf;
+
+/* Takes batch `batch` (photons [p0, p1)) at `frame` off the shelf into *out:
+ * 1, or 0 if the shelf has it at no such frame or its files in dir are
+ * gone or replaced (it is then closed). */
+int detp_batch_shelf_take(detp_batch_shelf *s, const char *dir, uint32_t batch, uint64_t p0,
+                          uint64_t p1, uint32_t frame, detp_batch *out);
+/* Puts *b on the shelf (the shelf owns it; *b is cleared), closing the
+ * oldest batches while the shelf holds more than its budget. */
+void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b);
+/* Closes batch `batch` if the shelf has it (its files are going). */
+void detp_batch_shelf_drop(detp_batch_shelf *s, uint32_t batch);
+/* Closes everything. */
+void detp_batch_shelf_free(detp_batch_shelf *s);
+
+#endif
