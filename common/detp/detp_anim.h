@@ -161,8 +161,8 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
  * `segs` by the Sphere Cache rooted at the object's bounding sphere grown
  * by the radius (sc != NULL; segments missing that sphere are dropped
  * first), or by Embree Disc Indexing over the discs (sc == NULL, device
- * given; when the discs are nearly the mobile's size, every disc against
- * every segment in lanes instead: the same pairs). acc is a fixed-point
+ * given; when the discs are not much smaller than the mobile, every disc
+ * against every segment in lanes instead: the same pairs). acc is a fixed-point
  * accumulator indexed by GLOBAL vertex: the object's entries are cleared
  * and then set; the others are untouched. */
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,

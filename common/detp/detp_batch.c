@@ -297,9 +297,11 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
     }
 }
 
-void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *mark)
+void detp_batch_mark_near(const detp_batch *b, gi_detp_mobile_pose s0, gi_detp_mobile_pose s1,
+                          uint8_t *mark)
 {
-    detp_grid_mark(&b->grid, lo, hi, mark);
+    detp_grid_mark(&b->grid, s0.c, s0.r, mark);
+    detp_grid_mark(&b->grid, s1.c, s1.r, mark);
     for (size_t i = 0; i < b->over_count; i++)
         mark[b->over[i].photon - b->p0] = 1;
 }

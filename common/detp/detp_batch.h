@@ -81,10 +81,11 @@ static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b
 /* The next path, or 0 at the end. */
 int detp_batch_next(detp_batch_iter *it, detp_path *run);
 
-/* The paths that may come near the box [lo, hi]: those the base's grid
- * lists in the cells the box overlaps, and every path a delta changed.
+/* The paths that may come within either sphere: those the base's grid
+ * lists in the cells the spheres overlap, and every path a delta changed.
  * Sets mark[i] = 1 for photon p0 + i (mark has p1 - p0 entries). */
-void detp_batch_mark_near(const detp_batch *b, gi_vec3 lo, gi_vec3 hi, uint8_t *mark);
+void detp_batch_mark_near(const detp_batch *b, gi_detp_mobile_pose s0, gi_detp_mobile_pose s1,
+                          uint8_t *mark);
 /* The runs of the marked paths (mark[i]: photon p0 + i) as of the batch's
  * frame, in photon order, into *runs (grown as needed, *cap its room).
  * Returns how many. */

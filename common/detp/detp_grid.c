@@ -342,17 +342,35 @@ void detp_grid_unmap(detp_grid *g)
     memset(g, 0, sizeof *g);
 }
 
-void detp_grid_mark(const detp_grid *g, gi_vec3 lo, gi_vec3 hi, uint8_t *mark)
+/* Squared distance from x to the interval [a, a + w]. */
+static float gap2(float x, float a, float w)
+{
+    float d = x < a ? a - x : (x > a + w ? x - (a + w) : 0.0f);
+    return d * d;
+}
+
+void detp_grid_mark(const detp_grid *g, gi_vec3 c, float r, uint8_t *mark)
 {
     const detp_grid_spec *s = &g->spec;
     uint32_t c0[3], c1[3];
     for (int k = 0; k < 3; k++)
-        cell_range(s, k, axis(lo, k), axis(hi, k), &c0[k], &c1[k]);
-    for (uint32_t z = c0[2]; z <= c1[2]; z++)
-        for (uint32_t y = c0[1]; y <= c1[1]; y++)
+        cell_range(s, k, axis(c, k) - r, axis(c, k) + r, &c0[k], &c1[k]);
+    /* Cells of the sphere's box that the sphere misses (its corners) are
+     * skipped; the radius is grown a little over the rounding of the
+     * cells' corners. */
+    float rr = r + 1e-4f * s->cell;
+    rr *= rr;
+    for (uint32_t z = c0[2]; z <= c1[2]; z++) {
+        float dz = gap2(c.z, s->lo.z + (float)z * s->cell, s->cell);
+        for (uint32_t y = c0[1]; y <= c1[1]; y++) {
+            float dyz = dz + gap2(c.y, s->lo.y + (float)y * s->cell, s->cell);
             for (uint32_t x = c0[0]; x <= c1[0]; x++) {
-                size_t c = ((size_t)z * s->n[1] + y) * s->n[0] + x;
-                for (uint64_t i = g->cell_start[c]; i < g->cell_start[c + 1]; i++)
+                if (dyz + gap2(c.x, s->lo.x + (float)x * s->cell, s->cell) > rr)
+                    continue;
+                size_t k = ((size_t)z * s->n[1] + y) * s->n[0] + x;
+                for (uint64_t i = g->cell_start[k]; i < g->cell_start[k + 1]; i++)
                     mark[g->entries[i]] = 1;
             }
+        }
+    }
 }

@@ -62,8 +62,8 @@ int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uin
                   gi_error *err);
 void detp_grid_unmap(detp_grid *g);
 
-/* Sets mark[i] = 1 for every path i listed in a cell the box [lo, hi]
+/* Sets mark[i] = 1 for every path i listed in a cell the sphere (c, r)
  * overlaps (mark has g->paths entries). */
-void detp_grid_mark(const detp_grid *g, gi_vec3 lo, gi_vec3 hi, uint8_t *mark);
+void detp_grid_mark(const detp_grid *g, gi_vec3 c, float r, uint8_t *mark);
 
 #endif

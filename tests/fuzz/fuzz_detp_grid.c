@@ -34,7 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     int rc = detp_grid_map(path, &spec, P0, P1, 2, RECORDS, BASE_CRC, &g, &err);
     if (rc == 1) {
         uint8_t mark[P1 - P0] = {0};
-        detp_grid_mark(&g, gi_v3(-1, -1, -1), gi_v3(9, 9, 9), mark);
+        detp_grid_mark(&g, gi_v3(2, 2, 2), 4.0f, mark);
         for (uint32_t i = 0; i < g.paths; i++)
             if (g.path_start[i] > g.path_start[i + 1] || g.path_start[i + 1] > RECORDS)
                 abort();

@@ -212,9 +212,9 @@ GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
     gi_detp_segments_free(&segs);
 }
 
-/* The grid lists, for a box, every path with a segment that enters it
+/* The grid lists, for a sphere, every path with a segment that enters it
  * (over its extent: up to t_second, or to the grid's edge if it escapes). */
-GI_TEST(test_detp_grid_lists_every_path_near_a_box)
+GI_TEST(test_detp_grid_lists_every_path_near_a_sphere)
 {
     char path[512];
     snprintf(path, sizeof path, "%s/g.grid", gi_test_tmpdir());
@@ -261,7 +261,7 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_box)
         /* With a margin, as the worker queries (rounding at cell
          * boundaries stays far below it). */
         float m = rad + 0.05f;
-        detp_grid_mark(&g, gi_sub(c, gi_v3(m, m, m)), gi_add(c, gi_v3(m, m, m)), mark);
+        detp_grid_mark(&g, c, m, mark);
         uint32_t listed = 0, near = 0;
         for (uint64_t i = 0; i < n; i++)
             listed += mark[i];
