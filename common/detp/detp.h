@@ -321,6 +321,25 @@ void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
                              gi_detp_accum *acc, gi_detp_stats *st);
 void gi_detp_embree_free(gi_detp_embree_index *x);
 
+/* The (segment, disc) pairs an estimate found, per segment: the discs of
+ * segment j are ids[off[j] .. off[j + 1]) (in the order found). */
+typedef struct gi_detp_crossings {
+    uint32_t *off; /* segments + 1 */
+    uint32_t *ids;
+    size_t segments, pairs, off_cap, ids_cap;
+} gi_detp_crossings;
+void gi_detp_crossings_free(gi_detp_crossings *c);
+/* gi_detp_embree_estimate that also lists each segment's discs into rec
+ * (replacing what it held). */
+void gi_detp_embree_estimate_listed(gi_detp_embree_index *x, const gi_detp_segments *s,
+                                    gi_detp_accum *acc, gi_detp_stats *st,
+                                    gi_detp_crossings *rec);
+/* The contributions of listed pairs without searching: segment j to each
+ * disc of its list (the same gi_detp_accum_add calls as the estimate that
+ * listed them made, in acc's current sign). */
+void gi_detp_crossings_apply(const gi_detp_segment *seg, const uint32_t *ids, uint32_t n,
+                             gi_detp_accum *acc, gi_detp_stats *st);
+
 /* Impact count (detp_impact.c), eqs. 3.6-3.8: each hit's energy goes to
  * the triangle it hits; a triangle's irradiance is its energy over its
  * area, and a vertex takes the mean of its triangles. Adds IRRADIANCE

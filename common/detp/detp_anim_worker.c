@@ -33,6 +33,8 @@ typedef struct detp_anim_worker {
     gi_detp_embree_index *static_index;
     gi_detp_accum static_acc;
     gi_detp_segments old_list, new_list, changed, near, regen[2];
+    gi_detp_segments unlisted; /* old segments whose crossings are not known */
+    gi_detp_crossings listed;  /* the new segments' static crossings */
     int64_t *sum, *hits; /* the result, per vertex */
     detp_grid_spec grid;  /* of the stored batches: the box the mobile can reach */
     uint8_t *mark;        /* per path of a batch: may come near the mobile */
@@ -58,6 +60,8 @@ void detp_anim_worker_free(detp_anim_worker *a)
     gi_detp_discs_free(&a->static_discs);
     gi_detp_accum_free(&a->static_acc);
     gi_detp_segments_free(&a->old_list);
+    gi_detp_segments_free(&a->unlisted);
+    gi_detp_crossings_free(&a->listed);
     gi_detp_segments_free(&a->new_list);
     gi_detp_segments_free(&a->changed);
     gi_detp_segments_free(&a->near);
@@ -148,19 +152,58 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
     return 0;
 }
 
+/* The static crossings of old segment o as listed with prev's newest
+ * delta, if o is one of its records: runs (the frame's marked paths) and
+ * o are in photon order, *r is a cursor over runs. */
+static int listed_crossings(const detp_batch *prev, const detp_path *runs, size_t nrun,
+                            size_t *r, const gi_detp_segment *o, const uint32_t **ids,
+                            uint32_t *n)
+{
+    if (!prev->cross_off || prev->delta_count == 0)
+        return 0;
+    while (*r < nrun && runs[*r].photon < o->photon)
+        ++*r;
+    if (*r == nrun || runs[*r].photon != o->photon || o->bounce >= runs[*r].count)
+        return 0;
+    const gi_detp_store_mapping *d = &prev->deltas[prev->delta_count - 1];
+    const gi_detp_segment *at = &runs[*r].seg[o->bounce];
+    if (at < d->seg || at >= d->seg + d->count)
+        return 0;
+    size_t i = (size_t)(at - d->seg);
+    if (!prev->cross_known[i] || memcmp(at, o, sizeof *o) != 0)
+        return 0;
+    *ids = prev->cross_ids + prev->cross_off[i];
+    *n = prev->cross_off[i + 1] - prev->cross_off[i];
+    return 1;
+}
+
 /* Eq. 4.4 for the static vertices: the sums of the new segments minus
  * those of the old, into the global accumulator (the mobile's range is
- * left for mobile_vertices). */
+ * left for mobile_vertices). An old segment that the frame before added
+ * (most are: what met the mobile at its last pose) takes back the
+ * crossings listed then, without a search; the others are searched. The
+ * new segments' crossings are listed for the next frame. */
 static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a,
-                          gi_detp_stats *st)
+                          const detp_batch *prev, size_t nrun, gi_detp_stats *st)
 {
     const gi_object *o = &ctx->job.scene.objects[a->object];
     gi_detp_accum *sa = &a->static_acc;
     gi_detp_accum_clear(sa);
     sa->sign = -1;
-    gi_detp_embree_estimate(a->static_index, &a->old_list, sa, st);
+    a->unlisted.count = 0;
+    size_t r = 0;
+    for (size_t k = 0; k < a->old_list.count; k++) {
+        const gi_detp_segment *g = &a->old_list.v[k];
+        const uint32_t *ids;
+        uint32_t n;
+        if (listed_crossings(prev, a->runs, nrun, &r, g, &ids, &n))
+            gi_detp_crossings_apply(g, ids, n, sa, st);
+        else
+            *gi_detp_segments_push(&a->unlisted) = *g;
+    }
+    gi_detp_embree_estimate(a->static_index, &a->unlisted, sa, st);
     sa->sign = 1;
-    gi_detp_embree_estimate(a->static_index, &a->new_list, sa, st);
+    gi_detp_embree_estimate_listed(a->static_index, &a->new_list, sa, st, &a->listed);
     /* Static disc i is vertex i below the mobile's range, i + n above. */
     size_t v0 = o->first_vertex, n = o->vertex_count;
     memcpy(w->acc.fixed, sa->fixed, 3 * v0 * sizeof *sa->fixed);
@@ -168,6 +211,37 @@ static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *
     memcpy(w->acc.fixed + 3 * (v0 + n), sa->fixed + 3 * v0,
            3 * (sa->count - v0) * sizeof *sa->fixed);
     memcpy(w->acc.hits + v0 + n, sa->hits + v0, (sa->count - v0) * sizeof *sa->hits);
+}
+
+/* Gives b (now standing on the delta of a->changed) the crossings of that
+ * delta's records listed by static_update: new_list is the subsequence of
+ * changed that the frame traced or repaired (the same bits, photon order;
+ * a path's new and kept segments differ in bounce). */
+static void attach_crossings(const detp_anim_worker *a, detp_batch *b)
+{
+    const gi_detp_segments *c = &a->changed, *nl = &a->new_list;
+    const gi_detp_crossings *l = &a->listed;
+    if (b->delta_count == 0 || b->deltas[b->delta_count - 1].count != c->count ||
+        l->segments != nl->count)
+        return;
+    b->cross_off = gi_xmalloc((c->count + 1) * sizeof *b->cross_off);
+    b->cross_known = gi_xcalloc(c->count + 1, 1);
+    b->cross_ids = gi_xmalloc((l->pairs + 1) * sizeof *b->cross_ids);
+    size_t j = 0, pairs = 0;
+    for (size_t i = 0; i < c->count; i++) {
+        b->cross_off[i] = (uint32_t)pairs;
+        if (j < nl->count && nl->v[j].photon == c->v[i].photon &&
+            nl->v[j].bounce == c->v[i].bounce) {
+            uint32_t n = l->off[j + 1] - l->off[j];
+            memcpy(b->cross_ids + pairs, l->ids + l->off[j], n * sizeof *l->ids);
+            pairs += n;
+            b->cross_known[i] = 1;
+            j++;
+        }
+    }
+    b->cross_off[c->count] = (uint32_t)pairs;
+    if (j != nl->count) /* not a subsequence after all: list nothing */
+        detp_batch_forget_crossings(b);
 }
 
 /* The scene's mobile at `frame` (vertices, normals, bounds), without the
@@ -440,7 +514,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         w->acc.sign = 1;
         rc = detp_worker_estimate(ctx, w, &h->stats, err);
     } else {
-        static_update(ctx, w, a, &h->stats);
+        static_update(ctx, w, a, &prev, nrun, &h->stats);
     }
     double t3 = detp_now();
     if (rc == 0)
@@ -453,8 +527,12 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         /* Keep the batch open at this frame for the next; if that fails,
          * the next frame opens it from the files. */
         gi_error ignored;
-        if (detp_batch_advance(dir, &a->grid, &prev, f, rc, &ignored) == 1)
+        int as_base = rc;
+        if (detp_batch_advance(dir, &a->grid, &prev, f, as_base, &ignored) == 1) {
+            if (!as_base && p->anim.update != GI_DETP_UPDATE_FULL)
+                attach_crossings(a, &prev);
             detp_batch_shelf_put(&a->shelf, &prev);
+        }
         rc = 0;
     }
     detp_batch_close(&prev);

@@ -210,6 +210,7 @@ int detp_batch_advance(const char *dir, const detp_grid_spec *spec, detp_batch *
         detp_batch_close(b);
         return detp_batch_open(dir, spec, batch, p0, p1, frame, b, err);
     }
+    detp_batch_forget_crossings(b); /* they were the previous delta's */
     b->deltas = gi_xrealloc(b->deltas, ((size_t)b->delta_count + 1) * sizeof *b->deltas);
     gi_detp_store_mapping *d = &b->deltas[b->delta_count];
     int rc = map_file(dir, b, frame, 1, d, err);
@@ -252,7 +253,17 @@ void detp_batch_close(detp_batch *b)
         gi_detp_store_unmap(&b->deltas[d]);
     free(b->deltas);
     free(b->over);
+    detp_batch_forget_crossings(b);
     memset(b, 0, sizeof *b);
+}
+
+void detp_batch_forget_crossings(detp_batch *b)
+{
+    free(b->cross_off);
+    free(b->cross_ids);
+    free(b->cross_known);
+    b->cross_off = b->cross_ids = NULL;
+    b->cross_known = NULL;
 }
 
 int detp_batch_next(detp_batch_iter *it, detp_path *run)

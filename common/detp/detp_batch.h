@@ -47,6 +47,12 @@ typedef struct detp_batch {
     /* The newest run of every path the deltas changed, by photon. */
     detp_path *over;
     size_t over_count;
+    /* The static discs each record of the newest delta crosses, as the
+     * process that wrote it found them (detp_anim_worker.c): record i's are
+     * cross_ids[cross_off[i] .. cross_off[i + 1]) where cross_known[i].
+     * Memory only (a batch kept open, detp_batch_shelf.h); NULL: none. */
+    uint32_t *cross_off, *cross_ids;
+    uint8_t *cross_known;
 } detp_batch;
 
 /* Opens batch `batch` (photons [p0, p1)) at `frame` from dir: 1 if found
@@ -55,6 +61,8 @@ typedef struct detp_batch {
 int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
                     uint64_t p1, uint32_t frame, detp_batch *b, gi_error *err);
 void detp_batch_close(detp_batch *b);
+/* Frees the crossing lists of the newest delta. */
+void detp_batch_forget_crossings(detp_batch *b);
 /* The files of an open batch are still on disk (its base and newest
  * delta, by inode): a batch kept open must not outlive them. */
 int detp_batch_files_present(const char *dir, const detp_batch *b);

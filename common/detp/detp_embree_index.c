@@ -14,6 +14,7 @@
  * leaf and reported at most once per ray. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "detp.h"
 
@@ -31,7 +32,17 @@ typedef struct query_ctx {
     const gi_detp_segment *seg;
     gi_detp_accum *acc;
     gi_detp_stats *st;
+    gi_detp_crossings *rec; /* or NULL */
 } query_ctx;
+
+static void rec_push(gi_detp_crossings *c, uint32_t disc)
+{
+    if (c->pairs == c->ids_cap) {
+        c->ids_cap = c->ids_cap ? 2 * c->ids_cap : 4096;
+        c->ids = gi_xrealloc(c->ids, c->ids_cap * sizeof *c->ids);
+    }
+    c->ids[c->pairs++] = disc;
+}
 
 static void disc_filter(const struct RTCFilterFunctionNArguments *args)
 {
@@ -49,6 +60,8 @@ static void disc_filter(const struct RTCFilterFunctionNArguments *args)
         if (gi_detp_crosses(&q->discs->d[disc], q->discs->r2, q->seg)) {
             gi_detp_accum_add(q->acc, disc, q->seg);
             q->st->crossings++;
+            if (q->rec)
+                rec_push(q->rec, disc);
         }
     }
 }
@@ -114,16 +127,24 @@ void gi_detp_embree_free(gi_detp_embree_index *x)
     free(x);
 }
 
-void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
-                             gi_detp_accum *acc, gi_detp_stats *st)
+static void estimate(gi_detp_embree_index *x, const gi_detp_segments *s, gi_detp_accum *acc,
+                     gi_detp_stats *st, gi_detp_crossings *rec)
 {
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
     q.discs = x->discs;
     q.acc = acc;
     q.st = st;
-    if (x->discs->count == 0)
-        return;
+    q.rec = rec;
+    if (rec) {
+        rec->segments = s->count;
+        rec->pairs = 0;
+        if (rec->off_cap < s->count + 1) {
+            rec->off_cap = s->count + 1;
+            rec->off = gi_xrealloc(rec->off, rec->off_cap * sizeof *rec->off);
+        }
+        rec->off[0] = 0;
+    }
     for (size_t j = 0; j < s->count; j++) {
         const gi_detp_segment *g = &s->v[j];
         q.seg = g;
@@ -143,6 +164,37 @@ void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
         /* An occlusion query: the filter rejects every disc, so it visits
          * them all, and Embree skips the hit record (~15% faster than
          * rtcIntersect1 at 1% radius in bench/detp_tree). */
-        rtcOccluded1(x->scene, &q.rtc, &ray);
+        if (x->discs->count)
+            rtcOccluded1(x->scene, &q.rtc, &ray);
+        if (rec)
+            rec->off[j + 1] = (uint32_t)rec->pairs;
     }
+}
+
+void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
+                             gi_detp_accum *acc, gi_detp_stats *st)
+{
+    estimate(x, s, acc, st, NULL);
+}
+
+void gi_detp_embree_estimate_listed(gi_detp_embree_index *x, const gi_detp_segments *s,
+                                    gi_detp_accum *acc, gi_detp_stats *st,
+                                    gi_detp_crossings *rec)
+{
+    estimate(x, s, acc, st, rec);
+}
+
+void gi_detp_crossings_apply(const gi_detp_segment *seg, const uint32_t *ids, uint32_t n,
+                             gi_detp_accum *acc, gi_detp_stats *st)
+{
+    for (uint32_t k = 0; k < n; k++)
+        gi_detp_accum_add(acc, ids[k], seg);
+    st->crossings += n;
+}
+
+void gi_detp_crossings_free(gi_detp_crossings *c)
+{
+    free(c->off);
+    free(c->ids);
+    memset(c, 0, sizeof *c);
 }

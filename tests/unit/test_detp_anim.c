@@ -239,6 +239,11 @@ static void check_animation(anim *a, const char *what)
     size_t total_retraced = 0, total_paths = 0, kept_checked = 0, kept_bad = 0;
     size_t untouched_bad = 0, static_bad = 0, mobile_bad = 0, second_bad = 0;
     uint64_t second_changed = 0;
+    size_t listed_old = 0;
+    gi_detp_crossings rec[2];
+    memset(rec, 0, sizeof rec);
+    gi_detp_segments prev_new; /* the frame before's new segments (rec lists them) */
+    gi_detp_segments_init(&prev_new);
     for (uint32_t f = 1; f <= FRAMES; f++) {
         /* Through the store, as a worker does between frames. */
         gi_detp_store_header h = {.p0 = 0, .p1 = PHOTONS, .frame = f - 1};
@@ -324,11 +329,35 @@ static void check_animation(anim *a, const char *what)
             second_bad += !(t2 == g->t_second || (isinf(t2) && isinf(g->t_second)));
         }
 
-        /* Static discs: running sums + new - old == recompute over next. */
+        /* Static discs: running sums + new - old == recompute over next.
+         * The new segments' crossings are listed; an old segment that the
+         * frame before added takes back its listed crossings (as a worker
+         * does), the others are searched. */
         run.sign = 1;
-        gi_detp_embree_estimate(x, &n, &run, &est);
+        gi_detp_embree_estimate_listed(x, &n, &run, &est, &rec[f & 1]);
         run.sign = -1;
-        gi_detp_embree_estimate(x, &o, &run, &est);
+        gi_detp_segments unlisted;
+        gi_detp_segments_init(&unlisted);
+        const gi_detp_crossings *was = &rec[(f - 1) & 1];
+        for (size_t k = 0, j = 0; k < o.count; k++) {
+            const gi_detp_segment *g = &o.v[k];
+            while (j < prev_new.count && (prev_new.v[j].photon < g->photon ||
+                                          (prev_new.v[j].photon == g->photon &&
+                                           prev_new.v[j].bounce < g->bounce)))
+                j++;
+            if (f > 1 && j < prev_new.count && memcmp(&prev_new.v[j], g, sizeof *g) == 0) {
+                gi_detp_crossings_apply(g, was->ids + was->off[j],
+                                        was->off[j + 1] - was->off[j], &run, &est);
+                listed_old++;
+            } else {
+                *gi_detp_segments_push(&unlisted) = *g;
+            }
+        }
+        gi_detp_embree_estimate(x, &unlisted, &run, &est);
+        gi_detp_segments_free(&unlisted);
+        prev_new.count = 0;
+        for (size_t k = 0; k < n.count; k++)
+            *gi_detp_segments_push(&prev_new) = n.v[k];
         gi_detp_accum full;
         GI_REQUIRE_OK(scratch(a, x, unit, &next, &full, &err));
         for (uint32_t v = 0; v < a->discs.count; v++) {
@@ -412,6 +441,10 @@ static void check_animation(anim *a, const char *what)
     GI_CHECK_MSG(static_bad == 0, "%zu static discs differ from the recompute", static_bad);
     GI_CHECK_MSG(mobile_bad == 0, "%zu mobile discs differ from basic DETP", mobile_bad);
     GI_CHECK(total_retraced > 0 && total_retraced < total_paths);
+    GI_CHECK_MSG(listed_old > 0, "no old segment took back listed crossings");
+    gi_detp_crossings_free(&rec[0]);
+    gi_detp_crossings_free(&rec[1]);
+    gi_detp_segments_free(&prev_new);
 
     /* Regenerated from frame 0, in two half batches: the same frame. */
     gi_detp_segments halves;
