@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "detp.h"
+#include "detp_anim_params.h"
 
 /* ---- Batch store (detp_store.c) ------------------------------------- */
 
@@ -158,16 +159,15 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
 
 /* The mobile's vertices from scratch (thesis 4.5): one disc per vertex of
  * `object` at its current pose (radius `radius`), estimated against all of
- * `segs` by the Sphere Cache rooted at the object's bounding sphere grown
- * by the radius (sc != NULL; segments missing that sphere are dropped
- * first), or by Embree Disc Indexing over the discs (sc == NULL, device
- * given; when the discs are not much smaller than the mobile, every disc
- * against every segment in lanes instead: the same pairs). acc is a fixed-point
- * accumulator indexed by GLOBAL vertex: the object's entries are cleared
- * and then set; the others are untouched. */
+ * `segs` as `how` says: the Sphere Cache rooted at the object's bounding
+ * sphere grown by the radius (sc given; segments missing that sphere are
+ * dropped first), Embree Disc Indexing over the discs (device given), or
+ * the discs in lanes (gi_detp_lanes_estimate): the same pairs. acc is a
+ * fixed-point accumulator indexed by GLOBAL vertex: the object's entries
+ * are cleared and then set; the others are untouched. */
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
-                                 const gi_detp_segments *segs, const gi_detp_sc_params *sc,
-                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
-                                 gi_error *err);
+                                 const gi_detp_segments *segs, gi_detp_mobile_estimator how,
+                                 const gi_detp_sc_params *sc, RTCDevice device,
+                                 gi_detp_accum *acc, gi_detp_stats *st, gi_error *err);
 
 #endif

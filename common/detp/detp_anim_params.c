@@ -5,7 +5,8 @@
 #include <math.h>
 #include <string.h>
 
-const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", NULL};
+const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", "lanes",
+                                                       NULL};
 const char *const gi_detp_anim_update_names[] = {"incremental", "full", NULL};
 
 #define ANIM_PATH "detp.animation"
@@ -99,7 +100,7 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
                                        "update", NULL};
     const char *object = NULL;
     int64_t frames = 0;
-    int est = GI_DETP_MOBILE_EMBREE, update = GI_DETP_UPDATE_INCREMENTAL;
+    int est = GI_DETP_MOBILE_LANES, update = GI_DETP_UPDATE_INCREMENTAL;
     const cJSON *arr = NULL;
     if (gi_jv_object(v, b, ANIM_PATH) || gi_jv_keys(v, b, ANIM_PATH, keys) ||
         gi_jv_string(v, b, ANIM_PATH, "object", 1, &object))

@@ -29,7 +29,8 @@
 /* How the mobile's own vertices are estimated each frame (thesis 1.12.4). */
 typedef enum {
     GI_DETP_MOBILE_SPHERE_CACHE, /* Sphere Cache rooted at the mobile's bounding sphere */
-    GI_DETP_MOBILE_EMBREE        /* Disc Indexing over the mobile's discs only */
+    GI_DETP_MOBILE_EMBREE,       /* Disc Indexing (Embree) over the mobile's discs only */
+    GI_DETP_MOBILE_LANES         /* every disc group near a segment, in vector lanes */
 } gi_detp_mobile_estimator;
 
 extern const char *const gi_detp_mobile_estimator_names[];

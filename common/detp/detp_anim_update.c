@@ -232,21 +232,14 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
     return 0;
 }
 
-/* Disc radius, as a fraction of the mobile's bounding radius, from which
- * its discs are tested in lanes rather than through Embree. Measured on
- * the Cornell box's 12.7 mm discs and spheres of 642 vertices (24 or 6
- * frames, AVX-512 lanes): seconds a frame, lanes against Embree, 0.010 /
- * 0.026 at a ratio of 0.46 (the 5% sphere), 0.029 / 0.037 at 0.23,
- * 0.072 / 0.069 at 0.15, 0.12 / 0.10 at 0.11, 0.48 / 0.23 at 0.09. */
-#define MOBILE_LANES_RADIUS 0.18f
-
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
-                                 const gi_detp_segments *segs, const gi_detp_sc_params *sc,
-                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
-                                 gi_error *err)
+                                 const gi_detp_segments *segs, gi_detp_mobile_estimator how,
+                                 const gi_detp_sc_params *sc, RTCDevice device,
+                                 gi_detp_accum *acc, gi_detp_stats *st, gi_error *err)
 {
-    if (object >= s->object_count || !acc->fixed)
-        return gi_fail(err, GI_EINTERNAL, "mobile estimate: bad object or accumulator");
+    if (object >= s->object_count || !acc->fixed ||
+        (how == GI_DETP_MOBILE_SPHERE_CACHE && !sc) || (how == GI_DETP_MOBILE_EMBREE && !device))
+        return gi_fail(err, GI_EINTERNAL, "mobile estimate: bad object, accumulator or index");
     const gi_object *o = &s->objects[object];
     uint32_t n = o->vertex_count;
     if ((uint64_t)o->first_vertex + n > acc->count)
@@ -272,7 +265,7 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
     view.hits = acc->hits + o->first_vertex;
     view.sign = 1;
     int rc = 0;
-    if (sc) {
+    if (how == GI_DETP_MOBILE_SPHERE_CACHE) {
         gi_detp_mobile_pose b = gi_detp_object_sphere(s, object);
         float r0 = b.r * 1.0001f + radius;
         /* Only segments that meet the root can cross a disc (the cache
@@ -289,10 +282,7 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
                    : -1;
         free(order);
         gi_detp_segments_free(&near);
-    } else if (radius >= MOBILE_LANES_RADIUS * gi_detp_object_sphere(s, object).r) {
-        /* Discs not much smaller than the mobile: a segment near it
-         * crosses many of them, and testing all in lanes beats the index's
-         * per-candidate cost (bench/BENCHMARKS.md). */
+    } else if (how == GI_DETP_MOBILE_LANES) {
         gi_detp_lanes_estimate(&d, segs, &view, st);
     } else {
         gi_detp_embree_index *x = NULL;

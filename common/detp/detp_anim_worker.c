@@ -392,10 +392,9 @@ static int mobile_vertices(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker 
                            gi_detp_stats *st, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
-    const gi_detp_sc_params *sc =
-        p->anim.mobile_estimator == GI_DETP_MOBILE_SPHERE_CACHE ? &p->sc : NULL;
     return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, &a->near,
-                                        sc, ctx->rt.device, &w->acc, st, err);
+                                        p->anim.mobile_estimator, &p->sc, ctx->rt.device,
+                                        &w->acc, st, err);
 }
 
 /* The result: the accumulator as signed per-vertex sums. */

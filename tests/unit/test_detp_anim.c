@@ -381,8 +381,8 @@ static void check_animation(anim *a, const char *what)
         gi_detp_accum_free(&full);
 
         /* The mobile's vertices from scratch at the new pose: Sphere Cache,
-         * Embree DI (or lanes, as the sizes decide) and lanes of each width
-         * the CPU has against basic DETP over discs of the ball. */
+         * Embree DI and lanes of each width the CPU has against basic DETP
+         * over discs of the ball. */
         gi_detp_discs md;
         GI_REQUIRE_OK(gi_detp_discs_from_scene(&a->s, a->radius, &md, &err));
         gi_detp_accum ref, sc, em, ln[3];
@@ -405,10 +405,12 @@ static void check_animation(anim *a, const char *what)
         size_t other = 3 * (size_t)(md.count - 1); /* not the ball's: must stay */
         GI_REQUIRE(!is_mobile_vertex(a, md.count - 1));
         sc.fixed[other] = 12345;
-        GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next, &scp, NULL,
-                                                   &sc, &est, &err));
-        GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next, NULL,
-                                                   a->rt.device, &em, &est, &err));
+        GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next,
+                                                   GI_DETP_MOBILE_SPHERE_CACHE, &scp, NULL, &sc,
+                                                   &est, &err));
+        GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next,
+                                                   GI_DETP_MOBILE_EMBREE, NULL, a->rt.device,
+                                                   &em, &est, &err));
         uint64_t lit = 0;
         for (uint32_t v = mo->first_vertex; v < mo->first_vertex + mo->vertex_count; v++) {
             mobile_bad += memcmp(&ref.fixed[3 * (size_t)v], &sc.fixed[3 * (size_t)v], 24) != 0 ||

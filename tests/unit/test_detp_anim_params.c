@@ -57,8 +57,12 @@ GI_TEST(test_detp_anim_parse_good)
 
     /* The default mobile estimator, and a single key. */
     GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 5}]"), p, &err));
-    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_EMBREE);
+    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_LANES);
     GI_CHECK(p->anim.key_count == 1);
+    GI_REQUIRE_OK(parse_detp(
+        ANIM("\"keyframes\": [{\"frame\": 0}], \"mobile_estimator\": \"sphere_cache\""), p,
+        &err));
+    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_SPHERE_CACHE);
     free(p);
 }
 
