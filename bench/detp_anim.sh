@@ -3,8 +3,8 @@
 # (issue 7). The thesis's Table A.14: the Cornell box with a mobile sphere of
 # radius 1.25% ... 50% of the box's width (gi_scenegen cornell-mobile), in
 # the middle of the room, moving 1% of the width (5.56 mm) along x per frame;
-# the 10% case again with "update": "full" and with the Sphere Cache for the
-# mobile's vertices; and the tree scene (gi_scenegen tree) with its
+# the 10% case again with "update": "full" and with the Sphere Cache and
+# Embree for the mobile's vertices; and the tree scene (gi_scenegen tree) with its
 # 500-triangle torus moving 0.01 (1% of the scene) along x per frame. One
 # worker (`gi render --workers 1`), "json" output only. ROUNDS rounds, each
 # running every case once in a rotated order; bench/anim_frames prints the
@@ -22,7 +22,7 @@ OUT=${6:-$SRC/bench/out/anim}
 mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
 RADII="0.0125 0.025 0.05 0.075 0.1 0.125 0.15 0.175 0.2 0.25 0.5"
-CASES="$RADII 0.1-full 0.1-sc tree tree-full"
+CASES="$RADII 0.1-full 0.1-sc 0.1-em tree tree-full"
 last=$((FRAMES - 1))
 
 for f in $RADII; do
@@ -43,6 +43,7 @@ job() {
     case $1 in
     *-full) anim=', "update": "full"' ;;
     *-sc) anim=', "mobile_estimator": "sphere_cache"' ;;
+    *-em) anim=', "mobile_estimator": "embree"' ;;
     esac
     cat >"$2" <<JOB
 {"scene": "$scene", "method": "detp", "seed": 1, "image": {"width": 64, "height": 64},
@@ -80,10 +81,11 @@ for f in $RADII; do
 done
 "$BIN/bench/anim_frames" row '10%, "update": "full"' 0.1 "$FRAMES" $(runs 0.1-full)
 "$BIN/bench/anim_frames" row '10%, Sphere Cache mobile' 0.1 "$FRAMES" $(runs 0.1-sc)
+"$BIN/bench/anim_frames" row '10%, Embree mobile' 0.1 "$FRAMES" $(runs 0.1-em)
 "$BIN/bench/anim_frames" row 'tree, torus' 0 "$FRAMES" $(runs tree)
 "$BIN/bench/anim_frames" row 'tree, torus, "update": "full"' 0 "$FRAMES" $(runs tree-full)
 echo
 "$BIN/bench/anim_frames" phase_header
-for c in 0.0125 0.025 0.1 0.1-full 0.1-sc 0.5 tree tree-full; do
+for c in 0.0125 0.025 0.1 0.1-full 0.1-sc 0.1-em 0.5 tree tree-full; do
     "$BIN/bench/anim_frames" phases "$c" "$FRAMES" $(runs "$c")
 done
