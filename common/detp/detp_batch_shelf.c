@@ -42,15 +42,25 @@ int detp_batch_shelf_take(detp_batch_shelf *s, const char *dir, uint32_t batch, 
 void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b)
 {
     detp_batch_shelf_drop(s, b->batch);
+    size_t add = mapped_bytes(b);
+    /* Batches that missed a frame went elsewhere: they go first. */
+    for (size_t i = s->count; i-- > 0 && s->bytes + add > s->budget;)
+        if (s->b[i].frame + 1 < b->frame)
+            remove_at(s, i, NULL);
+    if (s->bytes + add > s->budget) {
+        /* Full of batches still in use: keep those. A process cycling
+         * through more batches than fit then still finds the same ones
+         * every frame (dropping the oldest would find none). */
+        detp_batch_close(b);
+        return;
+    }
     if (s->count == s->cap) {
         s->cap = s->cap ? 2 * s->cap : 8;
         s->b = gi_xrealloc(s->b, s->cap * sizeof *s->b);
     }
     s->b[s->count++] = *b;
-    s->bytes += mapped_bytes(b);
+    s->bytes += add;
     memset(b, 0, sizeof *b);
-    while (s->count > 1 && s->bytes > s->budget)
-        remove_at(s, 0, NULL);
 }
 
 void detp_batch_shelf_drop(detp_batch_shelf *s, uint32_t batch)

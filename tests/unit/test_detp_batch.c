@@ -181,7 +181,9 @@ GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
     GI_REQUIRE(detp_batch_shelf_take(&shelf, dir, 0, P0, P0 + PATHS, 4, &b) == 1);
     GI_CHECK(shelf.count == 0 && shelf.bytes == 0 && b.batch == 0 && b.frame == 4 &&
              detp_batch_count(&b) == segs.count);
-    /* Put twice: one entry. Then a budget of one batch: the oldest goes. */
+    /* Put twice: one entry. Then a budget of one batch: a batch still in
+     * use stays and the newcomer is closed; one that missed a frame makes
+     * room. */
     detp_batch again;
     GI_REQUIRE(detp_batch_open(dir, &spec, 0, P0, P0 + PATHS, 4, &again, &err) == 1);
     detp_batch_shelf_put(&shelf, &b);
@@ -190,7 +192,11 @@ GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
     shelf.budget = shelf.bytes;
     GI_REQUIRE(detp_batch_open(dir, &spec, 1, P0, P0 + PATHS, 4, &b, &err) == 1);
     detp_batch_shelf_put(&shelf, &b);
-    GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 1);
+    GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 0 && b.base.seg == NULL);
+    GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, 1, P0, P0 + PATHS, 6, &segs, &err));
+    GI_REQUIRE(detp_batch_open(dir, &spec, 1, P0, P0 + PATHS, 6, &b, &err) == 1);
+    detp_batch_shelf_put(&shelf, &b); /* batch 0, kept at 4, missed frame 5 */
+    GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 1 && shelf.b[0].frame == 6);
     detp_batch_shelf_drop(&shelf, 1);
     GI_CHECK(shelf.count == 0 && shelf.bytes == 0);
     /* A batch whose base was rewritten (a new inode) or removed since it
