@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -243,6 +244,16 @@ int detp_batch_files_present(const char *dir, const detp_batch *b)
         return 0;
     return b->delta_count == 0 ||
            still_there(dir, b, b->frame, FILE_DELTA, &b->deltas[b->delta_count - 1]);
+}
+
+void detp_batch_release_pages(const detp_batch *b)
+{
+    /* Read-only file mappings: the pages stay in the page cache, only this
+     * process's references to them go. */
+    if (b->base.base)
+        madvise(b->base.base, b->base.len, MADV_DONTNEED);
+    if (b->grid.map)
+        madvise(b->grid.map, b->grid.len, MADV_DONTNEED);
 }
 
 void detp_batch_close(detp_batch *b)

@@ -61,6 +61,10 @@ typedef struct detp_batch {
 int detp_batch_open(const char *dir, const detp_grid_spec *spec, uint32_t batch, uint64_t p0,
                     uint64_t p1, uint32_t frame, detp_batch *b, gi_error *err);
 void detp_batch_close(detp_batch *b);
+/* Lets go of the pages of the base and grid a frame read (they stay in the
+ * page cache; the next read maps them again): a batch kept open between
+ * frames then does not hold its whole base in the process's memory. */
+void detp_batch_release_pages(const detp_batch *b);
 /* Frees the crossing lists of the newest delta. */
 void detp_batch_forget_crossings(detp_batch *b);
 /* The files of an open batch are still on disk (its base and newest

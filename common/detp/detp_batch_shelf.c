@@ -58,6 +58,7 @@ void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b)
         s->cap = s->cap ? 2 * s->cap : 8;
         s->b = gi_xrealloc(s->b, s->cap * sizeof *s->b);
     }
+    detp_batch_release_pages(b);
     s->b[s->count++] = *b;
     s->bytes += add;
     memset(b, 0, sizeof *b);

@@ -6,8 +6,10 @@
  * frame maps the base and every delta again, merges all the deltas'
  * runs, and faults the pages of the paths it reads in again; a batch kept
  * open only needs the delta its frame wrote (detp_batch_advance). The
- * shelf holds batches up to a budget of mapped bytes; the files stay the
- * truth: a batch not on the shelf at the frame asked for, or whose files
+ * shelf holds batches up to a budget of mapped bytes, and lets go of the
+ * pages of their bases and grids (the next frame maps those it reads again,
+ * from the page cache), so that a kept batch does not stay in the
+ * process's resident memory; the files stay the truth: a batch not on the shelf at the frame asked for, or whose files
  * were removed or replaced meanwhile, is opened from them (or
  * regenerated). */
 #ifndef GI_DETP_BATCH_SHELF_H
