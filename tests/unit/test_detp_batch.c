@@ -61,14 +61,21 @@ static int files_in(const char *dir)
     return n;
 }
 
+/* A fresh directory for batch files under the test's temporary one, and
+ * the grid spec the tests store with. */
+static void batch_dir(const char *name, char *dir, size_t len, detp_grid_spec *spec)
+{
+    snprintf(dir, len, "%s/%s", gi_test_tmpdir(), name);
+    mkdir(dir, 0755);
+    detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, spec);
+}
+
 GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
 {
     char dir[512];
-    snprintf(dir, sizeof dir, "%s/batches", gi_test_tmpdir());
-    mkdir(dir, 0755);
-    gi_error err;
     detp_grid_spec spec;
-    detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, &spec);
+    batch_dir("batches", dir, sizeof dir, &spec);
+    gi_error err;
     uint32_t version[PATHS] = {0};
     gi_detp_segments expect, got, changed;
     gi_detp_segments_init(&expect);
@@ -150,16 +157,15 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     gi_detp_segments_free(&changed);
 }
 
-/* The shelf hands a batch back only at the frame it was kept at, keeps
- * one entry per batch, and closes the oldest past its budget. */
+/* The shelf hands a batch back only at the frame it was kept at and while
+ * its files are the ones mapped, keeps one entry per batch, and past its
+ * budget keeps the batches still in use. */
 GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
 {
     char dir[512];
-    snprintf(dir, sizeof dir, "%s/shelf", gi_test_tmpdir());
-    mkdir(dir, 0755);
-    gi_error err;
     detp_grid_spec spec;
-    detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, &spec);
+    batch_dir("shelf", dir, sizeof dir, &spec);
+    gi_error err;
     uint32_t version[PATHS] = {0};
     gi_detp_segments segs;
     gi_detp_segments_init(&segs);
