@@ -21,6 +21,24 @@
 #include "detp_sphere.h"
 #include "gi_worker_ctx.h"
 
+/* The segments that may cross one of the mobile's discs: those that come
+ * within the reach of its discs (gi_detp_object_disc_reach). */
+typedef struct near_test {
+    gi_vec3 c;
+    float rr;
+} near_test;
+
+/* The mobile's bounding sphere and its discs' reach at a frame. They
+ * depend on the frame alone: each frame's are computed once, for all the
+ * batches of the frame and as the old pose of the next one, not by
+ * posing the scene again per batch. */
+typedef struct mobile_frame {
+    uint32_t frame;
+    int valid;
+    gi_detp_mobile_pose sphere;
+    near_test near;
+} mobile_frame;
+
 typedef struct detp_anim_worker {
     uint32_t object;
     gi_vec3 *base_pos, *base_nrm; /* the mobile's vertices as loaded */
@@ -42,6 +60,7 @@ typedef struct detp_anim_worker {
     detp_path *runs;      /* the marked paths' runs */
     size_t runs_cap;
     detp_batch_shelf shelf; /* batches kept open for their next frame */
+    mobile_frame at[2]; /* the mobile's spheres at the last two frames asked */
 } detp_anim_worker;
 
 /* Mapped batch files a process keeps open between frames (the shelf's
@@ -309,6 +328,29 @@ static int trace_frame0(gi_worker_ctx *ctx, detp_anim_worker *a, uint64_t p0, ui
     return 0;
 }
 
+static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
+                     mobile_frame *out, gi_error *err)
+{
+    for (int i = 0; i < 2; i++)
+        if (a->at[i].valid && a->at[i].frame == frame) {
+            *out = a->at[i];
+            return 0;
+        }
+    if (pose_scene(ctx, a, frame, err))
+        return -1;
+    const gi_scene *s = &ctx->job.scene;
+    const gi_detp_params *p = ctx->job.params;
+    mobile_frame m = {frame, 1, gi_detp_object_sphere(s, a->object), {{0, 0, 0}, 0.0f}};
+    float r0 = gi_detp_object_disc_reach(s, a->object, m.sphere, p->disc_radius);
+    float rr = r0 + gi_detp_sphere_slack(r0);
+    m.near = (near_test){m.sphere.c, rr * rr};
+    /* Replace the older of the two. */
+    int i = a->at[0].valid && (!a->at[1].valid || a->at[1].frame < a->at[0].frame);
+    a->at[i] = m;
+    *out = m;
+    return 0;
+}
+
 /* The update's fixed inputs for frame f (scene and tracer posed at f). */
 static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
                      const gi_detp_tracer *tr, gi_detp_anim_update_in *in, gi_error *err)
@@ -316,12 +358,12 @@ static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
     const gi_detp_params *p = ctx->job.params;
     const gi_object *o = &ctx->job.scene.objects[a->object];
     memset(in, 0, sizeof *in);
-    if (pose_scene(ctx, a, f - 1, err))
+    mobile_frame was, now;
+    if (mobile_at(ctx, a, f - 1, &was, err) || pose(ctx, a, f, err) ||
+        mobile_at(ctx, a, f, &now, err))
         return -1;
-    in->old_pose = gi_detp_object_sphere(&ctx->job.scene, a->object);
-    if (pose(ctx, a, f, err))
-        return -1;
-    in->new_pose = gi_detp_object_sphere(&ctx->job.scene, a->object);
+    in->old_pose = was.sphere;
+    in->new_pose = now.sphere;
     in->tracer = tr;
     in->mobile_first_tri = o->first_triangle;
     in->mobile_tri_count = o->triangle_count;
@@ -364,21 +406,8 @@ static int regenerate(gi_worker_ctx *ctx, detp_anim_worker *a, const char *dir, 
     return rc;
 }
 
-/* Collects the segments that may cross one of the mobile's discs (near
- * its bounding sphere grown by the disc radius), for the mobile's estimate. */
-typedef struct near_test {
-    gi_vec3 c;
-    float rr;
-} near_test;
-
-static near_test near_sphere(const gi_scene *s, uint32_t object, float radius)
-{
-    gi_detp_mobile_pose b = gi_detp_object_sphere(s, object);
-    float r0 = gi_detp_object_disc_reach(s, object, b, radius);
-    float rr = r0 + gi_detp_sphere_slack(r0);
-    return (near_test){b.c, rr * rr};
-}
-
+/* Collects the segments that may cross one of the mobile's discs, for
+ * the mobile's estimate. */
 static void collect_near(detp_anim_worker *a, near_test nt, const gi_detp_segment *seg,
                          size_t n)
 {
@@ -424,9 +453,11 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     if (detp_worker_estimate(ctx, w, &h->stats, err))
         return -1;
     double t3 = detp_now();
+    mobile_frame m;
+    if (mobile_at(ctx, a, 0, &m, err))
+        return -1;
     a->near.count = 0;
-    collect_near(a, near_sphere(&ctx->job.scene, a->object, w->discs.radius), w->segs.v,
-                 w->segs.count);
+    collect_near(a, m.near, w->segs.v, w->segs.count);
     if (mobile_vertices(ctx, w, a, &h->stats, err))
         return -1;
     h->sec_trace = t1 - t0;
@@ -469,7 +500,12 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         detp_batch_close(&prev);
         return -1;
     }
-    near_test nt = near_sphere(&ctx->job.scene, a->object, w->discs.radius);
+    mobile_frame now;
+    if (mobile_at(ctx, a, f, &now, err)) { /* cannot fail: update_in computed it */
+        detp_batch_close(&prev);
+        return -1;
+    }
+    near_test nt = now.near;
     gi_detp_update_stats us;
     memset(&us, 0, sizeof us);
     a->changed.count = a->old_list.count = a->new_list.count = a->near.count = 0;

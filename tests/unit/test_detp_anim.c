@@ -476,14 +476,6 @@ GI_TEST(test_detp_anim_incremental_update_is_exact)
     anim_free(&a);
 }
 
-/* A uniform direction from two numbers in [0, 1). */
-static gi_vec3 any_direction(float u1, float u2)
-{
-    float z = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    float phi = 6.2831853f * u2;
-    return gi_v3(r * cosf(phi), r * sinf(phi), z);
-}
-
 /* Every segment that crosses one of the mobile's discs comes within
  * gi_detp_object_disc_reach of its centre: lines shot at the ball with
  * discs nearly its size (where the reach is well under R + radius, and
@@ -507,19 +499,15 @@ GI_TEST(test_detp_anim_disc_reach_holds_every_crossing)
     gi_detp_segments all, near;
     gi_detp_segments_init(&all);
     gi_detp_segments_init(&near);
-    uint64_t x = 0x9e3779b97f4a7c15ull;
+    gi_rng r;
+    gi_rng_init(&r, 17, 0, 0);
     for (int k = 0; k < 20000; k++) {
-        float u[5];
-        for (int i = 0; i < 5; i++) {
-            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-            u[i] = (float)(x >> 40) / (float)(1 << 24);
-        }
         /* From a sphere of 4R towards a point within 1.5 reach of the centre. */
-        gi_vec3 from = any_direction(u[0], u[1]), to = any_direction(u[2], u[3]);
+        gi_vec3 from = gi_test_random_dir(&r), to = gi_test_random_dir(&r);
         gi_detp_segment *g = gi_detp_segments_push(&all);
         memset(g, 0, sizeof *g);
         g->org = gi_madd(b.c, from, 4.0f * b.r);
-        gi_vec3 aim = gi_madd(b.c, to, 1.5f * reach * u[4]);
+        gi_vec3 aim = gi_madd(b.c, to, 1.5f * reach * gi_rng_float(&r));
         g->dir = gi_normalize(gi_sub(aim, g->org));
         g->t_hit = g->t_second = g->t_end = 8.0f * b.r;
         g->energy = gi_v3(1.0f, 0.5f, 0.25f);

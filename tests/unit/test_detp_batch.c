@@ -14,6 +14,7 @@
 #include "detp/detp_sphere.h"
 #include "gi_rng.h"
 #include "gi_test.h"
+#include "test_helpers.h"
 
 #define P0 1000u
 #define PATHS 300u
@@ -241,9 +242,7 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_sphere)
             gi_detp_segment *g = gi_detp_segments_push(&s);
             memset(g, 0, sizeof *g);
             g->org = gi_v3(gi_rng_float(&r) * 100, gi_rng_float(&r) * 100, gi_rng_float(&r) * 100);
-            float a = gi_rng_float(&r) * 6.2831853f, c = 2 * gi_rng_float(&r) - 1;
-            float sn = sqrtf(1 - c * c);
-            g->dir = gi_v3(sn * cosf(a), sn * sinf(a), c);
+            g->dir = gi_test_random_dir(&r);
             float u = gi_rng_float(&r);
             g->t_hit = u < 0.1f ? INFINITY : 5 + 80 * u;
             g->t_second = u < 0.1f ? INFINITY : g->t_hit + 30 * gi_rng_float(&r);

@@ -59,3 +59,10 @@ double gi_test_polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3
     }
     return 0.5 * L * fabs(sum);
 }
+
+gi_vec3 gi_test_random_dir(gi_rng *r)
+{
+    float a = gi_rng_float(r) * 6.2831853f, c = 2 * gi_rng_float(r) - 1;
+    float sn = sqrtf(1 - c * c);
+    return gi_v3(sn * cosf(a), sn * sinf(a), c);
+}

@@ -3,6 +3,7 @@
 #define GI_TEST_HELPERS_H
 
 #include "gi_error.h"
+#include "gi_rng.h"
 #include "gi_scene.h"
 
 /* Writes `text` to <tmpdir>/<name> and loads it as a scene. */
@@ -18,5 +19,9 @@ extern const gi_vec3 gi_test_lamp[4];
 /* Irradiance at x (normal n) from a Lambertian polygon of radiance L:
  * Lambert's formula E = L/2 sum_i theta_i (n . gamma_i) (e.g. Arvo 1995). */
 double gi_test_polygon_irradiance(const gi_vec3 *poly, int k, gi_vec3 x, gi_vec3 n, double L);
+
+/* A direction uniform on the unit sphere (two numbers of r: azimuth, then
+ * height). */
+gi_vec3 gi_test_random_dir(gi_rng *r);
 
 #endif
