@@ -1,8 +1,9 @@
 #!/bin/sh
 # detp_anim: full recompute vs incremental frame of a detp animation
 # (issue 7). The thesis's Table A.14: the Cornell box with a mobile sphere of
-# radius 1.25% ... 50% of the box's width (gi_scenegen cornell-mobile), in
-# the middle of the room, moving 1% of the width (5.56 mm) along x per frame;
+# radius 1.25% ... 50% of the box's width (gi_scenegen cornell-mobile), clear
+# of the walls and blocks up to 27%, moving 1% of the width (5.56 mm) along x
+# per frame;
 # the 10% case again with "update": "full" and with the Sphere Cache and
 # Embree for the mobile's vertices; and the tree scene (gi_scenegen tree) with its
 # 500-triangle torus moving 0.01 (1% of the scene) along x per frame. One
@@ -25,10 +26,11 @@ RADII="0.0125 0.025 0.05 0.075 0.1 0.125 0.15 0.175 0.2 0.25 0.5"
 CASES="$RADII 0.1-full 0.1-sc 0.1-em tree tree-full"
 last=$((FRAMES - 1))
 
+# Always written afresh: a scene left in OUT by an older gi_scenegen would
+# silently measure another room.
 for f in $RADII; do
-    [ -f "$OUT/scene-$f.json" ] ||
-        "$BIN/scenes/gi_scenegen" cornell-mobile "$SRC/scenes/cornell-box/scene.json" \
-            "$OUT/scene-$f.json" --radius "$f" >/dev/null
+    "$BIN/scenes/gi_scenegen" cornell-mobile "$SRC/scenes/cornell-box/scene.json" \
+        "$OUT/scene-$f.json" --radius "$f" >/dev/null
 done
 [ -f "$OUT/tree/scene.json" ] || { mkdir -p "$OUT/tree" &&
     "$BIN/scenes/gi_scenegen" tree "$OUT/tree" >/dev/null; }

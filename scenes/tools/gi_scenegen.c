@@ -14,10 +14,15 @@
  *
  *   gi_scenegen cornell-mobile BASE.json OUT.json --radius F
  *       The Cornell box (BASE, e.g. scenes/cornell-box/scene.json) with a
- *       sphere mobile of radius F times the box's width in the middle of the
- *       room (thesis Table A.14: 1.25% to 50%). As in the thesis the sphere
- *       keeps its mesh resolution whatever its size (icosphere, 1280
- *       triangles).
+ *       sphere mobile of radius F times the box's width (thesis Table A.14:
+ *       1.25% to 50%). As in the thesis the sphere keeps its mesh resolution
+ *       whatever its size (icosphere, 1280 triangles). Its centre,
+ *       (150, 395, 150), is the point of the room farthest from the walls,
+ *       the blocks, the ceiling and the open front all the way to
+ *       (278, 395, 150): a sphere of radius up to 150 (27%) moved there
+ *       along x touches nothing, so it is lit on every side and never partly
+ *       inside a block (the room's middle is 12 mm from the tall block). A
+ *       50% sphere is as wide as the box and is free nowhere.
  *
  * Deterministic: the same arguments give the same bytes. */
 #include <errno.h>
@@ -338,19 +343,21 @@ static int cornell_mobile(const char *base, const char *out, double frac)
         cJSON_Delete(doc);
         return 1;
     }
-    /* The box is 556 wide (x), 548.8 high, 559.2 deep. */
+    /* The box is 556 wide (x), 548.8 high, 559.2 deep; the centre: see the
+     * header. */
     double width = 556.0, radius = frac * width;
     char obj[512];
     snprintf(obj, sizeof obj,
              "{\"name\": \"mobile\", \"material\": \"white\", \"mobile\": true,"
              " \"sphere\": {\"radius\": %.6g, \"subdivisions\": 3},"
-             " \"transform\": [{\"translate\": [278, 274.4, 279.6]}]}",
+             " \"transform\": [{\"translate\": [150, 395, 150]}]}",
              radius);
     cJSON_AddItemToArray(objects, cJSON_Parse(obj));
-    char desc[256];
+    char desc[512];
     snprintf(desc, sizeof desc,
              "The Cornell box with a sphere mobile of radius %.4g (%.4g%% of the box's width) "
-             "in the middle of the room (gi_scenegen cornell-mobile).",
+             "at (150, 395, 150), clear of the walls and blocks up to (278, 395, 150) for radii "
+             "up to 27%% of the width (gi_scenegen cornell-mobile).",
              radius, 100.0 * frac);
     cJSON_ReplaceItemInObjectCaseSensitive(doc, "description", cJSON_CreateString(desc));
     char *printed = cJSON_Print(doc);

@@ -17,8 +17,8 @@ write_job "$TMP/job.json" <<JOB
   "image": {"width": 32, "height": 32},
   "detp": {"photons": 48000, "batch": 6000, "subdivide": 60, "tile": 16, "image_spp": 1,
            "animation": {"object": "mobile", "frames": 6,
-                         "keyframes": [{"frame": 0, "translate": [212, -218.3, -219.6]},
-                                       {"frame": 5, "translate": [140, -218.3, -150],
+                         "keyframes": [{"frame": 0, "translate": [340, -338.9, -90]},
+                                       {"frame": 5, "translate": [268, -338.9, -20.4],
                                         "rotate": {"axis": [0, 1, 0], "degrees": 40}}]}},
   "outputs": {"exr": "img.exr", "ply": "v.ply", "bin": "v.bin", "json": "report.json"}
 }

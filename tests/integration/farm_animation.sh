@@ -11,8 +11,8 @@ write_job "$TMP/job.json" <<JOB
  "image": {"width": 32, "height": 32},
  "detp": {"photons": 400000, "batch": 50000, "subdivide": 40, "tile": 16, "image_spp": 1,
           "animation": {"object": "mobile", "frames": 8,
-                        "keyframes": [{"frame": 0, "translate": [212, -218.3, -219.6]},
-                                      {"frame": 7, "translate": [120, -218.3, -130]}]}},
+                        "keyframes": [{"frame": 0, "translate": [340, -338.9, -90]},
+                                      {"frame": 7, "translate": [248, -338.9, -0.4]}]}},
  "outputs": {"exr": "img.exr", "bin": "v.bin", "json": "report.json"}}
 JOB
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none >/dev/null 2>&1 ||
