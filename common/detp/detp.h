@@ -142,15 +142,40 @@ static inline int64_t gi_detp_fixed_round(double x)
     return (int64_t)(x < 0.0 ? x - 0.5 : x + 0.5);
 }
 
+/* One segment's contribution in fixed-point units, for an estimator that
+ * adds the same segment to many discs: gi_detp_accum_add's conversions
+ * done once (the same values, so the same sums). Fixed-point mode only. */
+typedef struct gi_detp_fixed_contrib {
+    int64_t e[3];
+    uint32_t hit;
+} gi_detp_fixed_contrib;
+
+static inline gi_detp_fixed_contrib gi_detp_fixed_contrib_of(const gi_detp_accum *a,
+                                                             const gi_detp_segment *s)
+{
+    int64_t sg = a->sign;
+    gi_detp_fixed_contrib c = {{sg * gi_detp_fixed_round((double)s->energy.x * a->inv_unit),
+                                sg * gi_detp_fixed_round((double)s->energy.y * a->inv_unit),
+                                sg * gi_detp_fixed_round((double)s->energy.z * a->inv_unit)},
+                               (uint32_t)sg};
+    return c;
+}
+
+static inline void gi_detp_accum_add_fixed(gi_detp_accum *a, uint32_t disc,
+                                           const gi_detp_fixed_contrib *c)
+{
+    int64_t *f = &a->fixed[3 * (size_t)disc];
+    f[0] += c->e[0];
+    f[1] += c->e[1];
+    f[2] += c->e[2];
+    a->hits[disc] += c->hit;
+}
+
 static inline void gi_detp_accum_add(gi_detp_accum *a, uint32_t disc, const gi_detp_segment *s)
 {
     if (__builtin_expect(a->fixed != NULL, 0)) {
-        int64_t *f = &a->fixed[3 * (size_t)disc];
-        int64_t sg = a->sign;
-        f[0] += sg * gi_detp_fixed_round((double)s->energy.x * a->inv_unit);
-        f[1] += sg * gi_detp_fixed_round((double)s->energy.y * a->inv_unit);
-        f[2] += sg * gi_detp_fixed_round((double)s->energy.z * a->inv_unit);
-        a->hits[disc] += (uint32_t)sg;
+        gi_detp_fixed_contrib c = gi_detp_fixed_contrib_of(a, s);
+        gi_detp_accum_add_fixed(a, disc, &c);
         return;
     }
     double *e = &a->energy[3 * (size_t)disc];
@@ -334,6 +359,21 @@ void gi_detp_crossings_free(gi_detp_crossings *c);
 void gi_detp_embree_estimate_listed(gi_detp_embree_index *x, const gi_detp_segments *s,
                                     gi_detp_accum *acc, gi_detp_stats *st,
                                     gi_detp_crossings *rec);
+/* Empties c for segments appended one by one. */
+void gi_detp_crossings_reset(gi_detp_crossings *c);
+/* Appends to rec the crossings of a segment whose line (origin and
+ * direction, bit for bit) is that of twin, whose crossings are ids[0..n):
+ * those of them within seg's extent, and if seg reaches past twin's end,
+ * the discs found searching only beyond it. The same pairs and sums as
+ * searching seg whole (the filter is gi_detp_crosses either way). */
+void gi_detp_embree_estimate_twin(gi_detp_embree_index *x, const gi_detp_segment *seg,
+                                  const gi_detp_segment *twin, const uint32_t *ids, uint32_t n,
+                                  gi_detp_accum *acc, gi_detp_stats *st,
+                                  gi_detp_crossings *rec);
+/* Appends to rec the crossings of seg, searched whole. */
+void gi_detp_embree_estimate_one(gi_detp_embree_index *x, const gi_detp_segment *seg,
+                                 gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_detp_crossings *rec);
 /* The contributions of listed pairs without searching: segment j to each
  * disc of its list (the same gi_detp_accum_add calls as the estimate that
  * listed them made, in acc's current sign). */

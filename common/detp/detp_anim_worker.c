@@ -39,6 +39,13 @@ typedef struct mobile_frame {
     near_test near;
 } mobile_frame;
 
+/* An old segment's static crossings: listed with the batch (ids), or
+ * searched this frame (ids NULL: the unlisted_x entry `at`). */
+typedef struct old_crossings {
+    const uint32_t *ids;
+    uint32_t n, at;
+} old_crossings;
+
 typedef struct detp_anim_worker {
     uint32_t object;
     gi_vec3 *base_pos, *base_nrm; /* the mobile's vertices as loaded */
@@ -52,6 +59,9 @@ typedef struct detp_anim_worker {
     gi_detp_accum static_acc;
     gi_detp_segments old_list, new_list, changed, near, regen[2];
     gi_detp_segments unlisted; /* old segments whose crossings are not known */
+    gi_detp_crossings unlisted_x; /* their crossings, searched this frame */
+    old_crossings *old_x;      /* per old segment: its crossings */
+    size_t old_x_cap;
     gi_detp_crossings listed;  /* the new segments' static crossings */
     int64_t *sum, *hits; /* the result, per vertex */
     detp_grid_spec grid;  /* of the stored batches: the box the mobile can reach */
@@ -81,6 +91,8 @@ void detp_anim_worker_free(detp_anim_worker *a)
     gi_detp_segments_free(&a->old_list);
     gi_detp_segments_free(&a->unlisted);
     gi_detp_crossings_free(&a->listed);
+    gi_detp_crossings_free(&a->unlisted_x);
+    free(a->old_x);
     gi_detp_segments_free(&a->new_list);
     gi_detp_segments_free(&a->changed);
     gi_detp_segments_free(&a->near);
@@ -200,29 +212,60 @@ static int listed_crossings(const detp_batch *prev, const detp_path *runs, size_
  * those of the old, into the global accumulator (the mobile's range is
  * left for mobile_vertices). An old segment that the frame before added
  * (most are: what met the mobile at its last pose) takes back the
- * crossings listed then, without a search; the others are searched. The
- * new segments' crossings are listed for the next frame. */
+ * crossings listed then, without a search; the others are searched. A new
+ * segment on the line of the old one it replaces (a retraced suffix's
+ * first segment, a repaired one) takes that one's crossings and searches
+ * only beyond its end, if at all; the others are searched. The new
+ * segments' crossings are listed for the next frame. */
 static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a,
                           const detp_batch *prev, size_t nrun, gi_detp_stats *st)
 {
     const gi_object *o = &ctx->job.scene.objects[a->object];
+    const gi_detp_segments *old = &a->old_list, *nl = &a->new_list;
     gi_detp_accum *sa = &a->static_acc;
     gi_detp_accum_clear(sa);
     sa->sign = -1;
     a->unlisted.count = 0;
-    size_t r = 0;
-    for (size_t k = 0; k < a->old_list.count; k++) {
-        const gi_detp_segment *g = &a->old_list.v[k];
-        const uint32_t *ids;
-        uint32_t n;
-        if (listed_crossings(prev, a->runs, nrun, &r, g, &ids, &n))
-            gi_detp_crossings_apply(g, ids, n, sa, st);
-        else
-            *gi_detp_segments_push(&a->unlisted) = *g;
+    if (a->old_x_cap < old->count) {
+        a->old_x_cap = 2 * old->count;
+        free(a->old_x);
+        a->old_x = gi_xmalloc(a->old_x_cap * sizeof *a->old_x);
     }
-    gi_detp_embree_estimate(a->static_index, &a->unlisted, sa, st);
+    size_t r = 0;
+    for (size_t k = 0; k < old->count; k++) {
+        const gi_detp_segment *g = &old->v[k];
+        old_crossings *x = &a->old_x[k];
+        if (listed_crossings(prev, a->runs, nrun, &r, g, &x->ids, &x->n)) {
+            gi_detp_crossings_apply(g, x->ids, x->n, sa, st);
+        } else {
+            x->ids = NULL;
+            x->at = (uint32_t)a->unlisted.count;
+            *gi_detp_segments_push(&a->unlisted) = *g;
+        }
+    }
+    gi_detp_embree_estimate_listed(a->static_index, &a->unlisted, sa, st, &a->unlisted_x);
     sa->sign = 1;
-    gi_detp_embree_estimate_listed(a->static_index, &a->new_list, sa, st, &a->listed);
+    gi_detp_crossings_reset(&a->listed);
+    /* Both lists are in (photon, bounce) order: a cursor finds the twin. */
+    size_t k = 0;
+    for (size_t j = 0; j < nl->count; j++) {
+        const gi_detp_segment *g = &nl->v[j];
+        while (k < old->count && (old->v[k].photon < g->photon ||
+                                  (old->v[k].photon == g->photon && old->v[k].bounce < g->bounce)))
+            k++;
+        const gi_detp_segment *t = k < old->count ? &old->v[k] : NULL;
+        if (t && t->photon == g->photon && t->bounce == g->bounce &&
+            memcmp(&t->org, &g->org, sizeof g->org) == 0 &&
+            memcmp(&t->dir, &g->dir, sizeof g->dir) == 0) {
+            const old_crossings *x = &a->old_x[k];
+            const gi_detp_crossings *u = &a->unlisted_x;
+            const uint32_t *ids = x->ids ? x->ids : u->ids + u->off[x->at];
+            uint32_t n = x->ids ? x->n : u->off[x->at + 1] - u->off[x->at];
+            gi_detp_embree_estimate_twin(a->static_index, g, t, ids, n, sa, st, &a->listed);
+        } else {
+            gi_detp_embree_estimate_one(a->static_index, g, sa, st, &a->listed);
+        }
+    }
     /* Static disc i is vertex i below the mobile's range, i + n above. */
     size_t v0 = o->first_vertex, n = o->vertex_count;
     memcpy(w->acc.fixed, sa->fixed, 3 * v0 * sizeof *sa->fixed);

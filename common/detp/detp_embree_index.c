@@ -33,6 +33,9 @@ typedef struct query_ctx {
     gi_detp_accum *acc;
     gi_detp_stats *st;
     gi_detp_crossings *rec; /* or NULL */
+    /* A twin's part of the line is already counted (gi_detp_embree_estimate_twin):
+     * a disc it crosses is not counted again. Or NULL. */
+    const gi_detp_segment *twin;
 } query_ctx;
 
 static void rec_push(gi_detp_crossings *c, uint32_t disc)
@@ -57,7 +60,8 @@ static void disc_filter(const struct RTCFilterFunctionNArguments *args)
         uint32_t disc = prim[i];
         q->st->candidates++;
         q->st->disc_tests++;
-        if (gi_detp_crosses(&q->discs->d[disc], q->discs->r2, q->seg)) {
+        if (gi_detp_crosses(&q->discs->d[disc], q->discs->r2, q->seg) &&
+            !(q->twin && gi_detp_crosses(&q->discs->d[disc], q->discs->r2, q->twin))) {
             gi_detp_accum_add(q->acc, disc, q->seg);
             q->st->crossings++;
             if (q->rec)
@@ -127,48 +131,111 @@ void gi_detp_embree_free(gi_detp_embree_index *x)
     free(x);
 }
 
+static void query_init(gi_detp_embree_index *x, gi_detp_accum *acc, gi_detp_stats *st,
+                       gi_detp_crossings *rec, query_ctx *q)
+{
+    rtcInitIntersectContext(&q->rtc);
+    q->discs = x->discs;
+    q->acc = acc;
+    q->st = st;
+    q->rec = rec;
+    q->twin = NULL;
+}
+
+/* The discs segment g crosses at t in [t0, its end], as an occlusion query
+ * (the filter rejects every disc, so it visits them all, and Embree skips
+ * the hit record: ~15% faster than rtcIntersect1 at 1% radius in
+ * bench/detp_tree). */
+static void query(gi_detp_embree_index *x, query_ctx *q, const gi_detp_segment *g, float t0)
+{
+    q->seg = g;
+    struct RTCRay ray;
+    ray.org_x = g->org.x;
+    ray.org_y = g->org.y;
+    ray.org_z = g->org.z;
+    ray.tnear = t0;
+    ray.dir_x = g->dir.x;
+    ray.dir_y = g->dir.y;
+    ray.dir_z = g->dir.z;
+    ray.time = 0.0f;
+    ray.tfar = isfinite(g->t_end) ? g->t_end * 1.0001f + 1e-6f : INFINITY;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    if (x->discs->count)
+        rtcOccluded1(x->scene, &q->rtc, &ray);
+}
+
+/* Ends the list of the segment just estimated. */
+static void close_segment(gi_detp_crossings *c)
+{
+    if (c->off_cap < c->segments + 2) {
+        c->off_cap = 2 * (c->segments + 2);
+        c->off = gi_xrealloc(c->off, c->off_cap * sizeof *c->off);
+    }
+    c->off[++c->segments] = (uint32_t)c->pairs;
+}
+
+void gi_detp_crossings_reset(gi_detp_crossings *c)
+{
+    if (c->off_cap == 0) {
+        c->off_cap = 1024;
+        c->off = gi_xmalloc(c->off_cap * sizeof *c->off);
+    }
+    c->off[0] = 0;
+    c->segments = c->pairs = 0;
+}
+
 static void estimate(gi_detp_embree_index *x, const gi_detp_segments *s, gi_detp_accum *acc,
                      gi_detp_stats *st, gi_detp_crossings *rec)
 {
     query_ctx q;
-    rtcInitIntersectContext(&q.rtc);
-    q.discs = x->discs;
-    q.acc = acc;
-    q.st = st;
-    q.rec = rec;
-    if (rec) {
-        rec->segments = s->count;
-        rec->pairs = 0;
-        if (rec->off_cap < s->count + 1) {
-            rec->off_cap = s->count + 1;
-            rec->off = gi_xrealloc(rec->off, rec->off_cap * sizeof *rec->off);
-        }
-        rec->off[0] = 0;
-    }
+    query_init(x, acc, st, rec, &q);
+    if (rec)
+        gi_detp_crossings_reset(rec);
     for (size_t j = 0; j < s->count; j++) {
-        const gi_detp_segment *g = &s->v[j];
-        q.seg = g;
-        struct RTCRay ray;
-        ray.org_x = g->org.x;
-        ray.org_y = g->org.y;
-        ray.org_z = g->org.z;
-        ray.tnear = 0.0f;
-        ray.dir_x = g->dir.x;
-        ray.dir_y = g->dir.y;
-        ray.dir_z = g->dir.z;
-        ray.time = 0.0f;
-        ray.tfar = isfinite(g->t_end) ? g->t_end * 1.0001f + 1e-6f : INFINITY;
-        ray.mask = 0xFFFFFFFFu;
-        ray.id = 0;
-        ray.flags = 0;
-        /* An occlusion query: the filter rejects every disc, so it visits
-         * them all, and Embree skips the hit record (~15% faster than
-         * rtcIntersect1 at 1% radius in bench/detp_tree). */
-        if (x->discs->count)
-            rtcOccluded1(x->scene, &q.rtc, &ray);
+        query(x, &q, &s->v[j], 0.0f);
         if (rec)
-            rec->off[j + 1] = (uint32_t)rec->pairs;
+            close_segment(rec);
     }
+}
+
+void gi_detp_embree_estimate_one(gi_detp_embree_index *x, const gi_detp_segment *seg,
+                                 gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_detp_crossings *rec)
+{
+    query_ctx q;
+    query_init(x, acc, st, rec, &q);
+    query(x, &q, seg, 0.0f);
+    close_segment(rec);
+}
+
+void gi_detp_embree_estimate_twin(gi_detp_embree_index *x, const gi_detp_segment *seg,
+                                  const gi_detp_segment *twin, const uint32_t *ids, uint32_t n,
+                                  gi_detp_accum *acc, gi_detp_stats *st,
+                                  gi_detp_crossings *rec)
+{
+    /* Same line, same arithmetic: within both extents a disc is crossed
+     * by both or neither, so the twin's list holds every crossing up to
+     * its end. */
+    const gi_detp_discs *d = x->discs;
+    for (uint32_t k = 0; k < n; k++)
+        if (gi_detp_crosses(&d->d[ids[k]], d->r2, seg)) {
+            gi_detp_accum_add(acc, ids[k], seg);
+            st->crossings++;
+            rec_push(rec, ids[k]);
+        }
+    st->disc_tests += n;
+    if (seg->t_end > twin->t_end) {
+        /* Beyond the twin's end: from a little before it (Embree's own
+         * disc test rounds differently from ours, as at the far end), and
+         * the filter leaves out what the twin crosses. */
+        query_ctx q;
+        query_init(x, acc, st, rec, &q);
+        q.twin = twin;
+        query(x, &q, seg, gi_maxf(twin->t_end * 0.9999f - 1e-6f, 0.0f));
+    }
+    close_segment(rec);
 }
 
 void gi_detp_embree_estimate(gi_detp_embree_index *x, const gi_detp_segments *s,
@@ -187,8 +254,14 @@ void gi_detp_embree_estimate_listed(gi_detp_embree_index *x, const gi_detp_segme
 void gi_detp_crossings_apply(const gi_detp_segment *seg, const uint32_t *ids, uint32_t n,
                              gi_detp_accum *acc, gi_detp_stats *st)
 {
-    for (uint32_t k = 0; k < n; k++)
-        gi_detp_accum_add(acc, ids[k], seg);
+    if (acc->fixed) {
+        gi_detp_fixed_contrib c = gi_detp_fixed_contrib_of(acc, seg);
+        for (uint32_t k = 0; k < n; k++)
+            gi_detp_accum_add_fixed(acc, ids[k], &c);
+    } else {
+        for (uint32_t k = 0; k < n; k++)
+            gi_detp_accum_add(acc, ids[k], seg);
+    }
     st->crossings += n;
 }
 

@@ -27,6 +27,10 @@ LANES_ATTR static void LANES_FN(const lanes_set *d, const gi_detp_segments *s,
         const LANES_VF ox = zero + g->org.x, oy = zero + g->org.y, oz = zero + g->org.z,
                        dx = zero + g->dir.x, dy = zero + g->dir.y, dz = zero + g->dir.z,
                        t_end = zero + g->t_end;
+        /* The segment's fixed-point contribution, converted once for all
+         * the discs it crosses. */
+        const gi_detp_fixed_contrib c =
+            acc->fixed ? gi_detp_fixed_contrib_of(acc, g) : (gi_detp_fixed_contrib){{0}, 0};
         for (size_t G = 0; G < d->groups; G += LANES_W) {
             /* Faces away: dir . axis >= sin(cone half-angle). */
             LANES_VI back = (dx * LOAD(d->ax, G) + dy * LOAD(d->ay, G)) + dz * LOAD(d->az, G) >=
@@ -58,7 +62,10 @@ LANES_ATTR static void LANES_FN(const lanes_set *d, const gi_detp_segments *s,
                 while (hit) {
                     unsigned k = (unsigned)__builtin_ctz(hit);
                     hit &= hit - 1;
-                    gi_detp_accum_add(acc, d->idx[i + k], g);
+                    if (acc->fixed)
+                        gi_detp_accum_add_fixed(acc, d->idx[i + k], &c);
+                    else
+                        gi_detp_accum_add(acc, d->idx[i + k], g);
                     crossings++;
                 }
             }

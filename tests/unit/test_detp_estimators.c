@@ -1,6 +1,7 @@
 /* Unit tests: every DETP estimator finds the same (segment, disc) pairs as
  * basic DETP, so disc energies agree - exactly, since each disc's sum is
  * taken in segment order whatever found the pairs. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -175,6 +176,121 @@ GI_TEST(test_detp_estimators_agree_with_basic_detp)
         gi_detp_segments_free(&s);
         gi_detp_discs_free(&d);
     }
+}
+
+static int by_id(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Segment j's pairs in c, sorted into out (room for n). */
+static uint32_t sorted_pairs(const gi_detp_crossings *c, size_t j, uint32_t *out)
+{
+    uint32_t n = c->off[j + 1] - c->off[j];
+    memcpy(out, c->ids + c->off[j], n * sizeof *out);
+    qsort(out, n, sizeof *out, by_id);
+    return n;
+}
+
+/* A segment on a twin's line (the animation's retraced first segments and
+ * repaired ones): the twin's list plus a search beyond its end finds
+ * exactly a whole search's pairs, whether the segment is shorter, longer,
+ * endless, or ends just past a disc the twin ends just short of. */
+GI_TEST(test_detp_embree_twin_finds_a_whole_search_pairs)
+{
+    gi_error err;
+    const uint32_t nd = 2000, ns = 1500;
+    gi_detp_discs d;
+    make_discs(&d, nd, 0.05f, 31);
+    gi_detp_segments twins, segs;
+    make_segments(&twins, ns, GI_DETP_AC_SECOND_HIT, 32);
+    gi_detp_segments_init(&segs);
+    gi_rng r;
+    gi_rng_init(&r, 33, 3, 0);
+    size_t at_disc = 0;
+    for (uint32_t i = 0; i < ns; i++) {
+        gi_detp_segment *t = &twins.v[i], *g = gi_detp_segments_push(&segs);
+        *g = *t;
+        g->energy = gi_v3(gi_rng_float(&r), 1.0f, 0.5f); /* another photon state */
+        switch (i % 6) {
+        case 0: g->t_end = t->t_end * 0.5f; break;
+        case 1: g->t_end = isfinite(t->t_end) ? t->t_end * 1.7f + 0.2f : 0.8f; break;
+        case 2: g->t_end = INFINITY; break;
+        case 3: break; /* the same extent */
+        default: {
+            /* The twin ends exactly at a disc's crossing, the segment one
+             * float past it: only the search beyond the twin finds it. Or
+             * the twin ends one float past it and the segment goes on: the
+             * search beyond the twin starts a little before its end, and
+             * must not count that disc again. */
+            for (uint32_t k = 0; k < nd; k++) {
+                const gi_detp_disc *D = &d.d[(k + i) % nd];
+                float denom = gi_dot(g->dir, D->n);
+                if (!(denom < 0.0f))
+                    continue;
+                float tc = gi_dot(gi_sub(D->c, g->org), D->n) / denom;
+                gi_detp_segment probe = *g;
+                probe.t_end = INFINITY;
+                if (tc > 0.0f && gi_detp_crosses(D, d.r2, &probe)) {
+                    if (i % 6 == 4) {
+                        t->t_end = tc;
+                        g->t_end = nextafterf(tc, INFINITY);
+                    } else {
+                        t->t_end = nextafterf(tc, INFINITY);
+                        g->t_end = 1.5f * tc + 0.1f;
+                    }
+                    at_disc++;
+                    break;
+                }
+            }
+        }
+        }
+    }
+    GI_CHECK_MSG(at_disc > ns / 8, "only %zu twins end at a disc", at_disc);
+    RTCDevice dev = rtcNewDevice("threads=1");
+    GI_REQUIRE(dev);
+    gi_detp_embree_index *x;
+    GI_REQUIRE_OK(gi_detp_embree_build(dev, &d, &x, &err));
+    double unit = 1e-9;
+    gi_detp_accum whole, derived;
+    GI_REQUIRE_OK(gi_detp_accum_init_fixed(&whole, nd, unit, &err));
+    GI_REQUIRE_OK(gi_detp_accum_init_fixed(&derived, nd, unit, &err));
+    gi_detp_stats st = {0};
+    gi_detp_crossings tw = {0}, a = {0}, b = {0};
+    gi_detp_accum scratch;
+    GI_REQUIRE_OK(gi_detp_accum_init_fixed(&scratch, nd, unit, &err));
+    gi_detp_embree_estimate_listed(x, &twins, &scratch, &st, &tw);
+    gi_detp_embree_estimate_listed(x, &segs, &whole, &st, &a);
+    gi_detp_crossings_reset(&b);
+    for (uint32_t i = 0; i < ns; i++)
+        gi_detp_embree_estimate_twin(x, &segs.v[i], &twins.v[i], tw.ids + tw.off[i],
+                                     tw.off[i + 1] - tw.off[i], &derived, &st, &b);
+    GI_REQUIRE(b.segments == ns && a.segments == ns);
+    size_t bad = 0, crossings = 0;
+    uint32_t *pa = gi_xmalloc(nd * sizeof *pa), *pb = gi_xmalloc(nd * sizeof *pb);
+    for (uint32_t i = 0; i < ns; i++) {
+        uint32_t na = sorted_pairs(&a, i, pa), nb = sorted_pairs(&b, i, pb);
+        bad += na != nb || memcmp(pa, pb, na * sizeof *pa) != 0;
+        crossings += na;
+    }
+    GI_CHECK_MSG(bad == 0, "%zu of %u segments: other pairs than a whole search", bad, ns);
+    GI_CHECK(crossings > 1000);
+    GI_CHECK(memcmp(whole.fixed, derived.fixed, 3 * (size_t)nd * sizeof *whole.fixed) == 0 &&
+             memcmp(whole.hits, derived.hits, nd * sizeof *whole.hits) == 0);
+    free(pa);
+    free(pb);
+    gi_detp_crossings_free(&tw);
+    gi_detp_crossings_free(&a);
+    gi_detp_crossings_free(&b);
+    gi_detp_accum_free(&scratch);
+    gi_detp_accum_free(&whole);
+    gi_detp_accum_free(&derived);
+    gi_detp_embree_free(x);
+    rtcReleaseDevice(dev);
+    gi_detp_segments_free(&twins);
+    gi_detp_segments_free(&segs);
+    gi_detp_discs_free(&d);
 }
 
 GI_TEST(test_detp_disc_test_is_one_sided_and_respects_the_extent)
