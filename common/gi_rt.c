@@ -45,6 +45,30 @@ static void attach_object(gi_rt *rt, RTCScene scene, uint32_t obj)
     rtcReleaseGeometry(g);
 }
 
+/* The object alone in a scene of its own (gi_rt_object_scene). */
+static RTCScene alone_scene(gi_rt *rt, uint32_t obj)
+{
+    RTCScene sc = rtcNewScene(rt->device);
+    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_MEDIUM);
+    attach_object(rt, sc, obj);
+    rtcCommitScene(sc);
+    return sc;
+}
+
+/* `lower` in the top scene as an identity instance: a ray enters it with
+ * its own origin and direction bit for bit, so its hits there are those of
+ * `lower` traced alone. */
+static void attach_instance(gi_rt *rt, RTCScene lower, uint32_t id)
+{
+    RTCGeometry inst = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(inst, lower);
+    const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
+    rtcCommitGeometry(inst);
+    rtcAttachGeometryByID(rt->scene, inst, id);
+    rtcReleaseGeometry(inst);
+}
+
 int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
 {
     memset(rt, 0, sizeof *rt);
@@ -65,18 +89,19 @@ int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
     } else {
         rt->statics = rtcNewScene(rt->device);
         rtcSetSceneBuildQuality(rt->statics, RTC_BUILD_QUALITY_HIGH);
+        rt->alone = gi_xcalloc(s->object_count, sizeof *rt->alone);
         for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
-            attach_object(rt, s->objects[i].mobile ? rt->scene : rt->statics, i);
+            if (s->objects[i].mobile)
+                rt->alone[i] = alone_scene(rt, i);
+            else
+                attach_object(rt, rt->statics, i);
         rtcCommitScene(rt->statics);
         /* The top level changes every frame: a quick build of a few entries. */
         rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_LOW);
-        RTCGeometry inst = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_INSTANCE);
-        rtcSetGeometryInstancedScene(inst, rt->statics);
-        const float identity[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
-        rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, identity);
-        rtcCommitGeometry(inst);
-        rtcAttachGeometryByID(rt->scene, inst, s->object_count); /* past every object's ID */
-        rtcReleaseGeometry(inst);
+        attach_instance(rt, rt->statics, s->object_count); /* past every object's ID */
+        for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
+            if (rt->alone[i])
+                attach_instance(rt, rt->alone[i], i);
     }
     if (!rt->failed)
         rtcCommitScene(rt->scene);
@@ -118,18 +143,22 @@ int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err)
 {
     if (object >= rt->src->object_count)
         return gi_fail(err, GI_EINTERNAL, "gi_rt_update_object: no object %u", object);
-    if (rt->statics && !rt->src->objects[object].mobile) {
-        /* A static object moved after all: rebuild the lower level and
-         * tell the instance. */
-        refit(rt->statics, object);
-        RTCGeometry inst = rtcGetGeometry(rt->scene, rt->src->object_count);
+    if (rt->statics) {
+        /* Two levels: refit the object's lower scene, tell its instance,
+         * rebuild the top level (a few entries). A static object that moved
+         * after all refits the statics' scene, and any scene of its own. */
+        int mobile = rt->src->objects[object].mobile;
+        refit(mobile ? rt->alone[object] : rt->statics, object);
+        if (!mobile && rt->alone[object])
+            refit(rt->alone[object], object);
+        RTCGeometry inst = rtcGetGeometry(rt->scene, mobile ? object : rt->src->object_count);
         rtcCommitGeometry(inst);
         rtcCommitScene(rt->scene);
     } else {
         refit(rt->scene, object);
+        if (rt->alone && rt->alone[object])
+            refit(rt->alone[object], object);
     }
-    if (rt->alone && rt->alone[object])
-        refit(rt->alone[object], object);
     return rt_check(rt, err, "updating a moved object");
 }
 
@@ -142,10 +171,7 @@ RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err)
     if (!rt->alone)
         rt->alone = gi_xcalloc(rt->src->object_count, sizeof *rt->alone);
     if (!rt->alone[object]) {
-        RTCScene sc = rtcNewScene(rt->device);
-        rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_MEDIUM);
-        attach_object(rt, sc, object);
-        rtcCommitScene(sc);
+        RTCScene sc = alone_scene(rt, object);
         if (rt_check(rt, err, "building an object's own scene")) {
             rtcReleaseScene(sc);
             return NULL;

@@ -7,12 +7,14 @@
  * triangle index. Embree errors go through an error callback into gi_error.
  *
  * A scene with mobile objects is two-level: the static objects are one
- * scene, built once with high quality and placed in the top scene as one
- * identity instance, next to the mobile objects' geometries. Moving an
- * object then refits it and rebuilds a top level of a few entries instead
- * of the whole BVH. Hits inside the instance report the object's geomID
- * all the same. Scenes without mobile objects stay one level (their hits
- * are bit for bit what they were). */
+ * scene, built once with high quality, and each mobile object a scene of
+ * its own (gi_rt_object_scene), all placed in the top scene as identity
+ * instances. Moving an object then refits its own scene and rebuilds a top
+ * level of a few entries instead of the whole BVH, and a ray traced against
+ * the mobile alone finds bit for bit the hits it finds there in the whole
+ * scene. Hits inside an instance report the object's geomID all the same.
+ * Scenes without mobile objects stay one level (their hits are bit for bit
+ * what they were). */
 #ifndef GI_RT_H
 #define GI_RT_H
 
@@ -54,10 +56,10 @@ int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err);
  * by gi_rt_update_object, owned by rt. NULL on failure (err says why). */
 RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err);
 
-/* Closest hit along org + t dir, t in [tnear, tfar]; dir need not be unit
- * (t is then in units of |dir|). Returns 1 on a hit, 0 on a miss. */
-static inline int gi_rt_intersect(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tnear,
-                                  float tfar, gi_hit *hit)
+/* gi_rt_intersect against `scene` (rt's, or one of its gi_rt_object_scene),
+ * not counted in rt->rays. */
+static inline int gi_rt_intersect_in(const gi_rt *rt, RTCScene scene, gi_vec3 org, gi_vec3 dir,
+                                     float tnear, float tfar, gi_hit *hit)
 {
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -76,8 +78,7 @@ static inline int gi_rt_intersect(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tne
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rt->scene, &ctx, &rh);
-    rt->rays++;
+    rtcIntersect1(scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
         return 0;
     hit->t = rh.ray.tfar;
@@ -86,6 +87,15 @@ static inline int gi_rt_intersect(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tne
     hit->v = rh.hit.v;
     hit->ng = gi_v3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     return 1;
+}
+
+/* Closest hit along org + t dir, t in [tnear, tfar]; dir need not be unit
+ * (t is then in units of |dir|). Returns 1 on a hit, 0 on a miss. */
+static inline int gi_rt_intersect(gi_rt *rt, gi_vec3 org, gi_vec3 dir, float tnear,
+                                  float tfar, gi_hit *hit)
+{
+    rt->rays++;
+    return gi_rt_intersect_in(rt, rt->scene, org, dir, tnear, tfar, hit);
 }
 
 /* 1 if anything blocks the segment org + t dir, t in [tnear, tfar]. */

@@ -242,6 +242,11 @@ void gi_detp_trace_photon(const gi_detp_tracer *tr, uint64_t photon, gi_detp_seg
  * what an incremental recompute calls to retrace a suffix. */
 void gi_detp_trace_from(const gi_detp_tracer *tr, uint64_t photon, uint32_t bounce,
                         gi_vec3 org, gi_vec3 dir, gi_vec3 energy, gi_detp_segments *out);
+/* The same with the first segment's closest hit already known (`first`,
+ * exactly what the ray would find), or NULL. */
+void gi_detp_trace_from_hit(const gi_detp_tracer *tr, uint64_t photon, uint32_t bounce,
+                            gi_vec3 org, gi_vec3 dir, gi_vec3 energy, const gi_hit *first,
+                            gi_detp_segments *out);
 
 /* ---- Irradiance points (detp_points.c) ------------------------------ */
 

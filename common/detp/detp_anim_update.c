@@ -76,28 +76,17 @@ static int ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mo
     return gi_dot(q, q) <= r * r;
 }
 
-/* The mobile at its new pose, strictly before the stored hit. */
-static int mobile_hit_before(RTCScene mobile, const gi_detp_segment *g)
+/* The mobile at its new pose, strictly before the stored hit: that hit is
+ * then the one the whole scene gives. Nothing static lies before the
+ * stored hit (the ray is the one traced when it was stored, and the static
+ * objects have not moved), and the mobile's own scene is the one the whole
+ * scene holds as an identity instance, so its hits are the same bits
+ * (gi_rt.h). */
+static int mobile_hit_before(const gi_detp_tracer *tr, RTCScene mobile,
+                             const gi_detp_segment *g, gi_hit *h)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    struct RTCRayHit rh;
-    rh.ray.org_x = g->org.x;
-    rh.ray.org_y = g->org.y;
-    rh.ray.org_z = g->org.z;
-    rh.ray.tnear = 0.0f;
-    rh.ray.dir_x = g->dir.x;
-    rh.ray.dir_y = g->dir.y;
-    rh.ray.dir_z = g->dir.z;
-    rh.ray.time = 0.0f;
-    rh.ray.tfar = isfinite(g->t_hit) ? g->t_hit : FLT_MAX;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(mobile, &ctx, &rh);
-    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.ray.tfar < g->t_hit;
+    float tfar = isfinite(g->t_hit) ? g->t_hit : FLT_MAX;
+    return gi_rt_intersect_in(tr->rt, mobile, g->org, g->dir, 0.0f, tfar, h) && h->t < g->t_hit;
 }
 
 /* t_second of a segment that keeps its hit, exactly as the tracer
@@ -147,14 +136,19 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
     for (size_t k = 0; k < n; k++) {
         const gi_detp_segment *g = &path[k];
         st->segments++;
-        int retrace = 0;
+        int retrace = 0, known = 0;
+        gi_hit first;
         if (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) {
             st->old_hits++;
             retrace = 1;
+            /* Hit again at the new pose before the old hit: that is the
+             * new first hit, without a ray through the whole scene. */
+            st->mobile_tests++;
+            known = mobile_hit_before(tr, in->mobile_scene, g, &first);
         } else if (ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
             st->sphere_passes++;
             st->mobile_tests++;
-            retrace = mobile_hit_before(in->mobile_scene, g);
+            retrace = known = mobile_hit_before(tr, in->mobile_scene, g, &first);
             st->mobile_hits += (uint64_t)retrace;
         }
         if (retrace) {
@@ -164,7 +158,8 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
                 append(out, path, k); /* the unchanged prefix */
             append(old_list, &path[k], n - k);
             size_t s0 = new_list->count;
-            gi_detp_trace_from(tr, g->photon, g->bounce, g->org, g->dir, g->energy, new_list);
+            gi_detp_trace_from_hit(tr, g->photon, g->bounce, g->org, g->dir, g->energy,
+                                   known ? &first : NULL, new_list);
             gi_detp_segments added = {new_list->v + s0, new_list->count - s0, 0};
             gi_detp_set_extent(&added, in->artifact, in->eps);
             append(out, added.v, added.count);

@@ -87,6 +87,13 @@ void gi_detp_trace_photon(const gi_detp_tracer *tr, uint64_t photon, gi_detp_seg
 void gi_detp_trace_from(const gi_detp_tracer *tr, uint64_t photon, uint32_t bounce,
                         gi_vec3 org, gi_vec3 dir, gi_vec3 energy, gi_detp_segments *out)
 {
+    gi_detp_trace_from_hit(tr, photon, bounce, org, dir, energy, NULL, out);
+}
+
+void gi_detp_trace_from_hit(const gi_detp_tracer *tr, uint64_t photon, uint32_t bounce,
+                            gi_vec3 org, gi_vec3 dir, gi_vec3 energy, const gi_hit *first,
+                            gi_detp_segments *out)
+{
     const gi_scene *s = tr->scene;
     for (;;) {
         gi_detp_segment *g = gi_detp_segments_push(out);
@@ -98,8 +105,12 @@ void gi_detp_trace_from(const gi_detp_tracer *tr, uint64_t photon, uint32_t boun
         g->t_hit = g->t_second = g->t_end = INFINITY;
         g->hit_tri = GI_DETP_NO_HIT;
         gi_hit h;
-        if (!gi_rt_intersect(tr->rt, org, dir, 0.0f, FLT_MAX, &h))
+        if (first) {
+            h = *first;
+            first = NULL;
+        } else if (!gi_rt_intersect(tr->rt, org, dir, 0.0f, FLT_MAX, &h)) {
             return;
+        }
         g->t_hit = g->t_end = h.t;
         g->hit_tri = h.tri;
         gi_vec3 p = gi_madd(org, dir, h.t);
