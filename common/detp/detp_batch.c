@@ -328,6 +328,10 @@ void detp_batch_mark_near(const detp_batch *b, gi_detp_mobile_pose s0, gi_detp_m
         mark[b->over[i].photon - b->p0] = 1;
 }
 
+/* A marked path of the base, its run not yet looked up (no path is that
+ * long: GI_DETP_MAX_PATH). */
+#define BASE_RUN UINT32_MAX
+
 size_t detp_batch_marked(const detp_batch *b, const uint8_t *mark, detp_path **runs,
                          size_t *cap)
 {
@@ -339,15 +343,33 @@ size_t detp_batch_marked(const detp_batch *b, const uint8_t *mark, detp_path **r
             *cap = *cap ? 2 * *cap : 1024;
             *runs = gi_xrealloc(*runs, *cap * sizeof **runs);
         }
-        /* Both in photon order: a cursor, not a search, finds the override. */
+        /* Both in photon order: a cursor, not a search, finds the override.
+         * A base path's run is filled in below. */
         uint64_t photon = b->p0 + i;
         while (o < b->over_count && b->over[o].photon < photon)
             o++;
-        if (o < b->over_count && b->over[o].photon == photon) {
+        if (o < b->over_count && b->over[o].photon == photon)
             (*runs)[n++] = b->over[o];
-        } else {
-            uint32_t s0 = b->grid.path_start[i], s1 = b->grid.path_start[i + 1];
-            (*runs)[n++] = (detp_path){photon, b->base.seg + s0, s1 - s0};
+        else
+            (*runs)[n++] = (detp_path){photon, NULL, BASE_RUN};
+    }
+    /* The marked paths lie scattered over the base and its grid: each is
+     * a cache miss or two. Asked for well ahead of use they overlap; the
+     * frame's test then finds the paths' segments in cache. */
+    const uint32_t *ps = b->grid.path_start;
+    enum { AHEAD = 16 };
+    for (size_t k = 0; k < n + AHEAD; k++) {
+        if (k + AHEAD < n && (*runs)[k + AHEAD].count == BASE_RUN)
+            __builtin_prefetch(&ps[(*runs)[k + AHEAD].photon - b->p0]);
+        if (k < n) {
+            detp_path *r = &(*runs)[k];
+            if (r->count == BASE_RUN) {
+                size_t i = (size_t)(r->photon - b->p0);
+                r->seg = b->base.seg + ps[i];
+                r->count = ps[i + 1] - ps[i];
+            }
+            __builtin_prefetch(r->seg);
+            __builtin_prefetch(r->seg + 1);
         }
     }
     return n;
