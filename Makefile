@@ -63,8 +63,12 @@ PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS)) -lembree3 -lm
 
 WARN = -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes -Wno-unused-parameter
+# -ffp-contract=off: no multiply-add is fused unless the code says so
+# (fmaf, intrinsics). Functions built for AVX2/AVX-512 (detp_lanes.c) would
+# otherwise round otherwise than the same arithmetic elsewhere, and hosts
+# with different CPUs would count different disc crossings.
 BASE_CFLAGS = -std=gnu11 -g $(WARN) -I. -Icommon -Iprotocol -Iworker -Iserver \
-	      -D_GNU_SOURCE -MMD -MP
+	      -D_GNU_SOURCE -MMD -MP -ffp-contract=off
 
 ifeq ($(CFG),asan)
 OPT_CFLAGS = -O1 -fno-omit-frame-pointer -fsanitize=address,undefined \
@@ -146,7 +150,8 @@ $(O)/bench/%: $(O)/obj/bench/%.o $(LIB)
 FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
 FO := $(BUILD)/fuzz
 FUZZ_CFLAGS = -std=gnu11 -g -O1 -fno-omit-frame-pointer -I. -Icommon -Iprotocol \
-	      -Iworker -Iserver -D_GNU_SOURCE -MMD -MP $(WARN) -Wno-unused-command-line-argument \
+	      -Iworker -Iserver -D_GNU_SOURCE -MMD -MP -ffp-contract=off $(WARN) \
+	      -Wno-unused-command-line-argument \
 	      -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined $(PKG_CFLAGS)
 FUZZ_LIB_OBJ := $(LIB_SRC:%.c=$(FO)/obj/%.o)
 FUZZ_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(FO)/%)

@@ -158,6 +158,17 @@ GI_TEST(test_detp_estimators_agree_with_basic_detp)
             gi_detp_octree_free(oct);
         }
 
+        /* Lanes (the animation's mobile discs), every width the CPU has:
+         * the segments ending on the plane of discs are where a fused
+         * multiply-add would round otherwise than basic DETP. */
+        for (unsigned w = 4; w <= 16; w *= 2) {
+            gi_detp_accum_clear(&acc);
+            memset(&st, 0, sizeof st);
+            gi_detp_lanes_estimate_width(&d, &s, &acc, &st, w);
+            GI_CHECK_MSG(same_accum(&acc, &ref), "lanes of %u (mode %d) differ", w, mi);
+            GI_CHECK(st.crossings == want);
+        }
+
         /* Embree. */
         RTCDevice dev = rtcNewDevice("threads=1");
         GI_REQUIRE(dev);
@@ -290,6 +301,52 @@ GI_TEST(test_detp_embree_twin_finds_a_whole_search_pairs)
     rtcReleaseDevice(dev);
     gi_detp_segments_free(&twins);
     gi_detp_segments_free(&segs);
+    gi_detp_discs_free(&d);
+}
+
+/* Lanes against basic DETP where rounding decides: segments that end
+ * exactly at a tilted disc's plane (t_end = its t: not crossed) or one
+ * float past it (crossed). A fused multiply-add, or any other order of
+ * operations, computes another t and flips some of them. */
+GI_TEST(test_detp_lanes_round_like_basic_detp_at_the_edge)
+{
+    gi_error err;
+    const uint32_t nd = 64, ns = 4000;
+    gi_detp_discs d;
+    make_discs(&d, nd, 0.3f, 41);
+    gi_detp_segments s;
+    gi_detp_segments_init(&s);
+    gi_rng r;
+    gi_rng_init(&r, 42, 4, 0);
+    for (uint32_t i = 0; i < ns; i++) {
+        const gi_detp_disc *D = &d.d[i % nd];
+        gi_detp_segment *g = gi_detp_segments_push(&s);
+        memset(g, 0, sizeof *g);
+        g->photon = i;
+        g->energy = gi_v3(1, 1, 1);
+        /* From the front of the disc towards a point near its centre. */
+        gi_vec3 aim = gi_add(D->c, gi_scale(random_unit(&r), 0.1f));
+        g->org = gi_add(aim, gi_scale(gi_add(D->n, gi_scale(random_unit(&r), 0.5f)),
+                                      0.5f + gi_rng_float(&r)));
+        g->dir = gi_normalize(gi_sub(aim, g->org));
+        float denom = gi_dot(g->dir, D->n);
+        float t = gi_dot(gi_sub(D->c, g->org), D->n) / denom;
+        g->t_hit = g->t_second = g->t_end = i % 2 ? nextafterf(t, INFINITY) : t;
+    }
+    gi_detp_accum ref, acc;
+    GI_REQUIRE_OK(gi_detp_accum_init(&ref, nd, &err));
+    GI_REQUIRE_OK(gi_detp_accum_init(&acc, nd, &err));
+    gi_detp_stats st = {0};
+    gi_detp_basic(&d, &s, &ref, &st);
+    GI_CHECK(st.crossings > ns / 4);
+    for (unsigned w = 4; w <= 16; w *= 2) {
+        gi_detp_accum_clear(&acc);
+        gi_detp_lanes_estimate_width(&d, &s, &acc, &st, w);
+        GI_CHECK_MSG(same_accum(&acc, &ref), "lanes of %u differ from basic DETP", w);
+    }
+    gi_detp_accum_free(&ref);
+    gi_detp_accum_free(&acc);
+    gi_detp_segments_free(&s);
     gi_detp_discs_free(&d);
 }
 
