@@ -35,6 +35,8 @@ typedef struct lanes_set {
 #define LANES_W 4
 #define LANES_VF lanes_vf4
 #define LANES_VI lanes_vi4
+#define LANES_VL lanes_vl4
+#define LANES_VU lanes_vu4
 #define LANES_ATTR
 #define LANES_MOVEMASK(m) _mm_movemask_ps((__m128)(m))
 #include "detp_lanes_kernel.h"
@@ -43,6 +45,8 @@ typedef struct lanes_set {
 #define LANES_W 8
 #define LANES_VF lanes_vf8
 #define LANES_VI lanes_vi8
+#define LANES_VL lanes_vl8
+#define LANES_VU lanes_vu8
 #define LANES_ATTR __attribute__((target("avx2")))
 #define LANES_MOVEMASK(m) _mm256_movemask_ps((__m256)(m))
 #include "detp_lanes_kernel.h"
@@ -51,6 +55,8 @@ typedef struct lanes_set {
 #define LANES_W 16
 #define LANES_VF lanes_vf16
 #define LANES_VI lanes_vi16
+#define LANES_VL lanes_vl16
+#define LANES_VU lanes_vu16
 #define LANES_ATTR __attribute__((target("avx512f,avx512dq")))
 #define LANES_MOVEMASK(m) _mm512_movepi32_mask((__m512i)(m))
 #include "detp_lanes_kernel.h"
