@@ -157,6 +157,13 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
                              gi_detp_segments *old_list, gi_detp_segments *new_list,
                              gi_detp_update_stats *st);
 
+/* A superset of the segments the update retraces from: the first test of
+ * gi_detp_anim_update_path without its exact ray (the stored hit is the
+ * mobile's, triangles [m0, m0 + mn), or the segment comes near the mobile
+ * at `pose` before its hit). */
+int gi_detp_anim_may_retrace(const gi_detp_segment *g, uint32_t m0, uint32_t mn,
+                             gi_detp_mobile_pose pose);
+
 /* The mobile's vertices from scratch (thesis 4.5): one disc per vertex of
  * `object` at its current pose (radius `radius`), estimated against all of
  * `segs` as `how` says: the Sphere Cache rooted at the object's bounding

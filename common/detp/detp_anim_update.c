@@ -76,6 +76,13 @@ static int ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mo
     return gi_dot(q, q) <= r * r;
 }
 
+int gi_detp_anim_may_retrace(const gi_detp_segment *g, uint32_t m0, uint32_t mn,
+                             gi_detp_mobile_pose pose)
+{
+    return (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) ||
+           ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, pose);
+}
+
 /* The mobile at its new pose, strictly before the stored hit: that hit is
  * then the one the whole scene gives. Nothing static lies before the
  * stored hit (the ray is the one traced when it was stored, and the static

@@ -184,19 +184,19 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
 }
 
 /* The static crossings of old segment o as listed with prev's newest
- * delta, if o is one of its records: runs (the frame's marked paths) and
+ * file, if o is one of its records: runs (the frame's marked paths) and
  * o are in photon order, *r is a cursor over runs. */
 static int listed_crossings(const detp_batch *prev, const detp_path *runs, size_t nrun,
                             size_t *r, const gi_detp_segment *o, const uint32_t **ids,
                             uint32_t *n)
 {
-    if (!prev->cross_off || prev->delta_count == 0)
+    if (!prev->cross_off)
         return 0;
     while (*r < nrun && runs[*r].photon < o->photon)
         ++*r;
     if (*r == nrun || runs[*r].photon != o->photon || o->bounce >= runs[*r].count)
         return 0;
-    const gi_detp_store_mapping *d = &prev->deltas[prev->delta_count - 1];
+    const gi_detp_store_mapping *d = detp_batch_newest(prev);
     const gi_detp_segment *at = &runs[*r].seg[o->bounce];
     if (at < d->seg || at >= d->seg + d->count)
         return 0;
@@ -275,17 +275,16 @@ static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *
     memcpy(w->acc.hits + v0 + n, sa->hits + v0, (sa->count - v0) * sizeof *sa->hits);
 }
 
-/* Gives b (now standing on the delta of a->changed) the crossings of that
- * delta's records listed by static_update: new_list is the subsequence of
- * changed that the frame traced or repaired (the same bits, photon order;
- * a path's new and kept segments differ in bounce). */
-static void attach_crossings(const detp_anim_worker *a, detp_batch *b)
+/* Gives b the static crossings of its newest file's records (`records`,
+ * as written), listed in `l` for `listed`: a subsequence of records (the
+ * same bits, photon order; a path's segments differ in bounce). */
+static void attach_crossings(detp_batch *b, const gi_detp_segments *records,
+                             const gi_detp_segments *listed, const gi_detp_crossings *l)
 {
-    const gi_detp_segments *c = &a->changed, *nl = &a->new_list;
-    const gi_detp_crossings *l = &a->listed;
-    if (b->delta_count == 0 || b->deltas[b->delta_count - 1].count != c->count ||
-        l->segments != nl->count)
+    const gi_detp_segments *c = records, *nl = listed;
+    if (detp_batch_newest(b)->count != c->count || l->segments != nl->count)
         return;
+    detp_batch_forget_crossings(b);
     b->cross_off = gi_xmalloc((c->count + 1) * sizeof *b->cross_off);
     b->cross_known = gi_xcalloc(c->count + 1, 1);
     b->cross_ids = gi_xmalloc((l->pairs + 1) * sizeof *b->cross_ids);
@@ -481,6 +480,48 @@ static void encode_result(const detp_worker *w, detp_anim_worker *a, const detp_
     detp_encode_anim(h, a->sum, a->hits, w->acc.count, result);
 }
 
+/* Keeps the batch open for frame 1, with the static crossings of the
+ * segments frame 1 may drop (a path's from its first segment that hit the
+ * mobile at pose 0 or may meet it at pose 1 on): frame 1 then takes them
+ * back from the list instead of searching, as later frames do. The lists
+ * cost frame 0 a search of those few segments (its sums are not touched);
+ * if anything fails, frame 1 opens the batch from its files and searches. */
+static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char *dir,
+                            uint32_t batch, uint64_t p0, uint64_t p1,
+                            const gi_detp_segments *segs)
+{
+    const gi_detp_params *p = ctx->job.params;
+    mobile_frame next;
+    gi_error ignored;
+    if (p->anim.frames < 2 || p->anim.update == GI_DETP_UPDATE_FULL ||
+        mobile_at(ctx, a, 1, &next, &ignored))
+        return;
+    const gi_object *o = &ctx->job.scene.objects[a->object];
+    gi_detp_segments *may = &a->unlisted;
+    may->count = 0;
+    for (size_t i = 0; i < segs->count;) {
+        size_t j = i;
+        while (j < segs->count && segs->v[j].photon == segs->v[i].photon)
+            j++;
+        size_t k = i;
+        while (k < j && !gi_detp_anim_may_retrace(&segs->v[k], o->first_triangle,
+                                                  o->triangle_count, next.sphere))
+            k++;
+        for (; k < j; k++)
+            *gi_detp_segments_push(may) = segs->v[k];
+        i = j;
+    }
+    gi_detp_stats scratch = {0};
+    gi_detp_accum_clear(&a->static_acc);
+    a->static_acc.sign = 1;
+    gi_detp_embree_estimate_listed(a->static_index, may, &a->static_acc, &scratch, &a->listed);
+    detp_batch b;
+    if (detp_batch_open(dir, &a->grid, batch, p0, p1, 0, &b, &ignored) != 1)
+        return;
+    attach_crossings(&b, segs, may, &a->listed);
+    detp_batch_shelf_put(&a->shelf, &b);
+}
+
 static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
                       detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
 {
@@ -503,10 +544,12 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     collect_near(a, m.near, w->segs.v, w->segs.count);
     if (mobile_vertices(ctx, w, a, &h->stats, err))
         return -1;
+    double t4 = detp_now();
+    keep_for_frame1(ctx, a, dir, h->batch, p0, p1, &w->segs);
     h->sec_trace = t1 - t0;
-    h->sec_store = t2 - t1;
+    h->sec_store = (t2 - t1) + (detp_now() - t4);
     h->sec_static = t3 - t2;
-    h->sec_mobile = detp_now() - t3;
+    h->sec_mobile = t4 - t3;
     h->segments = h->segments_new = w->segs.count;
     return 0;
 }
@@ -608,7 +651,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         int as_base = rc;
         if (detp_batch_advance(dir, &a->grid, &prev, f, as_base, &ignored) == 1) {
             if (!as_base && p->anim.update != GI_DETP_UPDATE_FULL)
-                attach_crossings(a, &prev);
+                attach_crossings(&prev, &a->changed, &a->new_list, &a->listed);
             detp_batch_shelf_put(&a->shelf, &prev);
         }
         rc = 0;

@@ -47,10 +47,11 @@ typedef struct detp_batch {
     /* The newest run of every path the deltas changed, by photon. */
     detp_path *over;
     size_t over_count;
-    /* The static discs each record of the newest delta crosses, as the
-     * process that wrote it found them (detp_anim_worker.c): record i's are
-     * cross_ids[cross_off[i] .. cross_off[i + 1]) where cross_known[i].
-     * Memory only (a batch kept open, detp_batch_shelf.h); NULL: none. */
+    /* The static discs each record of the newest file (detp_batch_newest)
+     * crosses, as the process that wrote it found them
+     * (detp_anim_worker.c): record i's are cross_ids[cross_off[i] ..
+     * cross_off[i + 1]) where cross_known[i]. Memory only (a batch kept
+     * open, detp_batch_shelf.h); NULL: none. */
     uint32_t *cross_off, *cross_ids;
     uint8_t *cross_known;
 } detp_batch;
@@ -65,7 +66,12 @@ void detp_batch_close(detp_batch *b);
  * page cache; the next read maps them again): a batch kept open between
  * frames then does not hold its whole base in the process's memory. */
 void detp_batch_release_pages(const detp_batch *b);
-/* Frees the crossing lists of the newest delta. */
+/* The newest file: the newest delta, or the base if there is none. */
+static inline const gi_detp_store_mapping *detp_batch_newest(const detp_batch *b)
+{
+    return b->delta_count ? &b->deltas[b->delta_count - 1] : &b->base;
+}
+/* Frees the crossing lists of the newest file. */
 void detp_batch_forget_crossings(detp_batch *b);
 /* The files of an open batch are still on disk (its base and newest
  * delta, by inode): a batch kept open must not outlive them. */
