@@ -259,8 +259,8 @@ static void static_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *
             memcmp(&t->dir, &g->dir, sizeof g->dir) == 0) {
             const old_crossings *x = &a->old_x[k];
             const gi_detp_crossings *u = &a->unlisted_x;
-            const uint32_t *ids = x->ids ? x->ids : u->ids + u->off[x->at];
             uint32_t n = x->ids ? x->n : u->off[x->at + 1] - u->off[x->at];
+            const uint32_t *ids = x->ids ? x->ids : n ? u->ids + u->off[x->at] : NULL;
             gi_detp_embree_estimate_twin(a->static_index, g, t, ids, n, sa, st, &a->listed);
         } else {
             gi_detp_embree_estimate_one(a->static_index, g, sa, st, &a->listed);
@@ -294,7 +294,8 @@ static void attach_crossings(detp_batch *b, const gi_detp_segments *records,
         if (j < nl->count && nl->v[j].photon == c->v[i].photon &&
             nl->v[j].bounce == c->v[i].bounce) {
             uint32_t n = l->off[j + 1] - l->off[j];
-            memcpy(b->cross_ids + pairs, l->ids + l->off[j], n * sizeof *l->ids);
+            if (n)
+                memcpy(b->cross_ids + pairs, l->ids + l->off[j], n * sizeof *l->ids);
             pairs += n;
             b->cross_known[i] = 1;
             j++;
@@ -458,12 +459,13 @@ static void collect_near(detp_anim_worker *a, near_test nt, const gi_detp_segmen
             *gi_detp_segments_push(&a->near) = seg[i];
 }
 
-/* The mobile's vertices from scratch (thesis 1.12.4) over a->near. */
+/* The mobile's vertices from scratch (thesis 1.12.4) over segs (a->near,
+ * or every segment of the frame). */
 static int mobile_vertices(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a,
-                           gi_detp_stats *st, gi_error *err)
+                           const gi_detp_segments *segs, gi_detp_stats *st, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
-    return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, &a->near,
+    return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, segs,
                                         p->anim.mobile_estimator, &p->sc, ctx->rt.device,
                                         &w->acc, st, err);
 }
@@ -542,7 +544,7 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         return -1;
     a->near.count = 0;
     collect_near(a, m.near, w->segs.v, w->segs.count);
-    if (mobile_vertices(ctx, w, a, &h->stats, err))
+    if (mobile_vertices(ctx, w, a, &a->near, &h->stats, err))
         return -1;
     double t4 = detp_now();
     keep_for_frame1(ctx, a, dir, h->batch, p0, p1, &w->segs);
@@ -628,9 +630,11 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     double t2 = detp_now();
     gi_detp_accum_clear(&w->acc);
     int rc = 0;
-    if (p->anim.update == GI_DETP_UPDATE_FULL) {
-        /* Every vertex from scratch over the frame's segments (the check
-         * of the incremental result, and its benchmark). */
+    int full = p->anim.update == GI_DETP_UPDATE_FULL;
+    if (full) {
+        /* Every vertex from scratch over the frame's segments, the
+         * mobile's too (the check of the incremental result, the grid's
+         * marks included, and its benchmark). */
         detp_batch_materialize(&prev, &a->changed, &w->segs);
         w->acc.sign = 1;
         rc = detp_worker_estimate(ctx, w, &h->stats, err);
@@ -639,7 +643,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     }
     double t3 = detp_now();
     if (rc == 0)
-        rc = mobile_vertices(ctx, w, a, &h->stats, err);
+        rc = mobile_vertices(ctx, w, a, full ? &w->segs : &a->near, &h->stats, err);
     double t4 = detp_now();
     if (rc == 0)
         rc = detp_batch_write_frame(dir, &a->grid, &prev, f, &a->changed, err);
@@ -650,7 +654,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
         gi_error ignored;
         int as_base = rc;
         if (detp_batch_advance(dir, &a->grid, &prev, f, as_base, &ignored) == 1) {
-            if (!as_base && p->anim.update != GI_DETP_UPDATE_FULL)
+            if (!as_base && !full)
                 attach_crossings(&prev, &a->changed, &a->new_list, &a->listed);
             detp_batch_shelf_put(&a->shelf, &prev);
         }

@@ -319,13 +319,33 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
     }
 }
 
+/* Some segment of the run comes within the sphere over the part the grid
+ * would list (detp_grid_reach). The radius is grown well beyond float
+ * error at the scale of the segment and the sphere. */
+static int run_near(const detp_path *run, gi_detp_mobile_pose s)
+{
+    for (uint32_t k = 0; k < run->count; k++) {
+        const gi_detp_segment *g = &run->seg[k];
+        gi_vec3 oc = gi_sub(s.c, g->org);
+        float t = gi_dot(oc, g->dir), t1 = detp_grid_reach(g);
+        t = t < 0.0f ? 0.0f : (t > t1 ? t1 : t);
+        gi_vec3 q = gi_sub(oc, gi_scale(g->dir, t));
+        float r = s.r + 1e-4f * (fabsf(t) + fabsf(oc.x) + fabsf(oc.y) + fabsf(oc.z) + s.r + 1.0f);
+        if (gi_dot(q, q) <= r * r)
+            return 1;
+    }
+    return 0;
+}
+
 void detp_batch_mark_near(const detp_batch *b, gi_detp_mobile_pose s0, gi_detp_mobile_pose s1,
                           uint8_t *mark)
 {
     detp_grid_mark(&b->grid, s0.c, s0.r, mark);
     detp_grid_mark(&b->grid, s1.c, s1.r, mark);
+    /* A path a delta changed is as near as its newest run is (the grid
+     * knows its base run only): tested here, segment by segment. */
     for (size_t i = 0; i < b->over_count; i++)
-        mark[b->over[i].photon - b->p0] = 1;
+        mark[b->over[i].photon - b->p0] = run_near(&b->over[i], s0) || run_near(&b->over[i], s1);
 }
 
 /* A marked path of the base, its run not yet looked up (no path is that

@@ -100,8 +100,10 @@ static inline void detp_batch_iter_init(detp_batch_iter *it, const detp_batch *b
 int detp_batch_next(detp_batch_iter *it, detp_path *run);
 
 /* The paths that may come within either sphere: those the base's grid
- * lists in the cells the spheres overlap, and every path a delta changed.
- * Sets mark[i] = 1 for photon p0 + i (mark has p1 - p0 entries). */
+ * lists in the cells the spheres overlap, and those a delta changed whose
+ * newest run comes near one (over the same part of each segment as the
+ * grid). Sets mark[i] to 1 for photon p0 + i if so, and to 0 for another
+ * changed path (mark has p1 - p0 entries). */
 void detp_batch_mark_near(const detp_batch *b, gi_detp_mobile_pose s0, gi_detp_mobile_pose s1,
                           uint8_t *mark);
 /* The runs of the marked paths (mark[i]: photon p0 + i) as of the batch's

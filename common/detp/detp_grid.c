@@ -92,15 +92,7 @@ static void add_cell(raster *r, size_t c, uint32_t path)
 
 static void rasterize(const detp_grid_spec *s, const gi_detp_segment *g, uint32_t path, raster *r)
 {
-    float t1 = -INFINITY;
-    if (isfinite(g->t_hit))
-        t1 = gi_maxf(t1, g->t_hit);
-    if (isfinite(g->t_second))
-        t1 = gi_maxf(t1, g->t_second);
-    if (isfinite(g->t_end))
-        t1 = gi_maxf(t1, g->t_end);
-    if (!isfinite(g->t_hit) || !(t1 > 0.0f))
-        t1 = INFINITY;
+    float t1 = detp_grid_reach(g);
     float t0 = 0.0f;
     float o[3] = {g->org.x, g->org.y, g->org.z}, d[3] = {g->dir.x, g->dir.y, g->dir.z};
     float lo[3] = {s->lo.x, s->lo.y, s->lo.z};

@@ -38,6 +38,20 @@ typedef struct detp_grid_spec {
  * need more than DETP_GRID_MAX_AXIS per axis). */
 void detp_grid_spec_make(gi_vec3 lo, gi_vec3 hi, float cell, detp_grid_spec *out);
 
+/* How far along a segment the grid lists it: every part the animation's
+ * tests look at (its hit, the surface behind it, its extent), and without
+ * end if it escapes or its extent does (rule 1 with nothing behind the
+ * hit: the discs and the mobile may lie anywhere beyond). */
+static inline float detp_grid_reach(const gi_detp_segment *g)
+{
+    if (!isfinite(g->t_hit) || !isfinite(g->t_end))
+        return INFINITY;
+    float t1 = gi_maxf(g->t_hit, g->t_end);
+    if (isfinite(g->t_second))
+        t1 = gi_maxf(t1, g->t_second);
+    return t1 > 0.0f ? t1 : INFINITY;
+}
+
 typedef struct detp_grid {
     detp_grid_spec spec;
     uint32_t paths;             /* the batch's photons, p1 - p0 */

@@ -42,6 +42,38 @@ sed 's/"frames": 6,/"frames": 6, "update": "full",/' "$TMP/job.json" >"$TMP/full
 render "$TMP/full.json" "$TMP/full" 2
 same_frames "$TMP/w1" "$TMP/full" "incremental vs full recompute"
 
+# Rule 1 with nothing behind a hit: the segments that hit this panel's top
+# reach on without end, through the ball below it (crossing its discs,
+# and their t_second is the ball's whenever it passes under). The batch
+# grid must list them there too: a frame that did not read them would
+# miss the ball's crossings that a full recompute counts.
+cat >"$TMP/open.json" <<'SCENE'
+{"materials": {"w": {"diffuse": [0.6, 0.6, 0.6]},
+               "l": {"diffuse": [0, 0, 0], "emission": [4, 4, 4]}},
+ "objects": [
+  {"name": "ball", "material": "w", "mobile": true,
+   "sphere": {"radius": 0.3, "subdivisions": 2},
+   "transform": [{"translate": [-0.6, -1, 0]}]},
+  {"name": "panel", "material": "w", "quad": {"size": [3, 3]}},
+  {"name": "lamp", "material": "l", "quad": {"size": [1, 1]},
+   "transform": [{"rotate": {"axis": [1, 0, 0], "degrees": 180}}, {"translate": [0, 1.5, 0]}]}]}
+SCENE
+write_job "$TMP/open-job.json" <<JOB
+{"scene": "$TMP/open.json", "method": "detp", "seed": 3, "image": {"width": 16, "height": 16},
+ "detp": {"photons": 20000, "batch": 5000, "radius": "2%",
+          "animation": {"object": "ball", "frames": 6,
+                        "keyframes": [{"frame": 0, "translate": [0, 0, 0]},
+                                      {"frame": 5, "translate": [1.2, 0, 0.2]}]}},
+ "outputs": {"bin": "v.bin"}}
+JOB
+sed 's/"frames": 6,/"frames": 6, "update": "full",/' "$TMP/open-job.json" >"$TMP/open-full.json"
+render "$TMP/open-job.json" "$TMP/open-inc" 1
+render "$TMP/open-full.json" "$TMP/open-full" 1
+for f in 0001 0002 0003 0004 0005; do
+    cmp "$TMP/open-inc/v.$f.bin" "$TMP/open-full/v.$f.bin" ||
+        fail "open scene, frame $f: incremental differs from the full recompute"
+done
+
 # The frames differ (the sphere moves), and later frames retraced a part.
 if cmp -s "$TMP/w1/v.0000.bin" "$TMP/w1/v.0005.bin"; then fail "frames 0 and 5 are the same"; fi
 for f in 0001 0003 0005; do

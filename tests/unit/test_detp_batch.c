@@ -71,6 +71,41 @@ static void batch_dir(const char *name, char *dir, size_t len, detp_grid_spec *s
     detp_grid_spec_make(gi_v3(990, -10, -10), gi_v3(1310, 50, 20), 10.0f, spec);
 }
 
+/* detp_batch_mark_near on b (the batch as `paths`, path-ordered): every
+ * path with a segment that enters either sphere is marked; a path a delta
+ * changed is marked only if its newest run comes near (counted into
+ * *changed_unmarked when it does not). */
+static void check_marks(const detp_batch *b, const gi_detp_segments *paths, uint32_t f,
+                        uint32_t *changed_unmarked)
+{
+    gi_rng r;
+    gi_rng_init(&r, 7, f, 1);
+    uint8_t mark[PATHS];
+    for (int q = 0; q < 20; q++) {
+        gi_detp_mobile_pose s[2];
+        for (int k = 0; k < 2; k++) {
+            s[k].c = gi_v3(1000 + 300 * gi_rng_float(&r), 40 * gi_rng_float(&r),
+                           5 * gi_rng_float(&r));
+            s[k].r = 1 + 9 * gi_rng_float(&r);
+        }
+        memset(mark, 0, sizeof mark);
+        detp_batch_mark_near(b, (gi_detp_mobile_pose){s[0].c, s[0].r + 0.05f},
+                             (gi_detp_mobile_pose){s[1].c, s[1].r + 0.05f}, mark);
+        uint8_t near[PATHS] = {0};
+        for (size_t k = 0; k < paths->count; k++)
+            for (int j = 0; j < 2; j++)
+                near[paths->v[k].photon - P0] |=
+                    gi_detp_segment_meets_sphere(&paths->v[k], s[j].c, s[j].r * s[j].r);
+        for (size_t o = 0; o < b->over_count; o++) {
+            uint64_t i = b->over[o].photon - P0;
+            *changed_unmarked += !near[i] && !mark[i];
+        }
+        for (uint32_t i = 0; i < PATHS; i++)
+            GI_CHECK_MSG(!near[i] || mark[i], "frame %u: path %u near a sphere, not marked", f,
+                         P0 + i);
+    }
+}
+
 GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
 {
     char dir[512];
@@ -88,7 +123,7 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
      * the base, and their count makes the rewrites. Frames 101-130 change
      * a third of the paths each: their size does. */
     int max_files = 0;
-    uint32_t base_at_100 = 0, late_bases = 0, advanced_bases = 0;
+    uint32_t base_at_100 = 0, late_bases = 0, advanced_bases = 0, near_changed_unmarked = 0;
     /* `kept` is opened once and then only advanced frame to frame
      * (detp_batch_advance); it must read like the batch opened afresh. */
     detp_batch kept;
@@ -106,6 +141,8 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
                          detp_batch_count(&kept) == expect.count,
                      "frame %u: the batch kept open reads back wrong", f - 1);
         changed.count = 0;
+        if (f % 10 == 0)
+            check_marks(&kept, &expect, f, &near_changed_unmarked);
         GI_CHECK_MSG(prev.delta_count <= DETP_BATCH_MAX_DELTAS, "frame %u: %u deltas", f - 1,
                      prev.delta_count);
         if (f - 1 == 100)
@@ -138,6 +175,7 @@ GI_TEST(test_detp_batch_base_and_deltas_over_many_frames)
     detp_batch_close(&kept);
     /* ~250 segments a frame against a base of ~750: a new base every few. */
     GI_CHECK_MSG(late_bases >= 5, "large deltas made %u new bases in 30 frames", late_bases);
+    GI_CHECK_MSG(near_changed_unmarked > 0, "every changed path was marked, near or not");
     const char *newest = last.base_frame == 130 ? "base" : "delta";
     detp_batch_close(&last);
     /* Old bases and deltas go: at most two bases' worth of files. */
@@ -226,7 +264,8 @@ GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
 }
 
 /* The grid lists, for a sphere, every path with a segment that enters it
- * (over its extent: up to t_second, or to the grid's edge if it escapes). */
+ * (over its extent: up to t_second, or to the grid's edge if it escapes or
+ * nothing lies behind its hit). */
 GI_TEST(test_detp_grid_lists_every_path_near_a_sphere)
 {
     char path[512];
@@ -246,6 +285,10 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_sphere)
             float u = gi_rng_float(&r);
             g->t_hit = u < 0.1f ? INFINITY : 5 + 80 * u;
             g->t_second = u < 0.1f ? INFINITY : g->t_hit + 30 * gi_rng_float(&r);
+            if (u > 0.85f) { /* a hit with nothing behind: rule 1 extends it without end */
+                g->t_hit = 2 + 10 * gi_rng_float(&r);
+                g->t_second = INFINITY;
+            }
             g->t_end = g->t_second;
             g->bounce = b;
             g->photon = ph;
