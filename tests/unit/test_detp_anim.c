@@ -4,6 +4,7 @@
  * batch split, untouched paths, a fresh-ray check of every kept segment;
  * the mobile's own vertices; the batch store. */
 #include <float.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -83,25 +84,39 @@ static int anim_load(anim *a, gi_error *err)
     return rc;
 }
 
-/* A closed room, a lamp under its ceiling, a panel across the middle and
- * the ball moving under the panel: segments that hit the panel keep their
- * hit while the surface behind it (rule 1's t_second) comes and goes. */
+/* A closed room 4 wide with a lamp under its ceiling, the ball (radius
+ * 0.5) at (ball_x, -1, 0) moving by `step` a frame, and one static object
+ * (JSON) besides. */
+static int anim_load_room(anim *a, const char *name, float ball_x, const char *object,
+                          gi_vec3 step, gi_error *err)
+{
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"materials\": {\"w\": {\"diffuse\": [0.6, 0.6, 0.6]},"
+             " \"l\": {\"diffuse\": [0, 0, 0], \"emission\": [4, 4, 4]}},"
+             " \"objects\": ["
+             "  {\"name\": \"ball\", \"material\": \"w\", \"mobile\": true,"
+             "   \"sphere\": {\"radius\": 0.5, \"subdivisions\": 2},"
+             "   \"transform\": [{\"translate\": [%g, -1, 0]}]},"
+             "  {\"name\": \"room\", \"material\": \"w\","
+             "   \"box\": {\"size\": [4, 4, 4], \"inward\": true}},"
+             "  %s,"
+             "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [1, 1]},"
+             "   \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}},"
+             "                   {\"translate\": [0, 1.9, 0]}]}]}",
+             (double)ball_x, object);
+    return anim_load_text(a, name, text, 0.3, 0.15f, step, err);
+}
+
+/* A panel across the middle of the room and the ball moving under it:
+ * segments that hit the panel keep their hit while the surface behind it
+ * (rule 1's t_second) comes and goes. */
 static int anim_load_panel(anim *a, gi_error *err)
 {
-    const char *text =
-        "{\"materials\": {\"w\": {\"diffuse\": [0.6, 0.6, 0.6]},"
-        " \"l\": {\"diffuse\": [0, 0, 0], \"emission\": [4, 4, 4]}},"
-        " \"objects\": ["
-        "  {\"name\": \"ball\", \"material\": \"w\", \"mobile\": true,"
-        "   \"sphere\": {\"radius\": 0.5, \"subdivisions\": 2},"
-        "   \"transform\": [{\"translate\": [-0.8, -1, 0]}]},"
-        "  {\"name\": \"room\", \"material\": \"w\","
-        "   \"box\": {\"size\": [4, 4, 4], \"inward\": true}},"
-        "  {\"name\": \"panel\", \"material\": \"w\", \"quad\": {\"size\": [2.5, 2.5]}},"
-        "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [1, 1]},"
-        "   \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}},"
-        "                   {\"translate\": [0, 1.9, 0]}]}]}";
-    return anim_load_text(a, "panel-ball.json", text, 0.3, 0.15f, gi_v3(0.3f, 0.0f, 0.1f), err);
+    return anim_load_room(a, "panel-ball.json", -0.8f,
+                          "{\"name\": \"panel\", \"material\": \"w\","
+                          " \"quad\": {\"size\": [2.5, 2.5]}}",
+                          gi_v3(0.3f, 0.0f, 0.1f), err);
 }
 
 /* The ball passing through a static plate (a mobile that cuts into the
@@ -110,22 +125,12 @@ static int anim_load_panel(anim *a, gi_error *err)
  * taken from the mobile alone) must see it. */
 static int anim_load_plate(anim *a, gi_error *err)
 {
-    const char *text =
-        "{\"materials\": {\"w\": {\"diffuse\": [0.6, 0.6, 0.6]},"
-        " \"l\": {\"diffuse\": [0, 0, 0], \"emission\": [4, 4, 4]}},"
-        " \"objects\": ["
-        "  {\"name\": \"ball\", \"material\": \"w\", \"mobile\": true,"
-        "   \"sphere\": {\"radius\": 0.5, \"subdivisions\": 2},"
-        "   \"transform\": [{\"translate\": [-0.6, -1, 0]}]},"
-        "  {\"name\": \"room\", \"material\": \"w\","
-        "   \"box\": {\"size\": [4, 4, 4], \"inward\": true}},"
-        "  {\"name\": \"plate\", \"material\": \"w\", \"quad\": {\"size\": [2, 2]},"
-        "   \"transform\": [{\"rotate\": {\"axis\": [0, 0, 1], \"degrees\": 90}},"
-        "                   {\"translate\": [0, -1, 0]}]},"
-        "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [1, 1]},"
-        "   \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}},"
-        "                   {\"translate\": [0, 1.9, 0]}]}]}";
-    return anim_load_text(a, "plate-ball.json", text, 0.3, 0.15f, gi_v3(0.25f, 0.0f, 0.05f), err);
+    return anim_load_room(a, "plate-ball.json", -0.6f,
+                          "{\"name\": \"plate\", \"material\": \"w\","
+                          " \"quad\": {\"size\": [2, 2]},"
+                          " \"transform\": [{\"rotate\": {\"axis\": [0, 0, 1], \"degrees\": 90}},"
+                          " {\"translate\": [0, -1, 0]}]}",
+                          gi_v3(0.25f, 0.0f, 0.05f), err);
 }
 
 static void anim_free(anim *a)
