@@ -17,25 +17,33 @@ double detp_now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Varints go a whole value at a time (a frame's result holds tens of
+ * thousands of them): the bytes gathered, then one append or one read. */
 static void put_varint(gi_buf *b, uint64_t v)
 {
+    uint8_t tmp[10];
+    size_t n = 0;
     while (v >= 0x80) {
-        gi_buf_put_u8(b, (uint8_t)(v | 0x80));
+        tmp[n++] = (uint8_t)(v | 0x80);
         v >>= 7;
     }
-    gi_buf_put_u8(b, (uint8_t)v);
+    tmp[n++] = (uint8_t)v;
+    gi_buf_put(b, tmp, n);
 }
 
 static uint64_t get_varint(gi_reader *r)
 {
     uint64_t v = 0;
-    for (int shift = 0; shift < 64; shift += 7) {
-        uint8_t b = gi_get_u8(r);
-        v |= (uint64_t)(b & 0x7F) << shift;
-        if (!(b & 0x80))
+    for (size_t k = 0; k < 10 && k < r->left && !r->failed; k++) {
+        uint8_t b = r->p[k];
+        v |= (uint64_t)(b & 0x7F) << (7 * k);
+        if (!(b & 0x80)) {
+            r->p += k + 1;
+            r->left -= k + 1;
             return v;
+        }
     }
-    r->failed = 1; /* more than 10 bytes: not a varint we wrote */
+    r->failed = 1; /* cut short, or more than 10 bytes: not a varint we wrote */
     return 0;
 }
 
