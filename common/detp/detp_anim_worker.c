@@ -498,6 +498,15 @@ static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char 
     if (p->anim.frames < 2 || p->anim.update == GI_DETP_UPDATE_FULL ||
         mobile_at(ctx, a, 1, &next, &ignored))
         return;
+    /* A shelf already full of batches in use would not keep this one:
+     * then there is nothing to list for. */
+    detp_batch b;
+    if (detp_batch_open(dir, &a->grid, batch, p0, p1, 0, &b, &ignored) != 1)
+        return;
+    if (!detp_batch_shelf_fits(&a->shelf, &b)) {
+        detp_batch_close(&b);
+        return;
+    }
     const gi_object *o = &ctx->job.scene.objects[a->object];
     gi_detp_segments *may = &a->unlisted;
     may->count = 0;
@@ -517,9 +526,6 @@ static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char 
     gi_detp_accum_clear(&a->static_acc);
     a->static_acc.sign = 1;
     gi_detp_embree_estimate_listed(a->static_index, may, &a->static_acc, &scratch, &a->listed);
-    detp_batch b;
-    if (detp_batch_open(dir, &a->grid, batch, p0, p1, 0, &b, &ignored) != 1)
-        return;
     attach_crossings(&b, segs, may, &a->listed);
     detp_batch_shelf_put(&a->shelf, &b);
 }

@@ -39,21 +39,38 @@ int detp_batch_shelf_take(detp_batch_shelf *s, const char *dir, uint32_t batch, 
     return 0;
 }
 
+/* Entry i makes way for b: it is b's batch (stale), or it missed a frame
+ * (the batch went elsewhere). */
+static int gives_way(const detp_batch *kept, const detp_batch *b)
+{
+    return kept->batch == b->batch || kept->frame + 1 < b->frame;
+}
+
+int detp_batch_shelf_fits(const detp_batch_shelf *s, const detp_batch *b)
+{
+    size_t freed = 0;
+    for (size_t i = 0; i < s->count; i++)
+        if (gives_way(&s->b[i], b))
+            freed += mapped_bytes(&s->b[i]);
+    return s->bytes - freed + mapped_bytes(b) <= s->budget;
+}
+
 void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b)
 {
+    if (!detp_batch_shelf_fits(s, b)) {
+        /* Full of batches still in use: keep those. A process cycling
+         * through more batches than fit then still finds the same ones
+         * every frame (dropping the oldest would find none). */
+        detp_batch_shelf_drop(s, b->batch);
+        detp_batch_close(b);
+        return;
+    }
     detp_batch_shelf_drop(s, b->batch);
     size_t add = mapped_bytes(b);
     /* Batches that missed a frame went elsewhere: they go first. */
     for (size_t i = s->count; i-- > 0 && s->bytes + add > s->budget;)
-        if (s->b[i].frame + 1 < b->frame)
+        if (gives_way(&s->b[i], b))
             remove_at(s, i, NULL);
-    if (s->bytes + add > s->budget) {
-        /* Full of batches still in use: keep those. A process cycling
-         * through more batches than fit then still finds the same ones
-         * every frame (dropping the oldest would find none). */
-        detp_batch_close(b);
-        return;
-    }
     if (s->count == s->cap) {
         s->cap = s->cap ? 2 * s->cap : 8;
         s->b = gi_xrealloc(s->b, s->cap * sizeof *s->b);

@@ -33,6 +33,8 @@ int detp_batch_shelf_take(detp_batch_shelf *s, const char *dir, uint32_t batch, 
  * previous one) are closed to make room; if it still does not fit, b is
  * closed instead. */
 void detp_batch_shelf_put(detp_batch_shelf *s, detp_batch *b);
+/* 1 if detp_batch_shelf_put would keep b (with the room it can make). */
+int detp_batch_shelf_fits(const detp_batch_shelf *s, const detp_batch *b);
 /* Closes batch `batch` if the shelf has it (its files are going). */
 void detp_batch_shelf_drop(detp_batch_shelf *s, uint32_t batch);
 /* Closes everything. */

@@ -236,10 +236,12 @@ GI_TEST(test_detp_batch_shelf_takes_puts_and_evicts)
     GI_CHECK(shelf.count == 1);
     shelf.budget = shelf.bytes;
     GI_REQUIRE(detp_batch_open(dir, &spec, 1, P0, P0 + PATHS, 4, &b, &err) == 1);
+    GI_CHECK(!detp_batch_shelf_fits(&shelf, &b));
     detp_batch_shelf_put(&shelf, &b);
     GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 0 && b.base.seg == NULL);
     GI_REQUIRE_OK(detp_batch_write_base(dir, &spec, 1, P0, P0 + PATHS, 6, &segs, &err));
     GI_REQUIRE(detp_batch_open(dir, &spec, 1, P0, P0 + PATHS, 6, &b, &err) == 1);
+    GI_CHECK(detp_batch_shelf_fits(&shelf, &b));
     detp_batch_shelf_put(&shelf, &b); /* batch 0, kept at 4, missed frame 5 */
     GI_CHECK(shelf.count == 1 && shelf.b[0].batch == 1 && shelf.b[0].frame == 6);
     detp_batch_shelf_drop(&shelf, 1);
