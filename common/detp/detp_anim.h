@@ -157,6 +157,11 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
                              gi_detp_segments *old_list, gi_detp_segments *new_list,
                              gi_detp_update_stats *st);
 
+/* The part [t0, t1] of org + t dir (unit dir; t1 may be infinite) may come
+ * within the sphere. The radius is grown well beyond float error at the
+ * scale of the ray and the sphere: a false pass only costs an exact test. */
+int gi_detp_ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mobile_pose m);
+
 /* A superset of the segments the update retraces from: the first test of
  * gi_detp_anim_update_path without its exact ray (the stored hit is the
  * mobile's, triangles [m0, m0 + mn), or the segment comes near the mobile

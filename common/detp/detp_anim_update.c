@@ -62,10 +62,7 @@ float gi_detp_object_disc_reach(const gi_scene *s, uint32_t object, gi_detp_mobi
     return gi_minf((float)(sqrt(reach2) * 1.0001), b.r * 1.0001f + radius);
 }
 
-/* The part [t0, t1] of org + t dir (unit dir; t1 may be infinite) may come
- * within the sphere. The radius is grown well beyond float error at the
- * scale of the ray and the sphere: a false pass only costs one exact ray. */
-static int ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mobile_pose m)
+int gi_detp_ray_may_meet(gi_vec3 org, gi_vec3 dir, float t0, float t1, gi_detp_mobile_pose m)
 {
     gi_vec3 oc = gi_sub(m.c, org);
     float t = gi_dot(oc, dir);
@@ -80,7 +77,7 @@ int gi_detp_anim_may_retrace(const gi_detp_segment *g, uint32_t m0, uint32_t mn,
                              gi_detp_mobile_pose pose)
 {
     return (g->hit_tri != GI_DETP_NO_HIT && g->hit_tri - m0 < mn) ||
-           ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, pose);
+           gi_detp_ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, pose);
 }
 
 /* The mobile at its new pose, strictly before the stored hit: that hit is
@@ -152,7 +149,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
              * new first hit, without a ray through the whole scene. */
             st->mobile_tests++;
             known = mobile_hit_before(tr, in->mobile_scene, g, &first);
-        } else if (ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
+        } else if (gi_detp_ray_may_meet(g->org, g->dir, 0.0f, g->t_hit, in->new_pose)) {
             st->sphere_passes++;
             st->mobile_tests++;
             retrace = known = mobile_hit_before(tr, in->mobile_scene, g, &first);
@@ -179,8 +176,8 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
         /* Rule 1: the surface behind the hit may be the mobile's, at
          * either pose. */
         if (tr->second_hit && isfinite(g->t_hit) &&
-            (ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
-             ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
+            (gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
+             gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
             double t0 = now();
             st->second_tests++;
             float t2 = second_distance(tr, g);

@@ -320,18 +320,12 @@ void detp_batch_materialize(const detp_batch *prev, const gi_detp_segments *chan
 }
 
 /* Some segment of the run comes within the sphere over the part the grid
- * would list (detp_grid_reach). The radius is grown well beyond float
- * error at the scale of the segment and the sphere. */
+ * would list (detp_grid_reach). */
 static int run_near(const detp_path *run, gi_detp_mobile_pose s)
 {
     for (uint32_t k = 0; k < run->count; k++) {
         const gi_detp_segment *g = &run->seg[k];
-        gi_vec3 oc = gi_sub(s.c, g->org);
-        float t = gi_dot(oc, g->dir), t1 = detp_grid_reach(g);
-        t = t < 0.0f ? 0.0f : (t > t1 ? t1 : t);
-        gi_vec3 q = gi_sub(oc, gi_scale(g->dir, t));
-        float r = s.r + 1e-4f * (fabsf(t) + fabsf(oc.x) + fabsf(oc.y) + fabsf(oc.z) + s.r + 1.0f);
-        if (gi_dot(q, q) <= r * r)
+        if (gi_detp_ray_may_meet(g->org, g->dir, 0.0f, detp_grid_reach(g), s))
             return 1;
     }
     return 0;

@@ -2,7 +2,7 @@
  * at a time, for the mobile's own vertices (thesis 1.12.4): a few hundred
  * discs against the few thousand segments near them, where an index's
  * per-candidate cost (traversal, filter callback) is most of the work.
- * The discs go in groups of one vector each, in Morton order of their
+ * The discs go in groups of one vector each, in Hilbert order of their
  * centres (so a group is a patch of the mobile); a segment tests a group
  * only if some disc in it may face it and the segment passes near it.
  * Sixteen lanes (AVX-512) or eight (AVX2) where the CPU has them, else four
@@ -61,27 +61,6 @@ typedef struct lanes_set {
 #define LANES_MOVEMASK(m) _mm512_movepi32_mask((__m512i)(m))
 #include "detp_lanes_kernel.h"
 
-/* 10 bits of x spread to every third bit. */
-static uint32_t spread3(uint32_t x)
-{
-    x &= 0x3ffu;
-    x = (x | (x << 16)) & 0x030000ffu;
-    x = (x | (x << 8)) & 0x0300f00fu;
-    x = (x | (x << 4)) & 0x030c30c3u;
-    x = (x | (x << 2)) & 0x09249249u;
-    return x;
-}
-
-typedef struct keyed {
-    uint32_t key, disc;
-} keyed;
-
-static int by_key(const void *a, const void *b)
-{
-    const keyed *x = a, *y = b;
-    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->disc < y->disc ? -1 : 1);
-}
-
 static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
 {
     size_t groups = (d->count + w - 1) / w, gpad = (groups + w - 1) / w * w, n = gpad * w;
@@ -94,30 +73,20 @@ static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
     L->idx = gi_xcalloc(n + 1, sizeof *L->idx);
     L->groups = gpad;
     L->r2 = d->r2;
-    /* Morton order of the centres in their box. */
-    gi_vec3 lo = gi_v3(INFINITY, INFINITY, INFINITY), hi = gi_scale(lo, -1.0f);
-    for (uint32_t i = 0; i < d->count; i++) {
-        lo = gi_min_v3(lo, d->d[i].c);
-        hi = gi_max_v3(hi, d->d[i].c);
-    }
-    float ext = gi_maxf(hi.x - lo.x, gi_maxf(hi.y - lo.y, hi.z - lo.z));
-    float q = ext > 0.0f ? 1023.0f / ext : 0.0f;
-    keyed *k = gi_xmalloc((d->count + 1) * sizeof *k);
-    for (uint32_t i = 0; i < d->count; i++) {
-        gi_vec3 c = d->d[i].c;
-        k[i].key = spread3((uint32_t)((c.x - lo.x) * q)) |
-                   spread3((uint32_t)((c.y - lo.y) * q)) << 1 |
-                   spread3((uint32_t)((c.z - lo.z) * q)) << 2;
-        k[i].disc = i;
-    }
-    qsort(k, d->count, sizeof *k, by_key);
+    /* The centres in Hilbert order (the Sphere Cache's query order):
+     * consecutive discs, so a group, are a compact patch of the mobile
+     * (a quarter fewer disc tests at the 2.5% sphere than Morton order).
+     * Without memory for the order, mesh order (slower, the same sums). */
+    gi_error ignored;
+    uint32_t *order = gi_detp_query_order(d, GI_DETP_ORDER_HILBERT, 0, &ignored);
     for (size_t i = 0; i < d->count; i++) {
-        const gi_detp_disc *D = &d->d[k[i].disc];
+        uint32_t k = order ? order[i] : (uint32_t)i;
+        const gi_detp_disc *D = &d->d[k];
         L->cx[i] = D->c.x, L->cy[i] = D->c.y, L->cz[i] = D->c.z;
         L->nx[i] = D->n.x, L->ny[i] = D->n.y, L->nz[i] = D->n.z;
-        L->idx[i] = k[i].disc;
+        L->idx[i] = k;
     }
-    free(k);
+    free(order);
     for (size_t g = 0; g < gpad; g++) {
         size_t i0 = g * w, i1 = i0 + w < d->count ? i0 + w : d->count;
         L->sin_t[g] = 2.0f;
