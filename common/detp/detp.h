@@ -290,12 +290,17 @@ void gi_detp_basic(const gi_detp_discs *d, const gi_detp_segments *s, gi_detp_ac
                    gi_detp_stats *st);
 /* The same pairs, the discs 16 (AVX-512), 8 (AVX2) or 4 at a time
  * (detp_lanes.c): faster than an index when a segment crosses most of the
- * discs (a small mobile's). _width: at most `lanes` at a time (4, 8 or 16,
- * as far as the CPU goes; the tests check each). */
-void gi_detp_lanes_estimate(const gi_detp_discs *d, const gi_detp_segments *s,
-                            gi_detp_accum *acc, gi_detp_stats *st);
-void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const gi_detp_segments *s,
-                                  gi_detp_accum *acc, gi_detp_stats *st, unsigned lanes);
+ * discs (a small mobile's). The discs are grouped in `order` (a
+ * permutation of their indices; NULL: their Hilbert order, computed here);
+ * any order gives the same sums, a compact one fewer tests, so a rigid
+ * mobile's order can be computed once and reused at every pose (thesis
+ * 4.6). _width: at most `lanes` at a time (4, 8 or 16, as far as the CPU
+ * goes; the tests check each). */
+void gi_detp_lanes_estimate(const gi_detp_discs *d, const uint32_t *order,
+                            const gi_detp_segments *s, gi_detp_accum *acc, gi_detp_stats *st);
+void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const uint32_t *order,
+                                  const gi_detp_segments *s, gi_detp_accum *acc,
+                                  gi_detp_stats *st, unsigned lanes);
 
 /* Sphere Cache (detp_sphere_cache.c), thesis 1.6. */
 typedef struct gi_detp_sc_params {

@@ -120,6 +120,9 @@ typedef struct gi_detp_anim_update_in {
     RTCScene mobile_scene; /* the mobile alone at the new pose (gi_rt_object_scene) */
     gi_detp_artifact artifact; /* for gi_detp_set_extent of new segments */
     float eps;
+    /* Time tests and retraces apart (the stats' seconds_*): two clock
+     * reads per retrace, a few percent of a small mobile's frame. */
+    int timed;
 } gi_detp_anim_update_in;
 
 typedef struct gi_detp_update_stats {
@@ -133,8 +136,8 @@ typedef struct gi_detp_update_stats {
     uint64_t second_tests;   /* rule 1: t_second recomputed (one ray each) */
     uint64_t second_changed; /* ... and different */
     uint64_t old_segments, new_segments;
-    double seconds_test;    /* pre-tests and mobile rays */
-    double seconds_retrace; /* retraced suffixes and t_second rays */
+    double seconds_test;    /* pre-tests and mobile rays (if timed) */
+    double seconds_retrace; /* retraced suffixes and t_second rays (if timed) */
 } gi_detp_update_stats;
 
 /* Thesis Fig. 4.2. Appends to `next` the frame's segments (path-ordered),
@@ -174,12 +177,23 @@ int gi_detp_anim_may_retrace(const gi_detp_segment *g, uint32_t m0, uint32_t mn,
  * `segs` as `how` says: the Sphere Cache rooted at the object's bounding
  * sphere grown by the radius (sc given; segments missing that sphere are
  * dropped first), Embree Disc Indexing over the discs (device given), or
- * the discs in lanes (gi_detp_lanes_estimate): the same pairs. acc is a
- * fixed-point accumulator indexed by GLOBAL vertex: the object's entries
- * are cleared and then set; the others are untouched. */
+ * the discs in lanes (gi_detp_lanes_estimate): the same pairs. The Sphere
+ * Cache and the lanes visit the discs in `order` (the object's vertices,
+ * 0-based; gi_detp_anim_mobile_order) or, if NULL, in one computed here.
+ * acc is a fixed-point accumulator indexed by GLOBAL vertex: the object's
+ * entries are cleared and then set; the others are untouched. */
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
                                  const gi_detp_segments *segs, gi_detp_mobile_estimator how,
-                                 const gi_detp_sc_params *sc, RTCDevice device,
-                                 gi_detp_accum *acc, gi_detp_stats *st, gi_error *err);
+                                 const gi_detp_sc_params *sc, const uint32_t *order,
+                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_error *err);
+
+/* The order in which gi_detp_anim_mobile_estimate(how, sc) visits the
+ * object's discs, from their current pose (malloc'ed; *out NULL for the
+ * Embree estimator, which has none). The mobile is rigid: an order computed
+ * at one pose serves every pose (thesis 4.6), and any order gives the same
+ * sums. */
+int gi_detp_anim_mobile_order(const gi_scene *s, uint32_t object, gi_detp_mobile_estimator how,
+                              const gi_detp_sc_params *sc, uint32_t **out, gi_error *err);
 
 #endif

@@ -157,7 +157,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
         }
         if (retrace) {
             /* Fig. 4.2: the old suffix out, a new one from this segment. */
-            double t0 = now();
+            double t0 = in->timed ? now() : 0.0;
             if (!keep_unchanged && !changed)
                 append(out, path, k); /* the unchanged prefix */
             append(old_list, &path[k], n - k);
@@ -170,7 +170,8 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
             st->paths_retraced++;
             st->old_segments += n - k;
             st->new_segments += added.count;
-            st->seconds_retrace += now() - t0;
+            if (in->timed)
+                st->seconds_retrace += now() - t0;
             return 1;
         }
         /* Rule 1: the surface behind the hit may be the mobile's, at
@@ -178,7 +179,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
         if (tr->second_hit && isfinite(g->t_hit) &&
             (gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
              gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
-            double t0 = now();
+            double t0 = in->timed ? now() : 0.0;
             st->second_tests++;
             float t2 = second_distance(tr, g);
             if (!same_float(t2, g->t_second)) {
@@ -195,10 +196,12 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
                 *gi_detp_segments_push(new_list) = *kept;
                 st->old_segments++;
                 st->new_segments++;
-                st->seconds_retrace += now() - t0;
+                if (in->timed)
+                    st->seconds_retrace += now() - t0;
                 continue;
             }
-            st->seconds_retrace += now() - t0;
+            if (in->timed)
+                st->seconds_retrace += now() - t0;
         }
         if (keep_unchanged || changed)
             *gi_detp_segments_push(out) = *g;
@@ -212,7 +215,7 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
 {
     const gi_detp_segment *prev = in->prev;
     size_t n = in->prev_count;
-    double t_start = now(), retrace0 = st->seconds_retrace;
+    double t_start = in->timed ? now() : 0.0, retrace0 = st->seconds_retrace;
     reserve(next, n);
     for (size_t i = 0; i < n;) {
         uint64_t photon = prev[i].photon;
@@ -227,14 +230,50 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
         gi_detp_anim_update_path(in, &prev[i], j - i, 1, next, old_list, new_list, st);
         i = j;
     }
-    st->seconds_test += now() - t_start - (st->seconds_retrace - retrace0);
+    if (in->timed)
+        st->seconds_test += now() - t_start - (st->seconds_retrace - retrace0);
     return 0;
+}
+
+/* The object's discs at its current pose: the same as
+ * gi_detp_discs_from_scene's, for its vertex range. */
+static int mobile_discs(const gi_scene *s, const gi_object *o, float radius, gi_detp_discs *d,
+                        gi_error *err)
+{
+    uint32_t n = o->vertex_count;
+    *d = (gi_detp_discs){n, NULL, radius, radius * radius};
+    d->d = gi_try_calloc((size_t)n + 1, sizeof *d->d, err, "mobile discs");
+    if (!d->d)
+        return -1;
+    for (uint32_t i = 0; i < n; i++) {
+        d->d[i].c = s->positions[o->first_vertex + i];
+        d->d[i].n = gi_normalize(s->normals[o->first_vertex + i]);
+    }
+    return 0;
+}
+
+int gi_detp_anim_mobile_order(const gi_scene *s, uint32_t object, gi_detp_mobile_estimator how,
+                              const gi_detp_sc_params *sc, uint32_t **out, gi_error *err)
+{
+    *out = NULL;
+    if (object >= s->object_count || (how == GI_DETP_MOBILE_SPHERE_CACHE && !sc))
+        return gi_fail(err, GI_EINTERNAL, "mobile order: bad object or parameters");
+    if (how == GI_DETP_MOBILE_EMBREE)
+        return 0;
+    gi_detp_discs d;
+    if (mobile_discs(s, &s->objects[object], 0.0f, &d, err))
+        return -1;
+    gi_detp_order kind = how == GI_DETP_MOBILE_SPHERE_CACHE ? sc->order : GI_DETP_ORDER_HILBERT;
+    *out = gi_detp_query_order(&d, kind, 0, err);
+    free(d.d);
+    return *out ? 0 : -1;
 }
 
 int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radius,
                                  const gi_detp_segments *segs, gi_detp_mobile_estimator how,
-                                 const gi_detp_sc_params *sc, RTCDevice device,
-                                 gi_detp_accum *acc, gi_detp_stats *st, gi_error *err)
+                                 const gi_detp_sc_params *sc, const uint32_t *order,
+                                 RTCDevice device, gi_detp_accum *acc, gi_detp_stats *st,
+                                 gi_error *err)
 {
     if (object >= s->object_count || !acc->fixed ||
         (how == GI_DETP_MOBILE_SPHERE_CACHE && !sc) || (how == GI_DETP_MOBILE_EMBREE && !device))
@@ -247,15 +286,9 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
     memset(acc->hits + o->first_vertex, 0, (size_t)n * sizeof *acc->hits);
     if (n == 0)
         return 0;
-    /* The same discs as gi_detp_discs_from_scene's, for this range. */
-    gi_detp_discs d = {n, NULL, radius, radius * radius};
-    d.d = gi_try_calloc(n, sizeof *d.d, err, "mobile discs");
-    if (!d.d)
+    gi_detp_discs d;
+    if (mobile_discs(s, o, radius, &d, err))
         return -1;
-    for (uint32_t i = 0; i < n; i++) {
-        d.d[i].c = s->positions[o->first_vertex + i];
-        d.d[i].n = gi_normalize(s->normals[o->first_vertex + i]);
-    }
     /* The object's slice of the global accumulator. */
     gi_detp_accum view = *acc;
     view.count = n;
@@ -276,13 +309,13 @@ int gi_detp_anim_mobile_estimate(const gi_scene *s, uint32_t object, float radiu
         for (size_t j = 0; j < segs->count; j++)
             if (gi_detp_segment_meets_sphere(&segs->v[j], b.c, rr))
                 *gi_detp_segments_push(&near) = segs->v[j];
-        uint32_t *order = gi_detp_query_order(&d, sc->order, 0, err);
-        rc = order ? gi_detp_sphere_cache_root(&d, order, &near, sc, b.c, r0, &view, st, err)
-                   : -1;
-        free(order);
+        uint32_t *own = order ? NULL : gi_detp_query_order(&d, sc->order, 0, err);
+        const uint32_t *q = order ? order : own;
+        rc = q ? gi_detp_sphere_cache_root(&d, q, &near, sc, b.c, r0, &view, st, err) : -1;
+        free(own);
         gi_detp_segments_free(&near);
     } else if (how == GI_DETP_MOBILE_LANES) {
-        gi_detp_lanes_estimate(&d, segs, &view, st);
+        gi_detp_lanes_estimate(&d, order, segs, &view, st);
     } else {
         gi_detp_embree_index *x = NULL;
         rc = gi_detp_embree_build(device, &d, &x, err);

@@ -49,6 +49,7 @@ typedef struct old_crossings {
 typedef struct detp_anim_worker {
     uint32_t object;
     gi_vec3 *base_pos, *base_nrm; /* the mobile's vertices as loaded */
+    uint32_t *mobile_order; /* its discs' order for its estimate, from pose 0 */
     int scene_posed, rt_posed;
     uint32_t scene_frame, rt_frame;
     /* The static discs alone (the mobile's vertex range left out: its
@@ -85,6 +86,7 @@ void detp_anim_worker_free(detp_anim_worker *a)
         return;
     free(a->base_pos);
     free(a->base_nrm);
+    free(a->mobile_order);
     gi_detp_embree_free(a->static_index);
     gi_detp_discs_free(&a->static_discs);
     gi_detp_accum_free(&a->static_acc);
@@ -163,7 +165,9 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
     /* The discs (and any index over them) at pose 0, where frame 0's
      * estimate needs the mobile's; later frames recompute the mobile's
      * vertices on their own and use only the static discs' entries. */
-    if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err))
+    if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err) ||
+        gi_detp_anim_mobile_order(s, a->object, p->anim.mobile_estimator, &p->sc,
+                                  &a->mobile_order, err))
         return -1;
     gi_detp_discs *sd = &a->static_discs;
     sd->count = w->discs.count - o->vertex_count;
@@ -466,8 +470,8 @@ static int mobile_vertices(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker 
 {
     const gi_detp_params *p = ctx->job.params;
     return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, segs,
-                                        p->anim.mobile_estimator, &p->sc, ctx->rt.device,
-                                        &w->acc, st, err);
+                                        p->anim.mobile_estimator, &p->sc, a->mobile_order,
+                                        ctx->rt.device, &w->acc, st, err);
 }
 
 /* The result: the accumulator as signed per-vertex sums. */

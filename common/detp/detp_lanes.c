@@ -61,7 +61,7 @@ typedef struct lanes_set {
 #define LANES_MOVEMASK(m) _mm512_movepi32_mask((__m512i)(m))
 #include "detp_lanes_kernel.h"
 
-static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
+static void lanes_build(const gi_detp_discs *d, const uint32_t *given, size_t w, lanes_set *L)
 {
     size_t groups = (d->count + w - 1) / w, gpad = (groups + w - 1) / w * w, n = gpad * w;
     float *f = gi_xcalloc(6 * n + 8 * gpad + 1, sizeof *f);
@@ -73,12 +73,14 @@ static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
     L->idx = gi_xcalloc(n + 1, sizeof *L->idx);
     L->groups = gpad;
     L->r2 = d->r2;
-    /* The centres in Hilbert order (the Sphere Cache's query order):
-     * consecutive discs, so a group, are a compact patch of the mobile
-     * (a quarter fewer disc tests at the 2.5% sphere than Morton order).
-     * Without memory for the order, mesh order (slower, the same sums). */
+    /* The centres in Hilbert order (the Sphere Cache's query order), unless
+     * given: consecutive discs, so a group, are a compact patch of the
+     * mobile (a quarter fewer disc tests at the 2.5% sphere than Morton
+     * order). Without memory for the order, mesh order (slower, the same
+     * sums). */
     gi_error ignored;
-    uint32_t *order = gi_detp_query_order(d, GI_DETP_ORDER_HILBERT, 0, &ignored);
+    uint32_t *own = given ? NULL : gi_detp_query_order(d, GI_DETP_ORDER_HILBERT, 0, &ignored);
+    const uint32_t *order = given ? given : own;
     for (size_t i = 0; i < d->count; i++) {
         uint32_t k = order ? order[i] : (uint32_t)i;
         const gi_detp_disc *D = &d->d[k];
@@ -86,7 +88,7 @@ static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
         L->nx[i] = D->n.x, L->ny[i] = D->n.y, L->nz[i] = D->n.z;
         L->idx[i] = k;
     }
-    free(order);
+    free(own);
     for (size_t g = 0; g < gpad; g++) {
         size_t i0 = g * w, i1 = i0 + w < d->count ? i0 + w : d->count;
         L->sin_t[g] = 2.0f;
@@ -136,8 +138,9 @@ static void lanes_build(const gi_detp_discs *d, size_t w, lanes_set *L)
     }
 }
 
-void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const gi_detp_segments *s,
-                                  gi_detp_accum *acc, gi_detp_stats *st, unsigned lanes)
+void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const uint32_t *order,
+                                  const gi_detp_segments *s, gi_detp_accum *acc,
+                                  gi_detp_stats *st, unsigned lanes)
 {
     int wider = lanes >= 16 && __builtin_cpu_supports("avx512f") &&
                 __builtin_cpu_supports("avx512dq");
@@ -145,7 +148,7 @@ void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const gi_detp_segments
     if (d->count == 0)
         return;
     lanes_set L;
-    lanes_build(d, wider ? 16 : wide ? 8 : 4, &L);
+    lanes_build(d, order, wider ? 16 : wide ? 8 : 4, &L);
     if (wider)
         lanes_avx512(&L, s, acc, st);
     else if (wide)
@@ -156,16 +159,18 @@ void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const gi_detp_segments
     free(L.idx);
 }
 #else
-void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const gi_detp_segments *s,
-                                  gi_detp_accum *acc, gi_detp_stats *st, unsigned lanes)
+void gi_detp_lanes_estimate_width(const gi_detp_discs *d, const uint32_t *order,
+                                  const gi_detp_segments *s, gi_detp_accum *acc,
+                                  gi_detp_stats *st, unsigned lanes)
 {
+    (void)order;
     (void)lanes;
     gi_detp_basic(d, s, acc, st);
 }
 #endif
 
-void gi_detp_lanes_estimate(const gi_detp_discs *d, const gi_detp_segments *s,
-                            gi_detp_accum *acc, gi_detp_stats *st)
+void gi_detp_lanes_estimate(const gi_detp_discs *d, const uint32_t *order,
+                            const gi_detp_segments *s, gi_detp_accum *acc, gi_detp_stats *st)
 {
-    gi_detp_lanes_estimate_width(d, s, acc, st, 16);
+    gi_detp_lanes_estimate_width(d, order, s, acc, st, 16);
 }

@@ -182,7 +182,7 @@ static int update(anim *a, uint32_t f, gi_detp_mobile_pose old_pose,
                                  o->triangle_count, old_pose,
                                  gi_detp_object_sphere(&a->s, a->mob),
                                  gi_rt_object_scene(&a->rt, a->mob, err),
-                                 GI_DETP_AC_SECOND_HIT, a->eps};
+                                 GI_DETP_AC_SECOND_HIT, a->eps, 0};
     if (!in.mobile_scene)
         return -1;
     return gi_detp_anim_update(&in, next, old_list, new_list, st, err);
@@ -273,6 +273,16 @@ static void check_animation(anim *a, const char *what)
     memset(rec, 0, sizeof rec);
     gi_detp_segments prev_new; /* the frame before's new segments (rec lists them) */
     gi_detp_segments_init(&prev_new);
+    /* The mobile's orders at pose 0, reused at every later pose (as a
+     * worker does), and one reversed: any order gives the same sums. */
+    gi_detp_sc_params scp = {2.0 / 3.0, 20, 16, GI_DETP_ORDER_HILBERT, 1, 0};
+    uint32_t *lanes0, *sc0, *reversed = gi_xmalloc((mo->vertex_count + 1) * sizeof *reversed);
+    GI_REQUIRE_OK(gi_detp_anim_mobile_order(&a->s, a->mob, GI_DETP_MOBILE_LANES, NULL, &lanes0,
+                                            &err));
+    GI_REQUIRE_OK(gi_detp_anim_mobile_order(&a->s, a->mob, GI_DETP_MOBILE_SPHERE_CACHE, &scp,
+                                            &sc0, &err));
+    for (uint32_t i = 0; i < mo->vertex_count; i++)
+        reversed[i] = lanes0[mo->vertex_count - 1 - i];
     for (uint32_t f = 1; f <= FRAMES; f++) {
         /* Through the store, as a worker does between frames. */
         gi_detp_store_header h = {.p0 = 0, .p1 = PHOTONS, .frame = f - 1};
@@ -423,23 +433,25 @@ static void check_animation(anim *a, const char *what)
         refv.fixed += 3 * (size_t)mo->first_vertex;
         refv.hits += mo->first_vertex;
         gi_detp_basic(&only, &next, &refv, &est);
-        for (int w = 0; w < 3; w++) { /* the discs in 4, 8, 16 lanes (detp_lanes.c) */
+        /* The discs in 4, 8, 16 lanes (detp_lanes.c), in this pose's
+         * order, pose 0's reversed and pose 0's. */
+        const uint32_t *lane_order[3] = {NULL, reversed, lanes0};
+        for (int w = 0; w < 3; w++) {
             GI_REQUIRE_OK(gi_detp_accum_init_fixed(&ln[w], md.count, unit, &err));
             gi_detp_accum lnv = ln[w];
             lnv.fixed += 3 * (size_t)mo->first_vertex;
             lnv.hits += mo->first_vertex;
-            gi_detp_lanes_estimate_width(&only, &next, &lnv, &est, 4u << w);
+            gi_detp_lanes_estimate_width(&only, lane_order[w], &next, &lnv, &est, 4u << w);
         }
-        gi_detp_sc_params scp = {2.0 / 3.0, 20, 16, GI_DETP_ORDER_HILBERT, 1, 0};
         size_t other = 3 * (size_t)(md.count - 1); /* not the ball's: must stay */
         GI_REQUIRE(!is_mobile_vertex(a, md.count - 1));
         sc.fixed[other] = 12345;
         GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next,
-                                                   GI_DETP_MOBILE_SPHERE_CACHE, &scp, NULL, &sc,
-                                                   &est, &err));
+                                                   GI_DETP_MOBILE_SPHERE_CACHE, &scp, sc0, NULL,
+                                                   &sc, &est, &err));
         GI_REQUIRE_OK(gi_detp_anim_mobile_estimate(&a->s, a->mob, a->radius, &next,
-                                                   GI_DETP_MOBILE_EMBREE, NULL, a->rt.device,
-                                                   &em, &est, &err));
+                                                   GI_DETP_MOBILE_EMBREE, NULL, NULL,
+                                                   a->rt.device, &em, &est, &err));
         uint64_t lit = 0;
         for (uint32_t v = mo->first_vertex; v < mo->first_vertex + mo->vertex_count; v++) {
             mobile_bad += memcmp(&ref.fixed[3 * (size_t)v], &sc.fixed[3 * (size_t)v], 24) != 0 ||
@@ -476,6 +488,9 @@ static void check_animation(anim *a, const char *what)
     gi_detp_crossings_free(&rec[0]);
     gi_detp_crossings_free(&rec[1]);
     gi_detp_segments_free(&prev_new);
+    free(lanes0);
+    free(sc0);
+    free(reversed);
 
     /* Regenerated from frame 0, in two half batches: the same frame. */
     gi_detp_segments halves;

@@ -164,7 +164,7 @@ GI_TEST(test_detp_estimators_agree_with_basic_detp)
         for (unsigned w = 4; w <= 16; w *= 2) {
             gi_detp_accum_clear(&acc);
             memset(&st, 0, sizeof st);
-            gi_detp_lanes_estimate_width(&d, &s, &acc, &st, w);
+            gi_detp_lanes_estimate_width(&d, NULL, &s, &acc, &st, w);
             GI_CHECK_MSG(same_accum(&acc, &ref), "lanes of %u (mode %d) differ", w, mi);
             GI_CHECK(st.crossings == want);
         }
@@ -341,7 +341,7 @@ GI_TEST(test_detp_lanes_round_like_basic_detp_at_the_edge)
     GI_CHECK(st.crossings > ns / 4);
     for (unsigned w = 4; w <= 16; w *= 2) {
         gi_detp_accum_clear(&acc);
-        gi_detp_lanes_estimate_width(&d, &s, &acc, &st, w);
+        gi_detp_lanes_estimate_width(&d, NULL, &s, &acc, &st, w);
         GI_CHECK_MSG(same_accum(&acc, &ref), "lanes of %u differ from basic DETP", w);
     }
     gi_detp_accum_free(&ref);
