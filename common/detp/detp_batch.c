@@ -351,6 +351,12 @@ size_t detp_batch_marked(const detp_batch *b, const uint8_t *mark, detp_path **r
 {
     size_t n = 0, o = 0, np = (size_t)(b->p1 - b->p0);
     for (size_t i = 0; i < np; i++) {
+        /* A few paths in a hundred are marked: eight unmarked at once. */
+        uint64_t eight;
+        if ((i & 7) == 0 && i + 8 <= np && (memcpy(&eight, mark + i, 8), eight == 0)) {
+            i += 7;
+            continue;
+        }
         if (!mark[i])
             continue;
         if (n == *cap) {
