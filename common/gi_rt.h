@@ -49,7 +49,9 @@ typedef struct gi_hit {
 int gi_rt_create(gi_rt *rt, const gi_scene *scene, gi_error *err);
 void gi_rt_free(gi_rt *rt);
 /* Re-reads the object's vertices from the gi_scene (it moved) and rebuilds
- * (and its gi_rt_object_scene, if made). */
+ * (and its gi_rt_object_scene, if made). A mobile object's BVH is refit
+ * instead: its topology is the one built at load, so its hits at a pose do
+ * not depend on the poses before. */
 int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err);
 /* A scene holding the object alone, at its current pose (the animation
  * tests segments against the mobile only): made on first use, kept in step

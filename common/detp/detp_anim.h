@@ -121,7 +121,7 @@ typedef struct gi_detp_anim_update_in {
     gi_detp_artifact artifact; /* for gi_detp_set_extent of new segments */
     float eps;
     /* Time tests and retraces apart (the stats' seconds_*): two clock
-     * reads per retrace, a few percent of a small mobile's frame. */
+     * reads per retrace, about 1% of a small mobile's frame. */
     int timed;
 } gi_detp_anim_update_in;
 

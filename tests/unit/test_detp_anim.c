@@ -523,6 +523,51 @@ GI_TEST(test_detp_anim_incremental_update_is_exact)
     anim_free(&a);
 }
 
+/* A moved object's BVH is refit, not rebuilt (gi_rt.c): its hits at a pose
+ * must not depend on the poses before, or workers that saw different frames
+ * would trace different paths. Two ray tracers of one scene, one posed at
+ * frames 1, 2, 3, 7 and 3 again, the other at 3 only: the same hits, bit for
+ * bit, for rays aimed at the ball and at random. */
+GI_TEST(test_detp_anim_moved_object_hits_do_not_depend_on_earlier_poses)
+{
+    gi_error err;
+    anim a, b;
+    GI_REQUIRE_OK(anim_load(&a, &err));
+    GI_REQUIRE_OK(anim_load(&b, &err));
+    const uint32_t path[] = {1, 2, 3, 7, 3};
+    for (size_t i = 0; i < sizeof path / sizeof *path; i++)
+        GI_REQUIRE_OK(anim_pose(&a, path[i], &err));
+    GI_REQUIRE_OK(anim_pose(&b, 3, &err));
+    gi_detp_mobile_pose ball = gi_detp_object_sphere(&b.s, b.mob);
+    const gi_object *o = &b.s.objects[b.mob];
+    gi_rng r;
+    gi_rng_init(&r, 5, 77, 0);
+    size_t differ = 0, on_ball = 0;
+    for (int k = 0; k < 20000; k++) {
+        gi_vec3 org = gi_v3(555.0f * gi_rng_float(&r), 548.0f * gi_rng_float(&r),
+                            559.0f * gi_rng_float(&r));
+        gi_vec3 aim = gi_v3(gi_rng_float(&r) - 0.5f, gi_rng_float(&r) - 0.5f,
+                            gi_rng_float(&r) - 0.5f);
+        aim = k % 2 ? gi_add(ball.c, gi_scale(aim, 2.0f * ball.r))
+                    : gi_add(org, aim); /* towards the ball, or anywhere */
+        gi_vec3 dir = gi_normalize(gi_sub(aim, org));
+        gi_hit ha, hb;
+        memset(&ha, 0, sizeof ha);
+        memset(&hb, 0, sizeof hb);
+        int got_a = gi_rt_intersect(&a.rt, org, dir, 0.0f, FLT_MAX, &ha);
+        int got_b = gi_rt_intersect(&b.rt, org, dir, 0.0f, FLT_MAX, &hb);
+        differ += got_a != got_b || (got_b && (memcmp(&ha.t, &hb.t, sizeof ha.t) != 0 ||
+                                               ha.tri != hb.tri ||
+                                               memcmp(&ha.u, &hb.u, sizeof ha.u) != 0 ||
+                                               memcmp(&ha.v, &hb.v, sizeof ha.v) != 0));
+        on_ball += got_b && hb.tri - o->first_triangle < o->triangle_count;
+    }
+    GI_CHECK_MSG(differ == 0, "%zu of 20000 rays differ", differ);
+    GI_CHECK_MSG(on_ball > 5000, "only %zu rays hit the ball", on_ball);
+    anim_free(&a);
+    anim_free(&b);
+}
+
 /* Every segment that crosses one of the mobile's discs comes within
  * gi_detp_object_disc_reach of its centre: lines shot at the ball with
  * discs nearly its size (where the reach is well under R + radius, and
