@@ -167,6 +167,34 @@ int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err)
     return rt_check(rt, err, "updating a moved object");
 }
 
+/* Point query callback: a primitive's bounds reach the query sphere. */
+static bool found_one(struct RTCPointQueryFunctionArguments *args)
+{
+    *(int *)args->userPtr = 1;
+    args->query->radius = 0.0f; /* the answer is known: shrink the rest away */
+    return true;
+}
+
+int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r)
+{
+    if (!rt->statics)
+        return 1;
+    int found = 0;
+    for (uint32_t i = 0; i <= rt->src->object_count && !found; i++) {
+        /* The static objects' scene, then every other mobile's own. */
+        RTCScene sc = i == rt->src->object_count ? rt->statics
+                      : i != object && rt->src->objects[i].mobile ? rt->alone[i]
+                                                                  : NULL;
+        if (!sc)
+            continue;
+        struct RTCPointQuery q = {.x = c.x, .y = c.y, .z = c.z, .time = 0.0f, .radius = r};
+        struct RTCPointQueryContext qc;
+        rtcInitPointQueryContext(&qc);
+        rtcPointQuery(sc, &q, &qc, found_one, &found);
+    }
+    return found;
+}
+
 RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err)
 {
     if (object >= rt->src->object_count) {

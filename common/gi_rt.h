@@ -58,6 +58,11 @@ int gi_rt_update_object(gi_rt *rt, uint32_t object, gi_error *err);
  * by gi_rt_update_object, owned by rt. NULL on failure (err says why). */
 RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err);
 
+/* 0 if no triangle of any object but `object` comes within r of c (their
+ * BVH bounds, rounded outward, all lie farther); 1 if one may. Always 1 for
+ * a scene without mobile objects (one BVH holds them all). */
+int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r);
+
 /* gi_rt_intersect against `scene` (rt's, or one of its gi_rt_object_scene),
  * not counted in rt->rays. */
 static inline int gi_rt_intersect_in(const gi_rt *rt, RTCScene scene, gi_vec3 org, gi_vec3 dir,

@@ -220,6 +220,14 @@ typedef struct gi_detp_tracer {
     int second_hit;         /* trace t_second (artifact control rule 1) */
     double select_shift;    /* Cranley-Patterson shift of the emitter selection */
     uint32_t frame;         /* animation frame (0: still jobs; set after init) */
+    /* Optional (NULL after init): a mobile object, triangles [mobile_first,
+     * + mobile_count), alone in this scene, when nothing else comes within
+     * its bounding sphere (gi_rt_others_near). A ray from just behind a hit
+     * on it stays in that sphere until it meets it again, so its first hit
+     * there is the whole scene's, bit for bit (gi_rt.h): rule 1's second
+     * ray is then traced against the mobile alone. */
+    RTCScene mobile_alone;
+    uint32_t mobile_first, mobile_count;
 } gi_detp_tracer;
 
 /* Random numbers of photon p at bounce b come from gi_rng (seed,

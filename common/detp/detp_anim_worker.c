@@ -37,6 +37,7 @@ typedef struct mobile_frame {
     int valid;
     gi_detp_mobile_pose sphere;
     near_test near;
+    int clear; /* nothing but the mobile comes within its sphere (grown) */
 } mobile_frame;
 
 /* An old segment's static crossings: listed with the batch (ids), or
@@ -351,12 +352,31 @@ int detp_anim_pose_frame(gi_worker_ctx *ctx, detp_worker *w, uint32_t frame, gi_
     return pose(ctx, a, frame, err);
 }
 
-static void tracer_at(gi_worker_ctx *ctx, uint32_t frame, gi_detp_tracer *tr)
+static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
+                     mobile_frame *out, gi_error *err);
+
+/* The tracer at `frame` (the ray tracer must be posed there to trace),
+ * with the mobile alone for rule 1's rays behind it when nothing else
+ * comes near it. */
+static int tracer_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
+                     gi_detp_tracer *tr, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
     gi_detp_tracer_init(tr, &ctx->rt, &ctx->job.scene, ctx->job.seed, p->photon_count,
                         p->max_bounces, p->artifact == GI_DETP_AC_SECOND_HIT);
     tr->frame = frame;
+    mobile_frame m;
+    if (mobile_at(ctx, a, frame, &m, err))
+        return -1;
+    if (m.clear) {
+        const gi_object *o = &ctx->job.scene.objects[a->object];
+        tr->mobile_alone = gi_rt_object_scene(&ctx->rt, a->object, err);
+        tr->mobile_first = o->first_triangle;
+        tr->mobile_count = o->triangle_count;
+        if (!tr->mobile_alone)
+            return -1;
+    }
+    return 0;
 }
 
 /* The batch's paths at frame 0 (the mobile at pose 0). */
@@ -367,7 +387,8 @@ static int trace_frame0(gi_worker_ctx *ctx, detp_anim_worker *a, uint64_t p0, ui
     if (pose(ctx, a, 0, err))
         return -1;
     gi_detp_tracer tr;
-    tracer_at(ctx, 0, &tr);
+    if (tracer_at(ctx, a, 0, &tr, err))
+        return -1;
     out->count = 0;
     for (uint64_t ph = p0; ph < p1; ph++)
         gi_detp_trace_photon(&tr, ph, out);
@@ -387,10 +408,14 @@ static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
         return -1;
     const gi_scene *s = &ctx->job.scene;
     const gi_detp_params *p = ctx->job.params;
-    mobile_frame m = {frame, 1, gi_detp_object_sphere(s, a->object), {{0, 0, 0}, 0.0f}};
+    mobile_frame m = {frame, 1, gi_detp_object_sphere(s, a->object), {{0, 0, 0}, 0.0f}, 0};
     float r0 = gi_detp_object_disc_reach(s, a->object, m.sphere, p->disc_radius);
     float rr = r0 + gi_detp_sphere_slack(r0);
     m.near = (near_test){m.sphere.c, rr * rr};
+    /* Grown by far more than rounding and the offset of a ray's origin
+     * off the surface (gi_rt_offset). */
+    float grown = m.sphere.r * 1.01f + 1e-3f * (float)p->scene_size;
+    m.clear = !gi_rt_others_near(&ctx->rt, a->object, m.sphere.c, grown);
     /* Replace the older of the two. */
     int i = a->at[0].valid && (!a->at[1].valid || a->at[1].frame < a->at[0].frame);
     a->at[i] = m;
@@ -430,9 +455,8 @@ static int regenerate(gi_worker_ctx *ctx, detp_anim_worker *a, const char *dir, 
         return -1;
     for (uint32_t g = 1; g <= f; g++) {
         gi_detp_tracer tr;
-        tracer_at(ctx, g, &tr);
         gi_detp_anim_update_in in;
-        if (update_in(ctx, a, g, &tr, &in, err))
+        if (tracer_at(ctx, a, g, &tr, err) || update_in(ctx, a, g, &tr, &in, err))
             return -1;
         in.prev = cur->v;
         in.prev_count = cur->count;
@@ -596,9 +620,8 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     }
     double t1 = detp_now();
     gi_detp_tracer tr;
-    tracer_at(ctx, f, &tr);
     gi_detp_anim_update_in in;
-    if (update_in(ctx, a, f, &tr, &in, err)) {
+    if (tracer_at(ctx, a, f, &tr, err) || update_in(ctx, a, f, &tr, &in, err)) {
         detp_batch_close(&prev);
         return -1;
     }

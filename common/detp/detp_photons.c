@@ -56,6 +56,8 @@ void gi_detp_tracer_init(gi_detp_tracer *tr, gi_rt *rt, const gi_scene *scene, u
     gi_rng_init(&r, seed, GI_DETP_STREAM_PHOTON - 1, 0);
     tr->select_shift = gi_rng_double(&r);
     tr->frame = 0;
+    tr->mobile_alone = NULL;
+    tr->mobile_first = tr->mobile_count = 0;
 }
 
 void gi_detp_trace_photon(const gi_detp_tracer *tr, uint64_t photon, gi_detp_segments *out)
@@ -120,7 +122,9 @@ void gi_detp_trace_from_hit(const gi_detp_tracer *tr, uint64_t photon, uint32_t 
             /* Through the surface: start just behind it, same line. */
             gi_vec3 o2 = gi_rt_offset(p, ng_f, dir);
             gi_hit h2;
-            if (gi_rt_intersect(tr->rt, o2, dir, 0.0f, FLT_MAX, &h2))
+            if ((tr->mobile_alone && h.tri - tr->mobile_first < tr->mobile_count &&
+                 gi_rt_intersect_in(tr->rt, tr->mobile_alone, o2, dir, 0.0f, FLT_MAX, &h2)) ||
+                gi_rt_intersect(tr->rt, o2, dir, 0.0f, FLT_MAX, &h2))
                 g->t_second = gi_dot(gi_sub(o2, org), dir) + h2.t;
         }
         if ((tr->max_bounces >= 0 && (int64_t)bounce >= tr->max_bounces) ||

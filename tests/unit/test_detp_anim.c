@@ -4,6 +4,7 @@
  * batch split, untouched paths, a fresh-ray check of every kept segment;
  * the mobile's own vertices; the batch store. */
 #include <float.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -566,6 +567,59 @@ GI_TEST(test_detp_anim_moved_object_hits_do_not_depend_on_earlier_poses)
     GI_CHECK_MSG(on_ball > 5000, "only %zu rays hit the ball", on_ball);
     anim_free(&a);
     anim_free(&b);
+}
+
+/* Rule 1's ray behind a hit on the mobile, traced against the mobile alone
+ * when nothing else comes within its sphere (gi_detp_tracer.mobile_alone):
+ * the same segments, bit for bit, as through the whole scene. The ball
+ * hanging over the tall block is clear of it by 30 mm; grown by 40 it is
+ * not, nor is the ball through the plate. */
+GI_TEST(test_detp_anim_rays_behind_the_mobile_alone_are_the_scenes)
+{
+    gi_error err;
+    anim a;
+    GI_REQUIRE_OK(anim_load(&a, &err));
+    const gi_object *o = &a.s.objects[a.mob];
+    gi_detp_mobile_pose ball = gi_detp_object_sphere(&a.s, a.mob);
+    GI_CHECK(!gi_rt_others_near(&a.rt, a.mob, ball.c, ball.r * 1.01f + 1.0f));
+    GI_CHECK(gi_rt_others_near(&a.rt, a.mob, ball.c, ball.r + 40.0f));
+    gi_detp_segments whole, alone;
+    gi_detp_segments_init(&whole);
+    gi_detp_segments_init(&alone);
+    gi_detp_tracer tw, ta;
+    anim_tracer(&a, &tw, 0);
+    anim_tracer(&a, &ta, 0);
+    ta.mobile_alone = gi_rt_object_scene(&a.rt, a.mob, &err);
+    GI_REQUIRE(ta.mobile_alone != NULL);
+    ta.mobile_first = o->first_triangle;
+    ta.mobile_count = o->triangle_count;
+    uint64_t rays0 = a.rt.rays;
+    for (uint64_t p = 0; p < PHOTONS; p++)
+        gi_detp_trace_photon(&tw, p, &whole);
+    uint64_t rays_whole = a.rt.rays - rays0;
+    for (uint64_t p = 0; p < PHOTONS; p++)
+        gi_detp_trace_photon(&ta, p, &alone);
+    uint64_t rays_alone = a.rt.rays - rays0 - rays_whole;
+    size_t behind = 0;
+    for (size_t i = 0; i < whole.count; i++)
+        behind += whole.v[i].hit_tri - o->first_triangle < o->triangle_count &&
+                  isfinite(whole.v[i].t_second);
+    GI_CHECK_MSG(seg_diff(&whole, &alone) == 0, "%zu segments differ",
+                 seg_diff(&whole, &alone));
+    GI_CHECK_MSG(behind > 50 && rays_whole - rays_alone == behind,
+                 "%zu rays behind the ball, %llu fewer through the scene", behind,
+                 (unsigned long long)(rays_whole - rays_alone));
+    gi_detp_segments_free(&whole);
+    gi_detp_segments_free(&alone);
+    anim_free(&a);
+
+    GI_REQUIRE_OK(anim_load_plate(&a, &err));
+    ball = gi_detp_object_sphere(&a.s, a.mob);
+    GI_CHECK(!gi_rt_others_near(&a.rt, a.mob, ball.c, ball.r)); /* 0.1 short of it */
+    GI_REQUIRE_OK(anim_pose(&a, 2, &err));                       /* through it */
+    ball = gi_detp_object_sphere(&a.s, a.mob);
+    GI_CHECK(gi_rt_others_near(&a.rt, a.mob, ball.c, ball.r));
+    anim_free(&a);
 }
 
 /* Every segment that crosses one of the mobile's discs comes within
