@@ -175,24 +175,26 @@ static bool found_one(struct RTCPointQueryFunctionArguments *args)
     return true;
 }
 
+/* Some primitive of `scene` has bounds within r of c. */
+static int reaches(RTCScene scene, gi_vec3 c, float r)
+{
+    struct RTCPointQuery q = {.x = c.x, .y = c.y, .z = c.z, .time = 0.0f, .radius = r};
+    struct RTCPointQueryContext qc;
+    rtcInitPointQueryContext(&qc);
+    int found = 0;
+    rtcPointQuery(scene, &q, &qc, found_one, &found);
+    return found;
+}
+
 int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r)
 {
-    if (!rt->statics)
+    if (!rt->statics || reaches(rt->statics, c, r))
         return 1;
-    int found = 0;
-    for (uint32_t i = 0; i <= rt->src->object_count && !found; i++) {
-        /* The static objects' scene, then every other mobile's own. */
-        RTCScene sc = i == rt->src->object_count ? rt->statics
-                      : i != object && rt->src->objects[i].mobile ? rt->alone[i]
-                                                                  : NULL;
-        if (!sc)
-            continue;
-        struct RTCPointQuery q = {.x = c.x, .y = c.y, .z = c.z, .time = 0.0f, .radius = r};
-        struct RTCPointQueryContext qc;
-        rtcInitPointQueryContext(&qc);
-        rtcPointQuery(sc, &q, &qc, found_one, &found);
-    }
-    return found;
+    /* Every other mobile object has a scene of its own. */
+    for (uint32_t i = 0; i < rt->src->object_count; i++)
+        if (i != object && rt->src->objects[i].mobile && reaches(rt->alone[i], c, r))
+            return 1;
+    return 0;
 }
 
 RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err)
