@@ -197,6 +197,18 @@ int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r)
     return 0;
 }
 
+int gi_rt_intersect_except(gi_rt *rt, uint32_t object, gi_vec3 org, gi_vec3 dir, float tnear,
+                           float tfar, gi_hit *hit)
+{
+    rt->rays++;
+    int any = gi_rt_intersect_in(rt, rt->statics, org, dir, tnear, tfar, hit);
+    for (uint32_t i = 0; i < rt->src->object_count; i++)
+        if (i != object && rt->src->objects[i].mobile &&
+            gi_rt_intersect_in(rt, rt->alone[i], org, dir, tnear, any ? hit->t : tfar, hit))
+            any = 1;
+    return any;
+}
+
 RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err)
 {
     if (object >= rt->src->object_count) {

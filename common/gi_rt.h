@@ -63,6 +63,20 @@ RTCScene gi_rt_object_scene(gi_rt *rt, uint32_t object, gi_error *err);
  * a scene without mobile objects (one BVH holds them all). */
 int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r);
 
+/* The closest hit along org + t dir among every object but `object`: the
+ * static scene, then every other mobile object's own scene (the closer
+ * wins; on equal t the later). Its hits are the ones those objects give in
+ * the whole scene, bit for bit. For a two-level rt and a mobile `object`
+ * only (gi_rt_splits). Counted as one ray. */
+int gi_rt_intersect_except(gi_rt *rt, uint32_t object, gi_vec3 org, gi_vec3 dir, float tnear,
+                           float tfar, gi_hit *hit);
+/* rt is two-level and `object` is one of its mobile objects. */
+static inline int gi_rt_splits(const gi_rt *rt, uint32_t object)
+{
+    return rt->statics && object < rt->src->object_count && rt->src->objects[object].mobile &&
+           rt->alone && rt->alone[object];
+}
+
 /* gi_rt_intersect against `scene` (rt's, or one of its gi_rt_object_scene),
  * not counted in rt->rays. */
 static inline int gi_rt_intersect_in(const gi_rt *rt, RTCScene scene, gi_vec3 org, gi_vec3 dir,

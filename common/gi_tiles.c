@@ -36,8 +36,57 @@ int gi_tile_read(gi_reader *r, int width, int height, gi_tile *t, gi_error *err)
     return 0;
 }
 
-int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
-                   gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
+/* The moving object of gi_tile_render_split, and the hits of the rest. */
+typedef struct split_ctx {
+    uint32_t object;
+    gi_vec3 c;
+    float r2; /* its bounding sphere, radius squared */
+    gi_tile_hit *rest;
+    int rest_known;
+} split_ctx;
+
+/* The ray (unit dir) passes within sqrt(r2) of c somewhere in [0, tfar]. */
+static int ray_meets_sphere(gi_vec3 org, gi_vec3 dir, gi_vec3 c, float r2, float tfar)
+{
+    gi_vec3 oc = gi_sub(c, org);
+    float b = gi_dot(oc, dir);
+    float d2 = gi_dot(oc, oc) - b * b;
+    if (d2 > r2)
+        return 0;
+    float half = sqrtf(r2 - d2);
+    return b + half >= 0.0f && b - half <= tfar;
+}
+
+/* One primary ray's hit: through the whole scene, or split into the rest
+ * (known, or traced and kept in *rest) and the object alone. */
+static int primary_hit(gi_rt *rt, split_ctx *sp, gi_tile_hit *rest, gi_vec3 org, gi_vec3 dir,
+                       gi_hit *h)
+{
+    if (!sp)
+        return gi_rt_intersect(rt, org, dir, 0.0f, FLT_MAX, h);
+    int any;
+    if (sp->rest_known) {
+        any = rest->tri != GI_TILE_HIT_NONE;
+        h->tri = rest->tri;
+        h->u = rest->u;
+        h->v = rest->v;
+        h->t = rest->t;
+    } else {
+        any = gi_rt_intersect_except(rt, sp->object, org, dir, 0.0f, FLT_MAX, h);
+        *rest = (gi_tile_hit){any ? h->tri : GI_TILE_HIT_NONE, any ? h->u : 0.0f,
+                              any ? h->v : 0.0f, any ? h->t : 0.0f};
+    }
+    h->ng = gi_v3(0, 0, 0); /* not kept: the same whether traced or known */
+    float tfar = any ? h->t : FLT_MAX;
+    if (ray_meets_sphere(org, dir, sp->c, sp->r2, tfar)) {
+        rt->rays++;
+        any |= gi_rt_intersect_in(rt, rt->alone[sp->object], org, dir, 0.0f, tfar, h);
+    }
+    return any;
+}
+
+static void render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp, split_ctx *sp,
+                   gi_surface_shader shade, void *user, gi_buf *result)
 {
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
@@ -55,7 +104,8 @@ int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
                 float jy = spp > 1 ? gi_rng_float(&rng) : 0.5f;
                 gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
                 gi_hit h;
-                if (!gi_rt_intersect(rt, cam.origin, dir, 0.0f, FLT_MAX, &h))
+                gi_tile_hit *rest = sp ? &sp->rest[k * (size_t)spp + (size_t)s] : NULL;
+                if (!primary_hit(rt, sp, rest, cam.origin, dir, &h))
                     continue;
                 gi_vec3 L = shade(user, &h, gi_madd(cam.origin, dir, h.t), gi_neg(dir));
                 sum[0] += L.x;
@@ -67,6 +117,27 @@ int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
         }
     gi_buf_put_f32s(result, px, npix * 3);
     free(px);
+}
+
+int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+                   gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
+{
+    (void)err;
+    render(rt, job, t, spp, NULL, shade, user, result);
+    return 0;
+}
+
+int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+                         uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest, int rest_known,
+                         gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
+{
+    if (!gi_rt_splits(rt, object))
+        return gi_fail(err, GI_EINTERNAL, "gi_tile_render_split: object %u is not mobile",
+                       object);
+    /* Grown well past rounding: a false pass only costs a ray. */
+    float rr = r * 1.001f + 1e-4f * (1.0f + gi_length(c));
+    split_ctx sp = {object, c, rr * rr, rest, rest_known};
+    render(rt, job, t, spp, &sp, shade, user, result);
     return 0;
 }
 

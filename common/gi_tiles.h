@@ -39,6 +39,28 @@ typedef gi_vec3 (*gi_surface_shader)(void *user, const gi_hit *hit, gi_vec3 p, g
  * are black. */
 int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
                    gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
+/* A primary ray's closest hit among all but the moving object
+ * (gi_tile_render_split); tri GI_TILE_HIT_NONE: none. */
+typedef struct gi_tile_hit {
+    uint32_t tri;
+    float u, v, t;
+} gi_tile_hit;
+#define GI_TILE_HIT_NONE UINT32_MAX
+
+/* gi_tile_render for a frame of an animation in which only `object` (a
+ * mobile object of a two-level rt, gi_rt.h) moves: each primary ray's hit
+ * among the rest, rest[(pixel in the tile, row-major) * spp + sample], is
+ * taken from `rest` if rest_known, else traced and stored there; the
+ * object is traced alone, behind its bounding sphere (c, r), up to that
+ * hit, and wins if it is as near. The rest's hits stay valid as long as
+ * only the object moves (the camera and all else stand still), and the
+ * hit shaded is the one the whole scene gives, bit for bit (the top scene
+ * holds identity instances of the same BVHs), except where the object and
+ * something else lie at exactly the same distance. The shader gets hits of
+ * the rest with a zero ng. */
+int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+                         uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest, int rest_known,
+                         gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
 /* Puts a tile result into img (RGB; coordinator side). */
 int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_error *err);
 

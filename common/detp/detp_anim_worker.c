@@ -19,6 +19,7 @@
 #include "detp_batch_shelf.h"
 #include "detp_method.h"
 #include "detp_sphere.h"
+#include "gi_tile_hits.h"
 #include "gi_worker_ctx.h"
 
 /* The segments that may cross one of the mobile's discs: those that come
@@ -341,19 +342,44 @@ static int pose(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_erro
     return 0;
 }
 
-int detp_anim_pose_frame(gi_worker_ctx *ctx, detp_worker *w, uint32_t frame, gi_error *err)
+static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
+                     mobile_frame *out, gi_error *err);
+
+int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *tile,
+                          uint32_t frame, gi_surface_shader shade, void *user, gi_buf *px,
+                          gi_error *err)
 {
-    detp_anim_worker *a;
     const gi_detp_params *p = ctx->job.params;
+    detp_anim_worker *a;
+    mobile_frame m;
+    const char *dir;
     if (anim_state(ctx, w, &a, err))
         return -1;
     if (frame >= p->anim.frames)
         return gi_fail(err, GI_EPROTO, "detp: frame %u of %u", frame, p->anim.frames);
-    return pose(ctx, a, frame, err);
+    if (pose(ctx, a, frame, err) || mobile_at(ctx, a, frame, &m, err) ||
+        gi_worker_batch_dir(ctx, &dir, err))
+        return -1;
+    size_t n = (size_t)(tile->x1 - tile->x0) * (tile->y1 - tile->y0) * (size_t)p->image_spp;
+    gi_tile_hit *rest = gi_try_malloc(n * sizeof *rest, err, "detp tile hits");
+    if (!rest)
+        return -1;
+    /* All but the mobile stands still: its hits are traced once per host
+     * and tile (gi_tile_hits.h), the mobile's every frame. */
+    gi_error miss;
+    gi_error_clear(&miss);
+    int known = gi_tile_hits_read(dir, tile, p->image_spp, ctx->job.scene.triangle_count, rest,
+                                  &miss);
+    int rc = known < 0 ? gi_fail(err, miss.code, "%s", miss.msg) : 0;
+    if (rc == 0)
+        rc = gi_tile_render_split(&ctx->rt, &ctx->job, tile, p->image_spp, a->object,
+                                  m.sphere.c, m.sphere.r, rest, known, shade, user, px, err);
+    if (rc == 0 && !known)
+        rc = gi_tile_hits_write(dir, tile, p->image_spp, rest, err);
+    free(rest);
+    return rc;
 }
 
-static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
-                     mobile_frame *out, gi_error *err);
 
 /* The tracer at `frame` (the ray tracer must be posed there to trace),
  * with the mobile alone for rule 1's rays behind it when nothing else

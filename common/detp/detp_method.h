@@ -11,6 +11,7 @@
 #include "gi_image.h"
 #include "gi_job.h"
 #include "gi_method.h"
+#include "gi_tiles.h"
 
 /* Task kinds and their payloads. */
 enum {
@@ -162,9 +163,12 @@ int detp_worker_estimate(gi_worker_ctx *ctx, detp_worker *w, gi_detp_stats *st,
                          gi_error *err);
 
 /* Animations, worker side (detp_anim_worker.c): frame-0 batches, updates,
- * and posing the mobile for a frame's image tiles. */
+ * and a frame's image tiles (the mobile posed and traced alone, the rest's
+ * hits kept in the batch directory: gi_tile_render_split). */
 int detp_anim_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
-int detp_anim_pose_frame(gi_worker_ctx *ctx, detp_worker *w, uint32_t frame, gi_error *err);
+int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *tile,
+                          uint32_t frame, gi_surface_shader shade, void *user, gi_buf *px,
+                          gi_error *err);
 void detp_anim_worker_free(struct detp_anim_worker *a);
 int detp_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
 

@@ -308,10 +308,6 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
                        (unsigned long long)t->id);
     }
     detp_worker *w = detp_worker_state(ctx);
-    if (t->kind == DETP_TASK_ANIM_TILE && detp_anim_pose_frame(ctx, w, frame, err)) {
-        free(hash);
-        return -1;
-    }
     if (strcmp(w->hash, hash) != 0) {
         const gi_buf *blob;
         if (gi_worker_blob(ctx, hash, &blob, err)) {
@@ -341,7 +337,9 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
     gi_buf px;
     gi_buf_init(&px);
     shade_ctx sc = {&job->scene, w->radiance};
-    int rc = gi_tile_render(&ctx->rt, job, &tile, p->image_spp, shade, &sc, &px, err);
+    int rc = t->kind == DETP_TASK_ANIM_TILE
+                 ? detp_anim_render_tile(ctx, w, &tile, frame, shade, &sc, &px, err)
+                 : gi_tile_render(&ctx->rt, job, &tile, p->image_spp, shade, &sc, &px, err);
     if (rc == 0) {
         gi_buf_put_f64(result, detp_now() - t0);
         gi_buf_put_u64(result, ctx->rt.rays - rays0);

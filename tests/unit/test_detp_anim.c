@@ -13,8 +13,10 @@
 #include "detp/detp_anim.h"
 #include "detp/detp_sphere.h"
 #include "gi_fs.h"
+#include "gi_job.h"
 #include "gi_rt.h"
 #include "gi_test.h"
+#include "gi_tiles.h"
 #include "test_helpers.h"
 
 #define FRAMES 5
@@ -619,6 +621,96 @@ GI_TEST(test_detp_anim_rays_behind_the_mobile_alone_are_the_scenes)
     GI_REQUIRE_OK(anim_pose(&a, 2, &err));                       /* through it */
     ball = gi_detp_object_sphere(&a.s, a.mob);
     GI_CHECK(gi_rt_others_near(&a.rt, a.mob, ball.c, ball.r));
+    anim_free(&a);
+}
+
+/* A pixel's "radiance" is the hit itself (triangle, u, v): any difference
+ * in the hits shows. */
+static gi_vec3 hit_shader(void *user, const gi_hit *h, gi_vec3 p, gi_vec3 wo)
+{
+    (void)user;
+    (void)p;
+    (void)wo;
+    return gi_v3((float)h->tri, h->u, h->v);
+}
+
+/* An animation frame's tiles split at the mobile (gi_tile_render_split):
+ * the rest's hits traced at frame 0 and reused at frames 1-4 give, frame
+ * for frame, the pixels of tiles traced through the whole scene, bit for
+ * bit, with the ball in view, moving and partly hidden, and later frames
+ * trace only the rays that come near the ball. */
+GI_TEST(test_detp_anim_tiles_split_at_the_mobile_are_the_whole_scenes)
+{
+    gi_error err;
+    anim a;
+    GI_REQUIRE_OK(anim_load(&a, &err));
+    /* Down through the frames until it sinks into the floor: part of the
+     * ball hides behind the floor. */
+    a.step = gi_v3(0.0f, -100.0f, 0.0f);
+    const gi_object *o = &a.s.objects[a.mob];
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.scene = a.s; /* borrowed: not freed through job */
+    job.width = 48;
+    job.height = 32;
+    job.seed = 5;
+    enum { SPP = 2, TILE = 16 };
+    size_t npix = (size_t)job.width * job.height;
+    gi_tile_hit *rest = gi_xcalloc(npix * SPP, sizeof *rest);
+    float *prev = gi_xcalloc(npix * 3, sizeof *prev);
+    size_t differing = 0, changed_by_moving = 0, ball_pixels = 0;
+    uint64_t split_rays = 0;
+    for (uint32_t f = 0; f < FRAMES; f++) {
+        GI_REQUIRE_OK(anim_pose(&a, f, &err));
+        gi_detp_mobile_pose ball = gi_detp_object_sphere(&a.s, a.mob);
+        size_t at = 0;
+        for (int y0 = 0; y0 < job.height; y0 += TILE)
+            for (int x0 = 0; x0 < job.width; x0 += TILE) {
+                gi_tile t = {(uint32_t)x0, (uint32_t)y0, (uint32_t)(x0 + TILE),
+                             (uint32_t)(y0 + TILE)};
+                gi_buf whole, split;
+                gi_buf_init(&whole);
+                gi_buf_init(&split);
+                GI_REQUIRE_OK(gi_tile_render(&a.rt, &job, &t, SPP, hit_shader, NULL, &whole,
+                                             &err));
+                uint64_t r0 = a.rt.rays;
+                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, &t, SPP, a.mob, ball.c, ball.r,
+                                                   rest + at, f > 0, hit_shader, NULL, &split,
+                                                   &err));
+                if (f > 0)
+                    split_rays += a.rt.rays - r0;
+                /* Any sphere that holds the ball will do; a loose one
+                 * sends rays that pass the ball's hit on to the ball. */
+                gi_buf loose;
+                gi_buf_init(&loose);
+                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, &t, SPP, a.mob, ball.c,
+                                                   8.0f * ball.r, rest + at, 1, hit_shader, NULL,
+                                                   &loose, &err));
+                at += (size_t)TILE * TILE * SPP;
+                GI_REQUIRE(whole.len == split.len && whole.len == loose.len);
+                differing += memcmp(whole.data, split.data, whole.len) != 0;
+                differing += memcmp(whole.data, loose.data, whole.len) != 0;
+                gi_buf_free(&loose);
+                const float *px = (const float *)split.data;
+                for (int k = 0; k < TILE * TILE; k++) {
+                    size_t i = (size_t)(y0 + k / TILE) * job.width + (size_t)(x0 + k % TILE);
+                    float tri = px[3 * k];
+                    ball_pixels += tri >= (float)o->first_triangle &&
+                                   tri < (float)(o->first_triangle + o->triangle_count);
+                    changed_by_moving += f > 0 && memcmp(&prev[3 * i], &px[3 * k], 12) != 0;
+                    memcpy(&prev[3 * i], &px[3 * k], 12);
+                }
+                gi_buf_free(&whole);
+                gi_buf_free(&split);
+            }
+    }
+    GI_CHECK_MSG(differing == 0, "%zu tiles differ", differing);
+    GI_CHECK_MSG(ball_pixels > 100 && changed_by_moving > 50, "ball in %zu pixels, %zu changed",
+                 ball_pixels, changed_by_moving);
+    GI_CHECK_MSG(split_rays > 0 && split_rays < npix * SPP * (FRAMES - 1) / 4,
+                 "%llu rays in frames 1-4", (unsigned long long)split_rays);
+    free(rest);
+    free(prev);
     anim_free(&a);
 }
 

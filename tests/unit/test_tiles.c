@@ -1,7 +1,10 @@
 /* Unit tests: image tiles shaded from surface data. */
+#include <stdio.h>
 #include <string.h>
 
+#include "gi_fs.h"
 #include "gi_job.h"
+#include "gi_tile_hits.h"
 #include "gi_tiles.h"
 #include "gi_test.h"
 #include "test_helpers.h"
@@ -70,4 +73,65 @@ GI_TEST(test_tiles_cover_the_image_and_do_not_depend_on_tile_size)
     gi_image_free(&img[1]);
     gi_rt_free(&rt);
     gi_scene_free(&job.scene);
+}
+
+/* A tile's hits file (gi_tile_hits.h) reads back as written, and only for
+ * its own tile and spp; damage (every byte flipped, every truncation), a
+ * triangle the scene does not have or a hit behind the camera make it
+ * "trace again" (0), never an I/O error. */
+GI_TEST(test_tile_hits_file_round_trips_and_refuses_damage)
+{
+    gi_error err;
+    char dir[1024], path[1200];
+    snprintf(dir, sizeof dir, "%s/tile-hits", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_mkdirs(dir, &err));
+    gi_tile t = {16, 8, 20, 11};
+    enum { SPP = 2, N = 4 * 3 * SPP, TRIS = 10 };
+    gi_tile_hit hits[N], back[N];
+    for (int i = 0; i < N; i++)
+        hits[i] = (gi_tile_hit){i % 5 == 0 ? GI_TILE_HIT_NONE : (uint32_t)(i % TRIS),
+                                0.01f * (float)i, 0.5f - 0.01f * (float)i, 3.0f + (float)i};
+    GI_REQUIRE_OK(gi_tile_hits_write(dir, &t, SPP, hits, &err));
+    GI_CHECK(gi_tile_hits_read(dir, &t, SPP, TRIS, back, &err) == 1);
+    GI_CHECK(memcmp(hits, back, sizeof hits) == 0);
+    GI_CHECK(gi_tile_hits_read(dir, &t, SPP + 1, TRIS, back, &err) == 0); /* no such file */
+    GI_CHECK(gi_tile_hits_read(dir, &t, SPP, TRIS - 1, back, &err) == 0);
+    GI_CHECK(strstr(err.msg, "no triangle") != NULL);
+
+    snprintf(path, sizeof path, "%s/tile.16.8.20.11.2.hits", dir);
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_REQUIRE_OK(gi_read_file(path, 1 << 20, &b, &err));
+    GI_CHECK(b.len == 56 + sizeof hits);
+    /* Another tile's file of the same size under this tile's name. */
+    gi_tile other = {0, 0, 4, 3};
+    GI_REQUIRE_OK(gi_tile_hits_write(dir, &other, SPP, hits, &err));
+    char other_path[1200];
+    snprintf(other_path, sizeof other_path, "%s/tile.0.0.4.3.2.hits", dir);
+    GI_REQUIRE(rename(other_path, path) == 0);
+    GI_CHECK(gi_tile_hits_read(dir, &t, SPP, TRIS, back, &err) == 0);
+    GI_CHECK(strstr(err.msg, "another tile") != NULL);
+    size_t read = 0, io_errors = 0, tried = 0;
+    for (size_t i = 0; i < b.len; i++) {
+        b.data[i] ^= 0x10;
+        GI_REQUIRE_OK(gi_write_file_atomic(path, b.data, b.len, &err));
+        b.data[i] ^= 0x10;
+        int rc = gi_tile_hits_read(dir, &t, SPP, TRIS, back, &err);
+        read += rc == 1;
+        io_errors += rc < 0;
+        tried++;
+    }
+    for (size_t len = 0; len < b.len; len++) {
+        GI_REQUIRE_OK(gi_write_file_atomic(path, b.data, len, &err));
+        int rc = gi_tile_hits_read(dir, &t, SPP, TRIS, back, &err);
+        read += rc == 1;
+        io_errors += rc < 0;
+        tried++;
+    }
+    GI_CHECK_MSG(read == 0 && io_errors == 0, "%zu of %zu damaged files read, %zu errors", read,
+                 tried, io_errors);
+    hits[3].t = -1.0f; /* valid CRCs, a hit behind the camera */
+    GI_REQUIRE_OK(gi_tile_hits_write(dir, &t, SPP, hits, &err));
+    GI_CHECK(gi_tile_hits_read(dir, &t, SPP, TRIS, back, &err) == 0);
+    gi_buf_free(&b);
 }
