@@ -39,15 +39,57 @@ static void png_on_warning(png_structp png, png_const_charp msg)
     gi_debug("%s: libpng warning: %s", m->path, msg ? msg : "");
 }
 
+/* IEC 61966-2-1 sRGB encoding (linear -> non-linear) of v in (0, 1), to 8
+ * bits. */
+static unsigned char srgb8_formula(double v)
+{
+    double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+    return (unsigned char)floor(s * 255.0 + 0.5);
+}
+
+static double as_double(uint64_t bits)
+{
+    double d;
+    memcpy(&d, &bits, sizeof d);
+    return d;
+}
+
+/* threshold[k], k = 1..255: the least double v with srgb8_formula(v) >= k
+ * (positive doubles order as their bits do). A PNG converts millions of
+ * values: a search among these is exact and ~4x cheaper than pow. */
+static double threshold[256];
+
+static void thresholds_init(void)
+{
+    uint64_t one;
+    double d = 1.0;
+    memcpy(&one, &d, sizeof one);
+    for (int k = 1; k < 256; k++) {
+        uint64_t lo = 0, hi = one; /* formula(lo) < k <= formula(hi) */
+        while (hi - lo > 1) {
+            uint64_t mid = lo + (hi - lo) / 2;
+            if (srgb8_formula(as_double(mid)) >= k)
+                hi = mid;
+            else
+                lo = mid;
+        }
+        threshold[k] = as_double(hi);
+    }
+}
+
 unsigned char gi_srgb8_from_linear(double v)
 {
     if (!(v > 0.0)) /* NaN and negatives */
         return 0;
     if (v >= 1.0)
         return 255;
-    /* IEC 61966-2-1 sRGB encoding (linear -> non-linear). */
-    double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
-    return (unsigned char)floor(s * 255.0 + 0.5);
+    if (threshold[255] == 0.0)
+        thresholds_init();
+    int k = 0;
+    for (int step = 128; step; step >>= 1)
+        if (k + step < 256 && threshold[k + step] <= v)
+            k += step;
+    return (unsigned char)k;
 }
 
 /* ---- writing ---------------------------------------------------------- */
@@ -82,6 +124,12 @@ static int png_encode(FILE *fp, png_msg *m, const gi_image *img, const int src[3
     /* sRGB + matching gAMA/cHRM chunks, so viewers do not re-gamma. No tIME
      * chunk: the same image gives the same file. */
     png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    /* A preview written every frame of an animation: deflate level 1 and
+     * the Up filter alone, 3x faster than libpng's defaults (level 6, every
+     * filter tried per row) for files ~40% larger (bench/image_write: a
+     * 1080p frame 0.32 -> 0.10 s, 0.50 -> 0.69 MB). */
+    png_set_compression_level(png, 1);
+    png_set_filter(png, 0, PNG_FILTER_UP);
     png_write_info(png, info);
     const int n = grey ? 1 : 3;
     for (int y = 0; y < img->height; y++) {

@@ -861,6 +861,45 @@ GI_TEST(png_srgb_transfer_exact)
     GI_CHECK(mono && prev == 255);
 }
 
+/* The sRGB formula, as the test computes it. */
+static int srgb8_reference(double v)
+{
+    if (!(v > 0.0))
+        return 0;
+    if (v >= 1.0)
+        return 255;
+    double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+    return (int)floor(s * 255.0 + 0.5);
+}
+
+/* gi_srgb8_from_linear looks codes up among thresholds instead of calling
+ * pow: it must agree with the formula everywhere, in particular on both
+ * sides of every code's boundary (found here by bisection over doubles)
+ * and on a million values spread over the range in log scale. */
+GI_TEST(png_srgb_lookup_matches_the_formula)
+{
+    size_t wrong = 0;
+    for (int k = 1; k < 256; k++) {
+        double lo = 0.0, hi = 1.0;
+        for (int i = 0; i < 200 && nextafter(lo, 2.0) < hi; i++) {
+            double mid = 0.5 * (lo + hi);
+            if (mid <= lo || mid >= hi)
+                break;
+            *(srgb8_reference(mid) >= k ? &hi : &lo) = mid;
+        }
+        double at[4] = {nextafter(lo, 0.0), lo, hi, nextafter(hi, 2.0)};
+        for (int j = 0; j < 4; j++)
+            wrong += gi_srgb8_from_linear(at[j]) != srgb8_reference(at[j]);
+    }
+    uint64_t x = 12345;
+    for (int i = 0; i < 1000000; i++) {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        double v = pow(10.0, -8.0 + 8.5 * (double)(x >> 11) / 9007199254740992.0);
+        wrong += gi_srgb8_from_linear(v) != srgb8_reference(v);
+    }
+    GI_CHECK_MSG(wrong == 0, "%zu values encode otherwise than the formula", wrong);
+}
+
 GI_TEST(png_roundtrip_known_values_and_exposure)
 {
     gi_error err;
