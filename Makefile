@@ -58,7 +58,7 @@ clean:
 # Build rules (entered with CFG=release or CFG=asan).
 
 CFG ?= release
-PKGS = OpenEXR libcjson libpng zlib assimp libzstd libsodium libmicrohttpd openblas lapacke
+PKGS = OpenEXR libcjson libpng zlib libdeflate assimp libzstd libsodium libmicrohttpd openblas lapacke
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS   = $(shell pkg-config --libs $(PKGS)) -lembree3 -lm
 

@@ -8,6 +8,7 @@ set -eu
 PACKAGES="make gcc pkg-config clang libclang-rt-14-dev
 libembree-dev libopenexr-dev libcjson-dev libpng-dev libassimp-dev
 libopenblas-dev liblapacke-dev libzstd-dev libsodium-dev libmicrohttpd-dev zlib1g-dev
+libdeflate-dev
 iproute2 curl"
 
 missing=""
