@@ -151,11 +151,16 @@ int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_erro
                        npix * 12);
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "tile result");
-    for (uint32_t y = t->y0; y < t->y1; y++)
+    for (uint32_t y = t->y0; y < t->y1; y++) {
+        if (img->channels == 3) { /* a row of the tile is a run of the image's */
+            gi_get_f32s(&r, gi_image_at(img, (int)t->x0, (int)y), (size_t)(t->x1 - t->x0) * 3);
+            continue;
+        }
         for (uint32_t x = t->x0; x < t->x1; x++) {
             float *p = gi_image_at(img, (int)x, (int)y);
             for (int c = 0; c < 3; c++)
                 p[c] = gi_get_f32(&r);
         }
+    }
     return gi_reader_finish(&r, err);
 }
