@@ -6,6 +6,7 @@
  *   anim_frames header | phase_header         a table's header
  *   anim_frames row LABEL C FRAMES PREFIX...    one row: full vs incremental
  *   anim_frames phases LABEL FRAMES PREFIX...   two rows: seconds per phase
+ *   anim_frames image FRAMES PREFIX             an animation's image phase
  *
  * PREFIX is a run's NAME with its directory (PREFIX.0000.json is frame 0).
  * Times are the reports' "animation"."seconds": worker seconds summed over
@@ -42,6 +43,7 @@ static const char *phase_key[2][NPHASE] = {
 typedef struct {
     double sec[NPHASE];
     double paths, retraced, segments, seg_old, seg_new, wall;
+    double image, wall_image; /* tiles' worker seconds, the image phase's wall time */
 } frame_rec;
 
 /* Thesis Table A.14: mobile size (%), whole scene (s), recompute (s). */
@@ -83,7 +85,10 @@ static int load_frame(const char *prefix, int f, frame_rec *r)
     r->segments = num(a, "segments");
     r->seg_old = num(a, "segments_old");
     r->seg_new = num(a, "segments_new");
-    r->wall = num(cJSON_GetObjectItemCaseSensitive(root, "seconds"), "wall_bake");
+    const cJSON *js = cJSON_GetObjectItemCaseSensitive(root, "seconds");
+    r->wall = num(js, "wall_bake");
+    r->image = num(js, "image");
+    r->wall_image = num(js, "wall_image");
     cJSON_Delete(root);
     return 0;
 }
@@ -111,6 +116,8 @@ static int load_run(const char *prefix, int frames, run_rec *run)
         run->inc.seg_old += r.seg_old / (frames - 1);
         run->inc.seg_new += r.seg_new / (frames - 1);
         run->inc.wall += r.wall / (frames - 1);
+        run->inc.image += r.image / (frames - 1);
+        run->inc.wall_image += r.wall_image / (frames - 1);
     }
     const double *s = run->f0.sec;
     run->full = s[P_BUILD] + s[P_TRACE] + s[P_STATIC] + s[P_MOBILE];
@@ -171,6 +178,19 @@ static int phases(const char *label, int frames, char **prefix, int n)
     return 0;
 }
 
+/* An animation with images: frame 0 and the mean of frames 1.. */
+static int image(int frames, const char *prefix)
+{
+    run_rec run;
+    if (load_run(prefix, frames, &run))
+        return 1;
+    printf("frame 0: wall_bake %.3f s, image %.3f worker s, wall_image %.3f s\n", run.f0.wall,
+           run.f0.image, run.f0.wall_image);
+    printf("frames 1..%d (mean): wall_bake %.3f s, image %.3f worker s, wall_image %.3f s\n",
+           frames - 1, run.inc.wall, run.inc.image, run.inc.wall_image);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc >= 2 && !strcmp(argv[1], "header")) {
@@ -190,8 +210,11 @@ int main(int argc, char **argv)
     }
     if (argc >= 5 && !strcmp(argv[1], "phases") && argc - 4 <= MAX_RUNS && atoi(argv[3]) >= 2)
         return phases(argv[2], atoi(argv[3]), argv + 4, argc - 4);
+    if (argc == 4 && !strcmp(argv[1], "image") && atoi(argv[2]) >= 2)
+        return image(atoi(argv[2]), argv[3]);
     fprintf(stderr, "usage: anim_frames header | phase_header\n"
                     "       anim_frames row LABEL C FRAMES PREFIX...\n"
-                    "       anim_frames phases LABEL FRAMES PREFIX...\n");
+                    "       anim_frames phases LABEL FRAMES PREFIX...\n"
+                    "       anim_frames image FRAMES PREFIX\n");
     return 2;
 }

@@ -21,6 +21,8 @@ echo "== detp_memory: peak RSS of detp bakes on the Cornell box (2 workers; minu
 sh bench/detp_memory.sh "$BIN" 5000000 50000000
 echo "== detp_anim: thesis Table A.14 + the tree's torus, full vs incremental frame (one worker; ~15 min)"
 sh bench/detp_anim.sh "$BIN" 1000000 250000 6 3
+echo "== detp_anim_image: a 1080p animation with EXR + PNG outputs (2 workers): tiles and writes per frame"
+sh bench/detp_anim_image.sh "$BIN" 24 1920 1080
 echo "== detp_anim_memory: 100 M photon paths, moving sphere, 2 workers: peak RSS and batch disk (TMPDIR needs ~13 GB; ~11 min)"
 sh bench/detp_anim_memory.sh "$BIN" 100000000 3 250000
 echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
