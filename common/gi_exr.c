@@ -8,10 +8,11 @@
  * is an error message, not a read past the end.
  *
  * Determinism: the header holds only the required attributes (no dates,
- * no host names), chunks are written in increasing y by one thread, and ZIP
- * uses a fixed deflate level, so the same image gives the same bytes (with
- * the same libdeflate). tests/unit/test_image.c checks this, also with malloc'ed memory
- * pre-filled with different patterns. */
+ * no host names), each chunk is compressed on its own (by whichever thread)
+ * at a fixed deflate level and the chunks are written in increasing y, so
+ * the same image gives the same bytes (with the same libdeflate).
+ * tests/unit/test_image.c checks this, also with malloc'ed memory pre-filled
+ * with different patterns. */
 #include "gi_image.h"
 
 #include <OpenEXR/openexr.h>
@@ -28,9 +29,8 @@
 
 #include "gi_fs.h"
 
-/* Deflate level for ZIP chunks (libdeflate's; zlib's when OpenEXR's own
- * compressor runs): fixed (not the library's global default) so output
- * bytes do not depend on process-wide settings. */
+/* libdeflate level for ZIP chunks (exr_write_chunks): fixed, so output
+ * bytes do not depend on any library's default. */
 #define GI_EXR_ZIP_LEVEL 6
 
 typedef struct exr_io {

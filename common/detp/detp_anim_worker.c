@@ -380,7 +380,6 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
     return rc;
 }
 
-
 /* The tracer at `frame` (the ray tracer must be posed there to trace),
  * with the mobile alone for rule 1's rays behind it when nothing else
  * comes near it. */

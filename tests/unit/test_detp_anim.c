@@ -2,7 +2,8 @@
  * sphere that moves over 5 frames: the incremental update (thesis Fig. 4.2)
  * against full recomputes in fixed point, its determinism whatever the
  * batch split, untouched paths, a fresh-ray check of every kept segment;
- * the mobile's own vertices; the batch store. */
+ * the mobile's own vertices; the batch store; a frame's image tiles traced
+ * with the mobile alone. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>

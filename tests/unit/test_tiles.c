@@ -87,7 +87,7 @@ GI_TEST(test_tile_hits_file_round_trips_and_refuses_damage)
     GI_REQUIRE_OK(gi_mkdirs(dir, &err));
     gi_tile t = {16, 8, 20, 11};
     enum { SPP = 2, N = 4 * 3 * SPP, TRIS = 10 };
-    gi_tile_hit hits[N], back[N];
+    gi_tile_hit hits[N], back[2 * N]; /* room for the spp + 1 read below */
     for (int i = 0; i < N; i++)
         hits[i] = (gi_tile_hit){i % 5 == 0 ? GI_TILE_HIT_NONE : (uint32_t)(i % TRIS),
                                 0.01f * (float)i, 0.5f - 0.01f * (float)i, 3.0f + (float)i};
