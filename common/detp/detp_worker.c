@@ -174,6 +174,8 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
     if (p->estimator != GI_DETP_EST_IMPACT_COUNT && p->estimator != GI_DETP_EST_PHOTON_MAP)
         scale = 1.0 / (GI_PI * (double)w->discs.radius * (double)w->discs.radius);
     detp_encode_batch(&h, &w->acc, scale, result);
+    /* The summary counts photons (the method's unit): batches are the only
+     * tasks that add to it, not tiles' or the reference's samples. */
     ctx->stats.samples = h.photons;
     /* Give back the batch's memory if it was unusually large. */
     if (w->segs.cap > 4 * (w->segs.count + 1024)) {
@@ -208,7 +210,6 @@ static int run_visibility(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, 
     gi_buf_put_u64(result, ctx->rt.rays - rays0);
     gi_buf_put(result, body.data, body.len);
     gi_buf_free(&body);
-    ctx->stats.samples = v1 - v0;
     return 0;
 }
 
@@ -265,7 +266,6 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
     gi_buf_put_u64(result, ctx->rt.rays - rays0);
     gi_buf_put(result, body.data, body.len);
     gi_buf_free(&body);
-    ctx->stats.samples = (uint64_t)(j1 - j0) * p->reference_spp;
     return 0;
 }
 
@@ -344,7 +344,6 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
         gi_buf_put_f64(result, detp_now() - t0);
         gi_buf_put_u64(result, ctx->rt.rays - rays0);
         gi_buf_put(result, px.data, px.len);
-        ctx->stats.samples = (uint64_t)(tile.x1 - tile.x0) * (tile.y1 - tile.y0) * p->image_spp;
     }
     gi_buf_free(&px);
     return rc;
