@@ -32,13 +32,25 @@ typedef struct gi_rng {
     int has_spare;
 } gi_rng;
 
+/* gi_rng_init in steps, for loops over many streams and samples of one
+ * seed: gi_rng_init_stream(r, gi_rng_stream_key(gi_rng_seed_key(seed),
+ * stream), sample) gives the very state gi_rng_init does. */
+static inline uint64_t gi_rng_seed_key(uint64_t seed) { return gi_mix64(seed + GI_RNG_GAMMA); }
+
+static inline uint64_t gi_rng_stream_key(uint64_t seed_key, uint64_t stream)
+{
+    return gi_mix64(seed_key ^ (stream + 0xD1B54A32D192ED03ull));
+}
+
+static inline void gi_rng_init_stream(gi_rng *r, uint64_t stream_key, uint32_t sample)
+{
+    r->state = gi_mix64(stream_key ^ ((uint64_t)sample + 0x8CB92BA72F3D8DD7ull));
+    r->has_spare = 0;
+}
+
 static inline void gi_rng_init(gi_rng *r, uint64_t seed, uint64_t stream, uint32_t sample)
 {
-    uint64_t h = gi_mix64(seed + GI_RNG_GAMMA);
-    h = gi_mix64(h ^ (stream + 0xD1B54A32D192ED03ull));
-    h = gi_mix64(h ^ ((uint64_t)sample + 0x8CB92BA72F3D8DD7ull));
-    r->state = h;
-    r->has_spare = 0;
+    gi_rng_init_stream(r, gi_rng_stream_key(gi_rng_seed_key(seed), stream), sample);
 }
 
 static inline uint64_t gi_rng_u64(gi_rng *r)

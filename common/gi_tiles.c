@@ -93,13 +93,15 @@ static void render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp, spli
     size_t npix = (size_t)(t->x1 - t->x0) * (t->y1 - t->y0);
     float *px = gi_xcalloc(npix * 3, sizeof *px);
     size_t k = 0;
+    uint64_t seed_key = gi_rng_seed_key(job->seed);
     for (uint32_t y = t->y0; y < t->y1; y++)
         for (uint32_t x = t->x0; x < t->x1; x++, k++) {
             uint64_t pixel = (uint64_t)y * (uint64_t)job->width + x;
+            uint64_t pixel_key = gi_rng_stream_key(seed_key, pixel);
             double sum[3] = {0, 0, 0};
             for (int s = 0; s < spp; s++) {
-                gi_rng rng;
-                gi_rng_init(&rng, job->seed, pixel, (uint32_t)s);
+                gi_rng rng; /* gi_rng_init(seed, pixel, s) */
+                gi_rng_init_stream(&rng, pixel_key, (uint32_t)s);
                 float jx = spp > 1 ? gi_rng_float(&rng) : 0.5f;
                 float jy = spp > 1 ? gi_rng_float(&rng) : 0.5f;
                 gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
