@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <math.h>
 #include <png.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -63,7 +64,7 @@ static double as_double(uint64_t bits)
 #define BUCKETS 4096
 static double threshold[257];
 static unsigned char first[BUCKETS];
-static int thresholds_ready;
+static pthread_once_t thresholds_once = PTHREAD_ONCE_INIT;
 
 static void thresholds_init(void)
 {
@@ -89,7 +90,6 @@ static void thresholds_init(void)
             k++;
         first[b] = (unsigned char)k;
     }
-    thresholds_ready = 1;
 }
 
 unsigned char gi_srgb8_from_linear(double v)
@@ -98,8 +98,7 @@ unsigned char gi_srgb8_from_linear(double v)
         return 0;
     if (v >= 1.0)
         return 255;
-    if (!thresholds_ready)
-        thresholds_init();
+    pthread_once(&thresholds_once, thresholds_init); /* PNGs are written on threads */
     int k = first[(int)(v * BUCKETS)];
     while (threshold[k + 1] <= v)
         k++;

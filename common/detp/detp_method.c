@@ -15,6 +15,7 @@
 
 #include "detp_method.h"
 #include "gi_log.h"
+#include "gi_image_writer.h"
 #include "gi_outputs.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
@@ -51,10 +52,12 @@ static uint32_t reference_count(const gi_job *job)
                                                            : job->scene.vertex_count;
 }
 
-static void state_free(detp_state *st)
+static void state_free(gi_job *job, detp_state *st)
 {
     if (!st)
         return;
+    gi_error ignored;
+    gi_image_writer_finish(job, &st->writer, &ignored);
     free(st->irr);
     free(st->hits);
     free(st->visible);
@@ -78,7 +81,7 @@ static int state_new(gi_job *job, detp_state **out, gi_error *err)
     st->ref = gi_try_calloc((size_t)st->nref * 4 + 1, sizeof *st->ref, err, "detp reference");
     if (!st->irr || !st->hits || !st->ref ||
         (p->artifact == GI_DETP_AC_VISIBLE_AREA && !st->visible)) {
-        state_free(st);
+        state_free(job, st);
         return -1;
     }
     st->wall_start = detp_now();
@@ -286,6 +289,7 @@ static int write_frame(gi_job *job, detp_state *st, const detp_vertex_data *v,
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
 {
+    const gi_detp_params *p = job->params;
     detp_state *st = job->state;
     if (st->phase == DETP_PHASE_DONE)
         return 0;
@@ -316,7 +320,13 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         }
     } else {
         st->wall_image = detp_now() - st->wall_start;
-        rc = gi_write_image_outputs(job, &st->img, err);
+        /* The frame before's outputs are written by now; this frame's are
+         * written while the next frame runs, if one follows. */
+        rc = gi_image_writer_finish(job, &st->writer, err);
+        if (rc == 0 && st->anim && detp_anim_frame(st) + 1 < p->anim.frames)
+            st->writer = gi_image_writer_start(job, &st->img);
+        else if (rc == 0)
+            rc = gi_write_image_outputs(job, &st->img, err);
     }
     if (rc == 0)
         rc = write_frame(job, st, &v, fq, err);
@@ -330,6 +340,9 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
 static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
     const detp_state *st = job->state;
+    /* A checkpoint past a frame holds its outputs on disk. */
+    if (gi_image_writer_wait(st->writer))
+        return gi_fail(err, GI_EIO, "%s: a frame's image outputs could not be written", job->file);
     gi_buf_put_u32(out, STATE_MAGIC);
     gi_buf_put_u32(out, STATE_VERSION);
     gi_buf_put_u32(out, (uint32_t)st->phase);
@@ -438,7 +451,7 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
 
 static void detp_release(gi_job *job)
 {
-    state_free(job->state);
+    state_free(job, job->state);
     free(job->params);
     job->state = job->params = NULL;
 }

@@ -102,6 +102,9 @@ typedef struct detp_state {
     char hash[GI_HASH_HEX];                   /* published radiance (image phase) */
     gi_image img;
     struct detp_anim_state *anim; /* animations only (detp_anim_job.c) */
+    /* An animation frame's image outputs, still being written while the
+     * next frame runs (or NULL). */
+    struct gi_image_writer *writer;
 } detp_state;
 
 /* Per-vertex results computed from the state (finish). */

@@ -1,10 +1,14 @@
-/* Unit tests: PLY and JSON outputs. */
+/* Unit tests: PLY and JSON outputs; image outputs written on a thread. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "gi_fs.h"
 #include "gi_image.h"
+#include "gi_image_writer.h"
+#include "gi_job.h"
 #include "gi_mesh.h"
+#include "gi_outputs.h"
 #include "gi_ply.h"
 #include "gi_test.h"
 
@@ -41,4 +45,67 @@ GI_TEST(test_ply_output_reads_back_through_assimp)
     gi_buf_free(&b);
     uint32_t bad[3] = {0, 1, 9};
     GI_CHECK(gi_ply_write(path, 4, pos, rad, 1, bad, 0.0, &err) == -1);
+}
+
+/* A frame's image outputs written on a thread (gi_image_writer) are the
+ * bytes gi_write_image_outputs writes, under the frame's names, noted only
+ * once finished; a write that fails (no such directory) fails at wait and
+ * at finish, naming the file, and notes nothing. */
+GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
+{
+    gi_error err;
+    static const char *const names[] = {"R", "G", "B"};
+    gi_image img;
+    GI_REQUIRE_OK(gi_image_init(&img, 40, 30, 3, names, &err));
+    for (int i = 0; i < 40 * 30 * 3; i++)
+        img.pixels[i] = 0.001f * (float)(i % 997);
+    char dir[600], sync_dir[700];
+    snprintf(dir, sizeof dir, "%s/writer", gi_test_tmpdir());
+    snprintf(sync_dir, sizeof sync_dir, "%s/sync", dir);
+    GI_REQUIRE_OK(gi_mkdirs(sync_dir, &err));
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.outputs[0] = (gi_output_spec){"exr", "f.exr"};
+    job.outputs[1] = (gi_output_spec){"png", "f.png"};
+    job.output_count = 2;
+    job.out_dir = sync_dir;
+    GI_REQUIRE_OK(gi_write_image_outputs(&job, &img, &err));
+    job.out_dir = dir;
+    job.in_frame = 1;
+    job.frame = 7;
+    gi_image copy;
+    GI_REQUIRE_OK(gi_image_init(&copy, 40, 30, 3, names, &err));
+    memcpy(copy.pixels, img.pixels, sizeof(float) * 40 * 30 * 3);
+    int noted = job.written_count;
+    gi_image_writer *w = gi_image_writer_start(&job, &copy);
+    GI_CHECK(copy.pixels == NULL);   /* taken */
+    job.frame = 8;                   /* the next frame goes on meanwhile */
+    GI_CHECK(job.written_count == noted);
+    GI_REQUIRE_OK(gi_image_writer_finish(&job, &w, &err));
+    GI_CHECK(w == NULL && job.written_count == noted + 4);
+    const char *pairs[2][2] = {{"sync/f.exr", "f.0007.exr"}, {"sync/f.png", "f.0007.png"}};
+    for (int k = 0; k < 2; k++) {
+        char a[800], b[800];
+        snprintf(a, sizeof a, "%s/%s", dir, pairs[k][0]);
+        snprintf(b, sizeof b, "%s/%s", dir, pairs[k][1]);
+        gi_buf x, y;
+        gi_buf_init(&x);
+        gi_buf_init(&y);
+        GI_REQUIRE_OK(gi_read_file(a, 1 << 24, &x, &err));
+        GI_REQUIRE_OK(gi_read_file(b, 1 << 24, &y, &err));
+        GI_CHECK_MSG(x.len == y.len && memcmp(x.data, y.data, x.len) == 0, "%s differs", b);
+        gi_buf_free(&x);
+        gi_buf_free(&y);
+    }
+    char gone[800];
+    snprintf(gone, sizeof gone, "%s/no-such-dir", dir);
+    job.out_dir = gone;
+    w = gi_image_writer_start(&job, &img);
+    GI_CHECK(gi_image_writer_wait(w) == -1);
+    GI_CHECK(gi_image_writer_finish(&job, &w, &err) == -1);
+    GI_CHECK(strstr(err.msg, "f.0008.exr") != NULL);
+    GI_CHECK(w == NULL && job.written_count == noted + 4);
+    GI_CHECK(gi_image_writer_finish(&job, &w, &err) == 0); /* nothing left */
+    for (int i = 0; i < job.written_count; i++)
+        free(job.written[i]);
 }
