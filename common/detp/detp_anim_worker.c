@@ -345,6 +345,10 @@ static int pose(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, gi_erro
 static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
                      mobile_frame *out, gi_error *err);
 
+/* The most disk a job's tile hits may take on a host (16 bytes per pixel
+ * and sample: 4K at 16 samples is 2.1 GB, 8K at 16 would be 8.5). */
+#define TILE_HITS_MAX_BYTES ((uint64_t)4 << 30)
+
 int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *tile,
                           uint32_t frame, gi_surface_shader shade, void *user, gi_buf *px,
                           gi_error *err)
@@ -365,16 +369,21 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
     if (!rest)
         return -1;
     /* All but the mobile stands still: its hits are traced once per host
-     * and tile (gi_tile_hits.h), the mobile's every frame. */
+     * and tile (gi_tile_hits.h), the mobile's every frame; unless the
+     * whole image's would take more disk than TILE_HITS_MAX_BYTES, then
+     * every frame traces them again. */
+    int keep = (uint64_t)ctx->job.width * (uint64_t)ctx->job.height *
+                   (uint64_t)p->image_spp * sizeof *rest <= TILE_HITS_MAX_BYTES;
     gi_error miss;
     gi_error_clear(&miss);
-    int known = gi_tile_hits_read(dir, tile, p->image_spp, ctx->job.scene.triangle_count, rest,
-                                  &miss);
+    int known = keep ? gi_tile_hits_read(dir, tile, p->image_spp,
+                                         ctx->job.scene.triangle_count, rest, &miss)
+                     : 0;
     int rc = known < 0 ? gi_fail(err, miss.code, "%s", miss.msg) : 0;
     if (rc == 0)
         rc = gi_tile_render_split(&ctx->rt, &ctx->job, tile, p->image_spp, a->object,
                                   m.sphere.c, m.sphere.r, rest, known, shade, user, px, err);
-    if (rc == 0 && !known)
+    if (rc == 0 && keep && !known)
         rc = gi_tile_hits_write(dir, tile, p->image_spp, rest, err);
     free(rest);
     return rc;
