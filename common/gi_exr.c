@@ -29,9 +29,6 @@
 
 #include "gi_fs.h"
 
-/* libdeflate level for ZIP chunks (exr_write_chunks): fixed, so output
- * bytes do not depend on any library's default. */
-#define GI_EXR_ZIP_LEVEL 6
 
 typedef struct exr_io {
     int fd;
@@ -302,7 +299,6 @@ static int exr_write_fd(const char *path, const char *tmp, const gi_image *img, 
     init.error_handler_fn = exr_on_error;
     init.user_data = io;
     init.write_fn = exr_io_write;
-    init.zip_level = GI_EXR_ZIP_LEVEL;
 
     /* The library only names this file in messages (we do the I/O), but it
      * is the temporary one: nothing may ever touch `path` before the rename. */
@@ -320,8 +316,6 @@ static int exr_write_fd(const char *path, const char *tmp, const gi_image *img, 
         r = exr_initialize_required_attr_simple(ctx, part, img->width, img->height,
                                                 EXR_COMPRESSION_ZIP);
     }
-    if (r == EXR_ERR_SUCCESS)
-        r = exr_set_zip_compression_level(ctx, part, GI_EXR_ZIP_LEVEL);
     for (int c = 0; c < img->channels && r == EXR_ERR_SUCCESS; c++) {
         step = "add channel";
         r = exr_add_channel(ctx, part, img->names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR,

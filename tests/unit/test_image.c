@@ -318,7 +318,7 @@ GI_TEST(exr_roundtrip_extra_channels_special_values)
     free(p);
 }
 
-/* Deflated size (libdeflate, level 6: what gi_exr uses) of a ZIP chunk:
+/* Deflated size (libdeflate at GI_EXR_ZIP_LEVEL, as gi_exr) of a ZIP chunk:
  * OpenEXR reorders the bytes (even then odd) and delta-codes them before
  * deflating. */
 static unsigned long zip_chunk_size(const unsigned char *packed, size_t n)
@@ -332,7 +332,7 @@ static unsigned long zip_chunk_size(const unsigned char *packed, size_t n)
         p = s[i];
         s[i] = (unsigned char)d;
     }
-    struct libdeflate_compressor *c = libdeflate_alloc_compressor(6);
+    struct libdeflate_compressor *c = libdeflate_alloc_compressor(GI_EXR_ZIP_LEVEL);
     size_t cap = libdeflate_zlib_compress_bound(c, n);
     unsigned char *out = malloc(cap);
     unsigned long z = libdeflate_zlib_compress(c, s, n, out, cap);
