@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "gi_checked_files.h"
 #include "gi_crc32c.h"
 #include "gi_fs.h"
 
@@ -78,6 +79,13 @@ static const char *records_invalid(const gi_tile_hit *v, uint64_t n, uint32_t tr
     return NULL;
 }
 
+/* What a check of the file vouches for: its header, and the triangle
+ * count its records were checked against. */
+static uint32_t checked_key(const hits_header *h, uint32_t tri_count)
+{
+    return gi_crc32c(h->header_crc, &tri_count, sizeof tri_count);
+}
+
 int gi_tile_hits_read(const char *dir, const gi_tile *t, int spp, uint32_t tri_count,
                       gi_tile_hit *hits, gi_error *err)
 {
@@ -106,10 +114,12 @@ int gi_tile_hits_read(const char *dir, const gi_tile *t, int spp, uint32_t tri_c
         ;
     else if (fread(hits, sizeof *hits, (size_t)n, f) != (size_t)n)
         why = "cannot read the records";
-    else if (gi_crc32c(0, hits, (size_t)n * sizeof *hits) != h.records_crc)
-        why = "bad record CRC";
-    else
-        why = records_invalid(hits, n, tri_count);
+    else if (!gi_file_was_checked(&st, checked_key(&h, tri_count))) {
+        if (gi_crc32c(0, hits, (size_t)n * sizeof *hits) != h.records_crc)
+            why = "bad record CRC";
+        else if ((why = records_invalid(hits, n, tri_count)) == NULL)
+            gi_file_note_checked(&st, checked_key(&h, tri_count));
+    }
     int io = ferror(f);
     fclose(f);
     int rc = why ? 0 : 1;

@@ -11,7 +11,9 @@
  * temporary name and renamed, not fsync'ed; one that is missing, torn or
  * not this tile's is traced again (any host or frame gives the same hits).
  * The batch directory belongs to one job, so the camera and the scene are
- * the job's. */
+ * the job's. A file this process has checked once (against the
+ * scene's triangle count) is not checked again (gi_checked_files.h): every
+ * frame reads every tile's file. */
 #ifndef GI_TILE_HITS_H
 #define GI_TILE_HITS_H
 

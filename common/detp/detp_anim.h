@@ -70,20 +70,6 @@ uint32_t gi_detp_store_records_crc(const gi_detp_segments *s);
  * frame against what it expects. */
 int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err);
 void gi_detp_store_unmap(gi_detp_store_mapping *m);
-/* Files this process has already checked whole (CRCs, record order,
- * values): an update maps its batch's base every frame, and checking it
- * again would cost a good part of the frame. Keyed by what a rewrite
- * changes (a rename gives a new inode) and the file's header CRC
- * (detp_checked.c). */
-struct stat;
-int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc);
-void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc);
-/* Notes a file this process has just written whole and renamed into
- * place: frame 1 need not read back what frame 0 wrote. */
-void gi_detp_file_note_written(const char *path, uint32_t header_crc);
-/* Forgets them (fuzzers rewrite one path thousands of times a second). */
-void gi_detp_file_forget_checked(void);
-
 /* A read-only gi_detp_segments view of a mapping (cap 0: never push). */
 static inline gi_detp_segments gi_detp_store_view(const gi_detp_store_mapping *m)
 {

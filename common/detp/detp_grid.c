@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "gi_checked_files.h"
 #include "gi_crc32c.h"
 #include "gi_fs.h"
 
@@ -228,7 +229,7 @@ int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, u
         if (rc)
             unlink(tmp);
         else
-            gi_detp_file_note_written(path, h.header_crc);
+            gi_file_note_written(path, h.header_crc);
         free(tmp);
         gi_buf_free(&b);
     }
@@ -290,7 +291,7 @@ int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uin
         g->path_start = (const uint32_t *)p;
         g->cell_start = (const uint64_t *)(p + path_bytes(paths));
         g->entries = (const uint32_t *)(p + body);
-        if (!gi_detp_file_was_checked(&st, h.header_crc)) {
+        if (!gi_file_was_checked(&st, h.header_crc)) {
             uint32_t crc = gi_crc32c(0, p, body);
             if (gi_crc32c(crc, g->entries, h.entries * 4) != h.body_crc)
                 why = "bad CRC";
@@ -309,7 +310,7 @@ int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uin
                 if (g->entries[i] >= paths)
                     why = "a path out of range";
             if (!why)
-                gi_detp_file_note_checked(&st, h.header_crc);
+                gi_file_note_checked(&st, h.header_crc);
         } else if (g->path_start[paths] != records) {
             why = "not the grid of this base";
         }

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "detp_anim.h"
+#include "gi_checked_files.h"
 #include "gi_crc32c.h"
 #include "gi_fs.h"
 
@@ -106,7 +107,7 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     if (rc != 0)
         unlink(tmp);
     else if (!records_invalid(&hd, s->v, s->count))
-        gi_detp_file_note_written(path, hd.header_crc); /* what a map would check */
+        gi_file_note_written(path, hd.header_crc); /* what a map would check */
     free(tmp);
     return rc;
 }
@@ -157,13 +158,13 @@ int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
         why = "truncated or wrong size";
     if (!why) {
         const gi_detp_segment *seg = (const gi_detp_segment *)((const char *)base + sizeof h);
-        if (!gi_detp_file_was_checked(&st, h.header_crc)) {
+        if (!gi_file_was_checked(&st, h.header_crc)) {
             if (gi_crc32c(0, seg, h.count * sizeof *seg) != h.records_crc)
                 why = "bad record CRC";
             else
                 why = records_invalid(&h, seg, h.count);
             if (!why)
-                gi_detp_file_note_checked(&st, h.header_crc);
+                gi_file_note_checked(&st, h.header_crc);
         }
         if (!why) {
             m->header = h;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "detp/detp_grid.h"
+#include "gi_checked_files.h"
 
 /* What the seed corpus was made with (tests/fuzz/corpus/detp_grid). */
 #define P0 10
@@ -29,7 +30,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     detp_grid_spec_make(gi_v3(0, 0, 0), gi_v3(4, 4, 4), 1.0f, &spec);
     gi_error err;
     gi_error_clear(&err);
-    gi_detp_file_forget_checked();
+    gi_file_forget_checked();
     detp_grid g;
     int rc = detp_grid_map(path, &spec, P0, P1, 2, RECORDS, BASE_CRC, &g, &err);
     if (rc == 1) {

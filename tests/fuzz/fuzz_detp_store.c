@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "detp/detp_anim.h"
+#include "gi_checked_files.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -21,7 +22,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!f || fwrite(data, 1, size, f) != size || fclose(f) != 0)
         abort();
     gi_detp_store_mapping m;
-    gi_detp_file_forget_checked();
+    gi_file_forget_checked();
     int rc = gi_detp_store_map(path, &m, &err);
     if (rc == 1) {
         if (m.count * sizeof(gi_detp_segment) + sizeof m.header != size)

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include "gi_checked_files.h"
 #include "gi_fs.h"
 #include "gi_tile_hits.h"
 
@@ -33,6 +34,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort();
     gi_error err;
     gi_error_clear(&err);
+    gi_file_forget_checked(); /* the same path rewritten in place */
     gi_tile_hit hits[HITS];
     int rc = gi_tile_hits_read(dir, &TILE, SPP, TRIS, hits, &err);
     if (rc == 1) {

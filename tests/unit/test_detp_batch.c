@@ -12,6 +12,7 @@
 #include "detp/detp_batch.h"
 #include "detp/detp_batch_shelf.h"
 #include "detp/detp_sphere.h"
+#include "gi_checked_files.h"
 #include "gi_rng.h"
 #include "gi_test.h"
 #include "test_helpers.h"
@@ -340,7 +341,7 @@ GI_TEST(test_detp_grid_lists_every_path_near_a_sphere)
     gi_detp_segments_free(&s);
 }
 
-/* The files a process has checked (detp_checked.c): all of them are
+/* The files a process has checked (gi_checked_files.c): all of them are
  * remembered, however many (a frame opens a base, a grid and up to 64
  * deltas per batch); a change of size, time or header CRC, or a new file
  * on a reused inode, is not taken for the checked one. */
@@ -348,7 +349,7 @@ GI_TEST(test_detp_checked_files_remember_many_and_see_changes)
 {
     enum { N = 3000 };
     static struct stat st[N];
-    gi_detp_file_forget_checked();
+    gi_file_forget_checked();
     for (uint32_t i = 0; i < N; i++) {
         memset(&st[i], 0, sizeof st[i]);
         st[i].st_dev = 3 + i % 2;
@@ -356,29 +357,29 @@ GI_TEST(test_detp_checked_files_remember_many_and_see_changes)
         st[i].st_size = 64 + i;
         st[i].st_mtim.tv_sec = 1700000000 + i;
         st[i].st_mtim.tv_nsec = i;
-        gi_detp_file_note_checked(&st[i], i);
+        gi_file_note_checked(&st[i], i);
     }
     uint32_t missed = 0;
     for (uint32_t i = 0; i < N; i++)
-        missed += !gi_detp_file_was_checked(&st[i], i);
+        missed += !gi_file_was_checked(&st[i], i);
     GI_CHECK_MSG(missed == 0, "%u of %u checked files forgotten", missed, N);
     struct stat s = st[5];
     s.st_size++;
-    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
+    GI_CHECK(!gi_file_was_checked(&s, 5));
     s = st[5];
     s.st_mtim.tv_nsec++;
-    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
-    GI_CHECK(!gi_detp_file_was_checked(&st[5], 6));
+    GI_CHECK(!gi_file_was_checked(&s, 5));
+    GI_CHECK(!gi_file_was_checked(&st[5], 6));
     s = st[5];
     s.st_dev = 9;
-    GI_CHECK(!gi_detp_file_was_checked(&s, 5));
+    GI_CHECK(!gi_file_was_checked(&s, 5));
     /* Inode 5 reused by another file. */
     s = st[5];
     s.st_size = 12345;
-    gi_detp_file_note_checked(&s, 77);
-    GI_CHECK(gi_detp_file_was_checked(&s, 77));
-    GI_CHECK(!gi_detp_file_was_checked(&st[5], 5));
-    GI_CHECK(gi_detp_file_was_checked(&st[6], 6));
-    gi_detp_file_forget_checked();
-    GI_CHECK(!gi_detp_file_was_checked(&st[6], 6));
+    gi_file_note_checked(&s, 77);
+    GI_CHECK(gi_file_was_checked(&s, 77));
+    GI_CHECK(!gi_file_was_checked(&st[5], 5));
+    GI_CHECK(gi_file_was_checked(&st[6], 6));
+    gi_file_forget_checked();
+    GI_CHECK(!gi_file_was_checked(&st[6], 6));
 }

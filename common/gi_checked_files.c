@@ -1,6 +1,5 @@
-/* detp_checked: the store and grid files this process has checked whole
- * (detp_anim.h), so that a frame maps its batch's base and grid without
- * reading all of them again.
+/* gi_checked_files: the cache files this process has checked whole
+ * (gi_checked_files.h).
  *
  * A hash table keyed by (device, inode), not a small ring: a frame opens a
  * base, a grid and up to 64 deltas per batch, and a worker holds many
@@ -14,7 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "detp_anim.h"
+#include "gi_checked_files.h"
 #include "gi_error.h"
 
 typedef struct checked_file {
@@ -46,14 +45,14 @@ static checked_file *find(dev_t dev, ino_t ino)
     }
 }
 
-void gi_detp_file_forget_checked(void)
+void gi_file_forget_checked(void)
 {
     free(table);
     table = NULL;
     table_cap = table_used = 0;
 }
 
-int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc)
+int gi_file_was_checked(const struct stat *st, uint32_t header_crc)
 {
     if (!table_cap)
         return 0;
@@ -62,12 +61,12 @@ int gi_detp_file_was_checked(const struct stat *st, uint32_t header_crc)
            c->mtime.tv_nsec == st->st_mtim.tv_nsec && c->header_crc == header_crc;
 }
 
-void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc)
+void gi_file_note_checked(const struct stat *st, uint32_t header_crc)
 {
     if (st->st_size <= 0)
         return;
     if (table_used + 1 > MAX_ENTRIES)
-        gi_detp_file_forget_checked();
+        gi_file_forget_checked();
     if (2 * (table_used + 1) > table_cap) {
         /* Grow (load <= 1/2) and re-insert. */
         checked_file *old = table;
@@ -84,9 +83,9 @@ void gi_detp_file_note_checked(const struct stat *st, uint32_t header_crc)
     *c = (checked_file){st->st_dev, st->st_ino, st->st_size, st->st_mtim, header_crc};
 }
 
-void gi_detp_file_note_written(const char *path, uint32_t header_crc)
+void gi_file_note_written(const char *path, uint32_t header_crc)
 {
     struct stat st;
     if (stat(path, &st) == 0)
-        gi_detp_file_note_checked(&st, header_crc);
+        gi_file_note_checked(&st, header_crc);
 }
