@@ -237,9 +237,12 @@ static void *zip_worker(void *arg)
  * none beyond one per 4 chunks. */
 static int zip_threads(int chunks)
 {
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    int t = cores > 8 ? 8 : cores < 1 ? 1 : (int)cores;
-    return t > chunks / 4 ? (chunks / 4 > 1 ? chunks / 4 : 1) : t;
+    long t = sysconf(_SC_NPROCESSORS_ONLN);
+    if (t > 8)
+        t = 8;
+    if (t > chunks / 4)
+        t = chunks / 4;
+    return t > 1 ? (int)t : 1;
 }
 
 static int exr_write_chunks(exr_context_t ctx, const gi_image *img, const char *path,

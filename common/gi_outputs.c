@@ -1,33 +1,103 @@
-/* gi_outputs: image outputs of a job. */
+/* gi_outputs: image and JSON outputs of a job (gi_outputs.h). */
 #include "gi_outputs.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gi_fs.h"
 
+/* A frame's image outputs: their paths (as the job names them when the
+ * write starts), the image, and how the write went. */
+struct gi_image_writer {
+    pthread_t thread;
+    int running;           /* a thread was started and not yet joined */
+    gi_image owned;        /* the image, when the writer took it */
+    const gi_image *img;   /* what is written: &owned, or the caller's */
+    char *exr, *png;       /* paths, or NULL */
+    double exposure;
+    int rc;                /* the write's result, and its error */
+    gi_error err;
+};
+
+static gi_image_writer *writer_new(gi_job *job, const gi_image *img)
+{
+    gi_image_writer *w = gi_xcalloc(1, sizeof *w);
+    const char *exr = gi_job_output(job, "exr"), *png = gi_job_output(job, "png");
+    w->exr = exr ? gi_job_output_path(job, exr) : NULL;
+    w->png = png ? gi_job_output_path(job, png) : NULL;
+    w->exposure = job->exposure;
+    w->img = img;
+    gi_error_clear(&w->err);
+    return w;
+}
+
+/* Writes the EXR, then the PNG; stops at the first failure. */
+static void write_all(gi_image_writer *w)
+{
+    w->rc = 0;
+    if (w->exr)
+        w->rc = gi_exr_write(w->exr, w->img, &w->err);
+    if (w->rc == 0 && w->png)
+        w->rc = gi_png_write(w->png, w->img, w->exposure, &w->err);
+}
+
+static void *writer_main(void *arg)
+{
+    write_all(arg);
+    return NULL;
+}
+
 int gi_write_image_outputs(gi_job *job, const gi_image *img, gi_error *err)
 {
-    const char *exr = gi_job_output(job, "exr"), *png = gi_job_output(job, "png");
-    if (exr) {
-        char *path = gi_job_output_path(job, exr);
-        int rc = gi_exr_write(path, img, err);
-        if (rc == 0)
-            gi_job_note_output(job, "exr", path);
-        free(path);
-        if (rc)
-            return -1;
+    gi_image_writer *w = writer_new(job, img);
+    write_all(w);
+    return gi_image_writer_finish(job, &w, err);
+}
+
+gi_image_writer *gi_image_writer_start(gi_job *job, gi_image *img)
+{
+    gi_image_writer *w = writer_new(job, NULL);
+    w->owned = *img;
+    w->img = &w->owned;
+    memset(img, 0, sizeof *img);
+    w->running = pthread_create(&w->thread, NULL, writer_main, w) == 0;
+    if (!w->running)
+        write_all(w); /* no thread: write here */
+    return w;
+}
+
+int gi_image_writer_wait(gi_image_writer *w)
+{
+    if (!w)
+        return 0;
+    if (w->running) {
+        pthread_join(w->thread, NULL);
+        w->running = 0;
     }
-    if (png) {
-        char *path = gi_job_output_path(job, png);
-        int rc = gi_png_write(path, img, job->exposure, err);
-        if (rc == 0)
-            gi_job_note_output(job, "png", path);
-        free(path);
-        if (rc)
-            return -1;
+    return w->rc;
+}
+
+int gi_image_writer_finish(gi_job *job, gi_image_writer **wp, gi_error *err)
+{
+    gi_image_writer *w = *wp;
+    if (!w)
+        return 0;
+    int rc = gi_image_writer_wait(w);
+    if (rc)
+        *err = w->err;
+    else {
+        if (w->exr)
+            gi_job_note_output(job, "exr", w->exr);
+        if (w->png)
+            gi_job_note_output(job, "png", w->png);
     }
-    return 0;
+    gi_image_free(&w->owned);
+    free(w->exr);
+    free(w->png);
+    free(w);
+    *wp = NULL;
+    return rc;
 }
 
 int gi_write_json_output(gi_job *job, const char *kind, const cJSON *doc, gi_error *err)

@@ -14,7 +14,6 @@
 #include <string.h>
 
 #include "detp_method.h"
-#include "gi_image_writer.h"
 #include "gi_log.h"
 #include "gi_outputs.h"
 #include "gi_tiles.h"

@@ -5,7 +5,6 @@
 
 #include "gi_fs.h"
 #include "gi_image.h"
-#include "gi_image_writer.h"
 #include "gi_job.h"
 #include "gi_mesh.h"
 #include "gi_outputs.h"
