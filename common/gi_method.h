@@ -9,6 +9,8 @@
 #ifndef GI_METHOD_H
 #define GI_METHOD_H
 
+#include <stdint.h>
+
 #include <cjson/cJSON.h>
 
 #include "gi_buf.h"
@@ -18,6 +20,16 @@
 
 typedef struct gi_job gi_job;
 typedef struct gi_worker_ctx gi_worker_ctx;
+
+/* Where a job stands, for progress bars and ETAs (gi_jobrun_progress). */
+typedef struct gi_job_progress {
+    uint32_t frame;  /* the frame being computed, from 0 */
+    uint32_t frames; /* how many the job has (a still: 1) */
+    /* Work, in the method's unit, that this frame will still add as
+     * follow-up tasks (image tiles after a bake), so that its fraction
+     * does not jump back when they are planned. */
+    double cost_unplanned;
+} gi_job_progress;
 
 typedef struct gi_method {
     const char *name;
@@ -46,6 +58,9 @@ typedef struct gi_method {
      * checkpoint without redoing merged work (gi_jobrun_checkpoint). */
     int (*save)(const gi_job *job, gi_buf *out, gi_error *err);
     int (*load)(gi_job *job, gi_reader *in, gi_error *err);
+    /* Optional: fills *out after plan, load and each finish (NULL: a still
+     * whose tasks are all planned up front). */
+    void (*progress)(const gi_job *job, gi_job_progress *out);
     /* Frees job->params and job->state. */
     void (*release)(gi_job *job);
 } gi_method;

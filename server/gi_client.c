@@ -144,6 +144,13 @@ static double num(const cJSON *o, const char *k, double dflt)
     return cJSON_IsNumber(v) ? v->valuedouble : dflt;
 }
 
+/* A count from the farm's JSON, clamped into uint32_t. */
+static uint32_t count(const cJSON *o, const char *k, uint32_t dflt)
+{
+    double v = num(o, k, dflt);
+    return v >= 0 && v <= UINT32_MAX ? (uint32_t)v : dflt;
+}
+
 static const char *str(const cJSON *o, const char *k)
 {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, k);
@@ -272,9 +279,20 @@ static int wait_job(client *c, uint64_t id, int fetch)
         }
         int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
                   strcmp(state, "cancelled") == 0;
-        if (started)
-            gi_progress_update(&prog, num(work, "done", 0), num(work, "total", 1),
-                               num(stats, "rays", 0), end);
+        if (started) {
+            const cJSON *eta = cJSON_GetObjectItemCaseSensitive(job, "eta_seconds");
+            gi_progress_at at = {
+                .fraction = num(job, "progress", 0),
+                .eta_s = cJSON_IsNumber(eta) ? eta->valuedouble : -1,
+                .done = num(work, "done", 0),
+                .total = num(work, "total", 1),
+                .samples = num(stats, "samples", 0),
+                .rays = num(stats, "rays", 0),
+                .frame = count(job, "frame", 0),
+                .frames = count(job, "frames", 1),
+            };
+            gi_progress_update(&prog, &at, end);
+        }
         if (end) {
             if (started)
                 gi_progress_end(&prog);

@@ -76,7 +76,6 @@ typedef struct gi_farm_job {
     double est_task_s;  /* mean worker-seconds of its tasks so far */
     uint64_t est_n;
     double run_t0;          /* monotonic start of this process's run */
-    double cost_done_t0;    /* cost already done at run_t0 */
     uint64_t resumed_merged; /* tasks merged before a restart (from a checkpoint) */
     uint64_t results_accepted, results_late, leases, lease_expiries;
     double merge_s, finish_s; /* coordinator time in method merge / finish */
@@ -85,6 +84,7 @@ typedef struct gi_farm_job {
     /* Task counts and statistics as they stood when the run ended. */
     uint64_t final_tasks, final_merged, final_retries;
     gi_task_stats final_stats;
+    gi_progress_at final_progress;
     /* Affinity key -> gi_farm_host owning it (gi_farm_sched.c). Kept with
      * the job's checkpoint (<dir>/affinity, by host name) so a restarted
      * coordinator sends a key's tasks to the same host again. */
@@ -227,9 +227,8 @@ void gi_farm_jobs_checkpoint_all(gi_farm *f);
 void gi_farm_jobs_free(gi_farm *f);
 /* Output file path of a finished job, or NULL if the job has no such output. */
 char *gi_farm_job_output_path(const gi_farm_job *j, const char *name);
-/* Progress in [0, 1], and an ETA in seconds (< 0 when unknown). */
-double gi_farm_job_progress(const gi_farm_job *j);
-double gi_farm_job_eta(const gi_farm_job *j);
+/* Fraction, ETA (< 0: unknown or not running), frames and work of a job. */
+void gi_farm_job_progress(const gi_farm_job *j, gi_progress_at *out);
 
 /* The checker's verdict (NULL: the scene loads): loads and starts the job,
  * or fails it. */

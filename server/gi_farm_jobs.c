@@ -517,6 +517,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
         j->final_merged = j->jr.merge_next;
         j->final_retries = j->jr.retries;
         j->final_stats = j->jr.stats;
+        gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
     }
     run_free(j);
     char *ck = checkpoint_path(j);
@@ -659,7 +660,6 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
     if (!j->started)
         j->started = gi_farm_wallnow();
     j->run_t0 = gi_now();
-    j->cost_done_t0 = j->jr.cost_done;
     j->ckpt_last = j->run_t0;
     j->ckpt_merged = j->jr.merge_next;
     j->ckpt_done_cost = j->jr.cost_done;
@@ -801,21 +801,22 @@ char *gi_farm_job_output_path(const gi_farm_job *j, const char *name)
     return NULL;
 }
 
-double gi_farm_job_progress(const gi_farm_job *j)
+void gi_farm_job_progress(const gi_farm_job *j, gi_progress_at *out)
 {
-    if (j->state == GI_FJ_DONE)
-        return 1.0;
-    if (j->loaded && j->jr.cost_total > 0)
-        return j->jr.cost_done / j->jr.cost_total;
-    return 0.0;
-}
-
-double gi_farm_job_eta(const gi_farm_job *j)
-{
-    if (j->state != GI_FJ_RUNNING || !j->loaded)
-        return -1;
-    double dt = gi_now() - j->run_t0, done = j->jr.cost_done - j->cost_done_t0;
-    if (dt < 1e-3 || done <= 0)
-        return -1;
-    return (j->jr.cost_total - j->jr.cost_done) * dt / done;
+    if (j->loaded) {
+        gi_jobrun_progress(&j->jr, gi_now(), out);
+    } else if (j->final_progress.frames) {
+        *out = j->final_progress; /* as the run ended */
+    } else {
+        memset(out, 0, sizeof *out); /* not run by this process */
+        out->frames = 1;
+        out->total = 1;
+        out->done = j->state == GI_FJ_DONE;
+    }
+    if (j->state == GI_FJ_DONE) {
+        out->fraction = 1;
+        out->eta_s = 0;
+    } else if (j->state != GI_FJ_RUNNING) {
+        out->eta_s = -1;
+    }
 }

@@ -36,11 +36,11 @@ static void add_time(cJSON *o, const char *key, double epoch)
     cJSON_AddStringToObject(o, key, s);
 }
 
-static void add_eta(cJSON *o, const gi_farm_job *j)
+static void add_progress(cJSON *o, const gi_progress_at *at)
 {
-    double eta = gi_farm_job_eta(j);
-    if (eta >= 0 && isfinite(eta))
-        cJSON_AddNumberToObject(o, "eta_seconds", floor(eta * 10 + 0.5) / 10);
+    cJSON_AddNumberToObject(o, "progress", floor(at->fraction * 1e4) / 1e4);
+    if (at->eta_s >= 0 && isfinite(at->eta_s))
+        cJSON_AddNumberToObject(o, "eta_seconds", floor(at->eta_s * 10 + 0.5) / 10);
     else
         cJSON_AddNullToObject(o, "eta_seconds");
 }
@@ -53,8 +53,9 @@ static cJSON *job_summary(const gi_farm_job *j)
     cJSON_AddStringToObject(o, "method", j->method ? j->method : "?");
     cJSON_AddStringToObject(o, "state", gi_fj_state_name(j->state));
     cJSON_AddNumberToObject(o, "priority", j->priority);
-    cJSON_AddNumberToObject(o, "progress", floor(gi_farm_job_progress(j) * 1e4) / 1e4);
-    add_eta(o, j);
+    gi_progress_at at;
+    gi_farm_job_progress(j, &at);
+    add_progress(o, &at);
     add_time(o, "submitted", j->submitted);
     return o;
 }
@@ -81,14 +82,17 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
             held += jr->tasks[i].state == GI_TASK_DONE;
         }
     }
-    /* Work in the method's unit (samples, photons...), for progress bars. */
+    /* Work in the method's unit (samples, photons...), planned so far and
+     * still to plan in this frame; the frame being computed, from 0. */
+    gi_progress_at at;
+    gi_farm_job_progress(j, &at);
     const gi_method *m = j->method ? gi_method_find(j->method) : NULL;
     cJSON_AddStringToObject(o, "unit", m ? m->unit : "");
     cJSON *work = cJSON_AddObjectToObject(o, "work");
-    double wtotal = j->loaded ? j->jr.cost_total : 1.0;
-    double wdone = j->loaded ? j->jr.cost_done : j->state == GI_FJ_DONE ? 1.0 : 0.0;
-    cJSON_AddNumberToObject(work, "done", wdone);
-    cJSON_AddNumberToObject(work, "total", wtotal);
+    cJSON_AddNumberToObject(work, "done", at.done);
+    cJSON_AddNumberToObject(work, "total", at.total);
+    cJSON_AddNumberToObject(o, "frame", at.frame);
+    cJSON_AddNumberToObject(o, "frames", at.frames);
 
     cJSON *t = cJSON_AddObjectToObject(o, "tasks");
     cJSON_AddNumberToObject(t, "total", (double)total);

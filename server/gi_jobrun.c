@@ -32,9 +32,31 @@ static void pending_push(gi_jobrun *jr, uint64_t id, int front)
     }
 }
 
+/* Tells the progress clock where the method stands, before the tasks it
+ * just planned count in cost_total. */
+static void note_progress(gi_jobrun *jr)
+{
+    gi_job_progress at = {0, 1, 0};
+    if (jr->job->method->progress)
+        jr->job->method->progress(jr->job, &at);
+    gi_progress_clock_note(&jr->clock, &at, jr->cost_total, jr->cost_done, gi_now());
+}
+
+void gi_jobrun_progress(const gi_jobrun *jr, double now, gi_progress_at *out)
+{
+    gi_progress_clock_read(&jr->clock, jr->cost_total, jr->cost_done, now, out);
+    if (jr->finished) {
+        out->fraction = 1;
+        out->eta_s = 0;
+    }
+    out->samples = (double)jr->stats.samples;
+    out->rays = (double)jr->stats.rays;
+}
+
 /* Takes the queue's tasks (ids are consecutive from task_count). */
 static int absorb(gi_jobrun *jr, gi_task_queue *q, gi_error *err)
 {
+    note_progress(jr);
     for (size_t i = 0; i < q->count; i++) {
         gi_task *t = &q->tasks[i];
         if (t->id != jr->task_count)
@@ -339,6 +361,7 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
         return -1;
     if (gi_reader_finish(&sr, err))
         return gi_error_prefix(err, "%s", job->file);
+    note_progress(jr);
     /* Everything was merged when the checkpoint was taken: only finish is left. */
     if (jr->merge_next == jr->task_count && advance(jr)) {
         if (err)

@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 #include "gi_job.h"
+#include "gi_progress.h"
 #include "gi_task.h"
 
 typedef enum {
@@ -41,6 +42,7 @@ typedef struct gi_jobrun {
     gi_error error;
     /* Progress and statistics. */
     double cost_total, cost_done;
+    gi_progress_clock clock; /* frames and ETA (gi_jobrun_progress) */
     gi_task_stats stats; /* summed over merged tasks */
     uint64_t retries;
     uint64_t held_results_bytes, held_results_peak;
@@ -73,6 +75,9 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
 int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why);
 /* A lease given back without running (worker shutting down). */
 void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
+
+/* The job's fraction, ETA, frame and totals now (monotonic seconds). */
+void gi_jobrun_progress(const gi_jobrun *jr, double now, gi_progress_at *out);
 
 static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
 

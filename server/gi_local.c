@@ -162,15 +162,20 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
                 gi_debug("sending a task to child %d failed: %s", idle, serr.msg);
         }
         gi_pool_poll(&lr.pool, 200, &ev);
-        gi_progress_update(&prog, lr.jr.cost_done, lr.jr.cost_total, (double)lr.jr.stats.rays, 0);
+        gi_progress_at at;
+        gi_jobrun_progress(&lr.jr, gi_now(), &at);
+        gi_progress_update(&prog, &at, 0);
     }
     if (rc == 0 && lr.jr.failed) {
         if (err)
             *err = lr.jr.error;
         rc = -1;
     }
-    if (rc == 0)
-        gi_progress_update(&prog, lr.jr.cost_done, lr.jr.cost_total, (double)lr.jr.stats.rays, 1);
+    if (rc == 0) {
+        gi_progress_at at;
+        gi_jobrun_progress(&lr.jr, gi_now(), &at);
+        gi_progress_update(&prog, &at, 1);
+    }
     gi_progress_end(&prog);
     gi_pool_stop(&lr.pool); /* children gone: nothing writes below batch_root now */
     batch_root_remove(&lr);

@@ -15,7 +15,7 @@ double gi_now(void)
 
 const char *gi_si(double v, char *buf, size_t n)
 {
-    static const char *suffix[] = {"", " k", " M", " G", " T"};
+    static const char *suffix[] = {" ", " k", " M", " G", " T"}; /* a unit follows */
     int i = 0;
     while (fabs(v) >= 1000.0 && i < 4) {
         v /= 1000.0;
@@ -63,15 +63,77 @@ void gi_progress_init(gi_progress *p, gi_progress_mode mode, FILE *out, const ch
     p->last_fraction_printed = -1.0;
 }
 
-void gi_progress_update(gi_progress *p, double done, double total, double rays, int force)
+void gi_progress_clock_note(gi_progress_clock *c, const gi_job_progress *at, double cost_total,
+                            double cost_done, double now)
+{
+    if (!c->noted || at->frame != c->at.frame) {
+        if (c->noted && c->frame_seen_whole && c->at.frame > 0) {
+            c->later_seconds += now - c->t_frame;
+            c->later_count++;
+        }
+        /* A frame is seen whole when none of its work was done before: at
+         * a fresh start, or when the frame before it finished. A restored
+         * job's frame counts from the work left in it. */
+        c->frame_seen_whole = c->noted || cost_done == 0;
+        c->frame_base = c->noted ? cost_total : cost_done;
+        c->t_frame = now;
+        c->done_at_t = cost_done;
+        c->noted = 1;
+    }
+    c->at = *at;
+}
+
+void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, double cost_done,
+                            double now, gi_progress_at *out)
+{
+    uint32_t frames = c->at.frames ? c->at.frames : 1, frame = c->at.frame;
+    double planned = cost_total + c->at.cost_unplanned;
+    double left = planned > cost_done ? planned - cost_done : 0;
+    double frame_work = planned - c->frame_base;
+    double f = frame_work > 0 ? (cost_done - c->frame_base) / frame_work : 1.0;
+    f = f < 0 ? 0 : f > 1 ? 1 : f;
+    out->fraction = ((double)frame + f) / frames;
+    if (out->fraction > 1)
+        out->fraction = 1;
+    out->done = cost_done;
+    out->total = planned;
+    out->frame = frame;
+    out->frames = frames;
+
+    double dt = now - c->t_frame, dd = cost_done - c->done_at_t;
+    double rest = left <= 0 ? 0 : dd > 0 && dt > 0 ? left * dt / dd : -1;
+    uint32_t after = frames - frame - 1;
+    double per_frame = -1; /* a frame past 0 */
+    if (c->later_count)
+        per_frame = c->later_seconds / c->later_count;
+    else if (frame > 0 && rest >= 0)
+        per_frame = dt + rest;
+    if (rest < 0 && per_frame >= 0 && frame > 0)
+        rest = per_frame > dt ? per_frame - dt : 0;
+    if (rest < 0 || (after > 0 && per_frame < 0))
+        out->eta_s = -1; /* frame 0 says nothing of how long the frames after it take */
+    else
+        out->eta_s = rest + (after > 0 ? per_frame * after : 0);
+}
+
+void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force)
 {
     double now = gi_now(), elapsed = now - p->start;
-    double f = total > 0 ? done / total : 0.0;
-    if (f > 1.0)
-        f = 1.0;
-    double eta = f > 0 ? elapsed * (1.0 - f) / f : NAN;
-    double rate = elapsed > 0 ? done / elapsed : 0.0;
-    char b1[32], b2[32], b3[32];
+    if (!p->updated) {
+        p->updated = 1;
+        p->samples_at_start = at->samples;
+        p->rays_at_start = at->rays;
+    }
+    double f = at->fraction, eta = at->eta_s >= 0 ? at->eta_s : NAN;
+    double rate = elapsed > 0 ? (at->samples - p->samples_at_start) / elapsed : 0.0;
+    double ray_rate = elapsed > 0 ? (at->rays - p->rays_at_start) / elapsed : 0.0;
+    char b1[32], b2[32], b3[32], what[64];
+    /* An animation shows its frames done; a still the rate in the method's unit. */
+    if (at->frames > 1)
+        snprintf(what, sizeof what, "%u/%u frames", (uint32_t)(f * at->frames + 1e-9),
+                 at->frames);
+    else
+        snprintf(what, sizeof what, "%s%s/s", gi_si(rate, b2, sizeof b2), p->unit);
     switch (p->mode) {
     case GI_PROGRESS_BAR: {
         if (!force && now - p->last_print < 0.1)
@@ -81,9 +143,9 @@ void gi_progress_update(gi_progress *p, double done, double total, double rays, 
         for (int i = 0; i < width; i++)
             bar[i] = i < fill ? '#' : '.';
         bar[width] = '\0';
-        fprintf(p->out, "\r%s [%s] %5.1f%%  ETA %-8s %s%s/s  %srays/s ", p->job_name, bar,
-                100.0 * f, gi_duration(eta, b1, sizeof b1), gi_si(rate, b2, sizeof b2),
-                p->unit, gi_si(elapsed > 0 ? rays / elapsed : 0, b3, sizeof b3));
+        fprintf(p->out, "\r%s [%s] %5.1f%%  ETA %-8s %s  %srays/s ", p->job_name, bar,
+                100.0 * f, gi_duration(eta, b1, sizeof b1), what,
+                gi_si(ray_rate, b3, sizeof b3));
         fflush(p->out);
         p->bar_drawn = 1;
         break;
@@ -93,8 +155,8 @@ void gi_progress_update(gi_progress *p, double done, double total, double rays, 
         if (!force && f - p->last_fraction_printed < 0.1 && now - p->last_print < 10.0)
             return;
         p->last_fraction_printed = f;
-        fprintf(p->out, "%s: %.1f%% done, ETA %s, %s%s/s\n", p->job_name, 100.0 * f,
-                gi_duration(eta, b1, sizeof b1), gi_si(rate, b2, sizeof b2), p->unit);
+        fprintf(p->out, "%s: %.1f%% done, ETA %s, %s\n", p->job_name, 100.0 * f,
+                gi_duration(eta, b1, sizeof b1), what);
         fflush(p->out);
         break;
     case GI_PROGRESS_JSON:
@@ -103,8 +165,10 @@ void gi_progress_update(gi_progress *p, double done, double total, double rays, 
         snprintf(b1, sizeof b1, "%.3f", eta);
         fprintf(p->out,
                 "{\"event\":\"progress\",\"job\":\"%s\",\"done\":%.17g,\"total\":%.17g,"
-                "\"fraction\":%.6f,\"elapsed_s\":%.3f,\"eta_s\":%s,\"rays\":%.17g}\n",
-                p->job_name, done, total, f, elapsed, isfinite(eta) ? b1 : "null", rays);
+                "\"fraction\":%.6f,\"frame\":%u,\"frames\":%u,\"elapsed_s\":%.3f,"
+                "\"eta_s\":%s,\"rays\":%.17g}\n",
+                p->job_name, at->done, at->total, f, at->frame, at->frames, elapsed,
+                isfinite(eta) ? b1 : "null", at->rays);
         fflush(p->out);
         break;
     default:

@@ -3,7 +3,10 @@
 #ifndef GI_PROGRESS_H
 #define GI_PROGRESS_H
 
+#include <stdint.h>
 #include <stdio.h>
+
+#include "gi_method.h"
 
 typedef enum {
     GI_PROGRESS_AUTO, /* bar on a terminal, lines otherwise */
@@ -13,11 +16,48 @@ typedef enum {
     GI_PROGRESS_NONE
 } gi_progress_mode;
 
+/* A job's progress at one moment, as the displays show it. */
+typedef struct gi_progress_at {
+    double fraction; /* of the whole job, 0..1 */
+    double eta_s;    /* seconds left; < 0 if not known yet */
+    double done, total; /* work in the method's unit: done; planned and still to plan */
+    double samples, rays; /* so far (the rates) */
+    uint32_t frame, frames; /* the frame being computed, of how many (a still: 0 of 1) */
+} gi_progress_at;
+
+/* The clock behind a job's fraction and ETA. A frame's fraction is its
+ * work done over its work planned and still to plan; the whole job's is
+ * (frame + that) / frames. The ETA is the current frame's rest at the rate
+ * this process has seen in it, plus the frames after it at the mean time of
+ * the frames this process saw whole past frame 0 (frame 0 bakes everything,
+ * the others update; before one is seen, the current frame's projected
+ * time stands in for them). Monotonic seconds; not checkpointed. */
+typedef struct gi_progress_clock {
+    gi_job_progress at;
+    int noted;
+    double frame_base;   /* planned work of the frames before this one */
+    double t_frame;      /* when this process saw this frame (or itself) start */
+    double done_at_t;    /* work done then */
+    int frame_seen_whole; /* this process saw this frame start */
+    double later_seconds; /* frames past 0 seen whole: their time and count */
+    uint32_t later_count;
+} gi_progress_clock;
+
+/* Where the job stands now (method->progress), before its newly planned
+ * tasks are counted in cost_total. */
+void gi_progress_clock_note(gi_progress_clock *c, const gi_job_progress *at, double cost_total,
+                            double cost_done, double now);
+/* Fills fraction, eta_s, done, total, frame and frames. */
+void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, double cost_done,
+                            double now, gi_progress_at *out);
+
 typedef struct gi_progress {
     gi_progress_mode mode;
     FILE *out;
     const char *job_name, *unit;
     double start, last_print;
+    double samples_at_start, rays_at_start; /* rates count from the first update */
+    int updated;
     double last_fraction_printed;
     int bar_drawn;
 } gi_progress;
@@ -26,13 +66,14 @@ typedef struct gi_progress {
 int gi_progress_mode_parse(const char *s, gi_progress_mode *out);
 void gi_progress_init(gi_progress *p, gi_progress_mode mode, FILE *out, const char *job_name,
                       const char *unit);
-/* done/total in work units; rays so far; rate-limited unless force. */
-void gi_progress_update(gi_progress *p, double done, double total, double rays, int force);
+/* Shows *at; rate-limited unless force. */
+void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force);
 /* Clears the bar line (before other output). */
 void gi_progress_end(gi_progress *p);
 
 double gi_now(void); /* monotonic seconds */
-/* "1.23 M" style formatting of a number into buf. */
+/* "1.23 M" / "500 " style formatting of a number into buf, for a unit to
+ * follow. */
 const char *gi_si(double v, char *buf, size_t n);
 /* "1:02:03" / "2:03" / "4.5s" into buf. */
 const char *gi_duration(double s, char *buf, size_t n);

@@ -333,6 +333,18 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return rc;
 }
 
+/* An animation's frame, and a bake's image tiles still to plan. */
+static void detp_progress(const gi_job *job, gi_job_progress *out)
+{
+    const gi_detp_params *p = job->params;
+    const detp_state *st = job->state;
+    out->frame = st->anim ? detp_anim_frame(st) : 0;
+    out->frames = st->anim ? p->anim.frames : 1;
+    out->cost_unplanned = st->phase == DETP_PHASE_BAKE && wants_image(job)
+                              ? (double)job->width * job->height * p->image_spp
+                              : 0;
+}
+
 #define STATE_MAGIC 0x53505444u /* "DTPS" */
 #define STATE_VERSION 2u /* 2: animations */
 
@@ -471,5 +483,6 @@ const gi_method gi_method_detp = {
     .finish = detp_finish,
     .save = detp_save,
     .load = detp_load,
+    .progress = detp_progress,
     .release = detp_release,
 };

@@ -39,6 +39,9 @@ typedef struct quad_state {
     uint32_t round;  /* the round whose tasks are out (0: the initial regions) */
     int phase;
     double threshold_abs;
+    /* Evaluations merged when the current round was planned plus that
+     * round's task costs: what max_evals has left (progress; not saved). */
+    double budget_planned;
     double splat_rel; /* |sum of pixels x area - sum of estimates| / sum, before Monte Carlo */
     double seconds;   /* coordinator wall time before this process took over */
     double t0;
@@ -115,11 +118,11 @@ static double total_error(const quad_state *st)
     return e;
 }
 
-static void add_task(gi_task_queue *q, const gi_quad_task_in *t, const gi_quad_rule *rule,
-                     double cost)
+static void add_task(gi_task_queue *q, quad_state *st, const gi_quad_task_in *t, double cost)
 {
     gi_task *task = gi_task_queue_add(q, t->kind, cost);
-    gi_quad_task_encode(&task->payload, t, rule);
+    gi_quad_task_encode(&task->payload, t, &st->rule);
+    st->budget_planned += cost;
 }
 
 /* Round 0: the initial regions (initial[0] x initial[1] image tiles, each
@@ -156,7 +159,7 @@ int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
         s->id = gi_quad_box_id(s->lo, s->hi, n);
         s->axis = -1;
         if (t.count == per || i + 1 == count) {
-            add_task(q, &t, &st->rule, (double)t.count * (double)st->rule.points);
+            add_task(q, st, &t, (double)t.count * (double)st->rule.points);
             t.count = 0;
         }
     }
@@ -172,6 +175,7 @@ static int plan_refine_round(gi_job *job, quad_state *st, gi_task_queue *q)
 {
     const gi_quad_params *p = job->params;
     uint64_t left = st->evals < p->max_evals ? p->max_evals - st->evals : 0;
+    st->budget_planned = (double)st->evals;
     uint64_t want = (uint64_t)p->round_tasks * (uint64_t)p->task_regions;
     uint64_t pts = st->rule.points, split_cost = 2 * st->rule.child_new;
     gi_quad_summary *picked = gi_xcalloc(want, sizeof *picked);
@@ -204,7 +208,7 @@ static int plan_refine_round(gi_job *job, quad_state *st, gi_task_queue *q)
         if (budget == 0)
             continue;
         t.max_splits = budget;
-        add_task(q, &t, &st->rule, (double)(reeval + budget * split_cost));
+        add_task(q, st, &t, (double)(reeval + budget * split_cost));
         added++;
     }
     gi_quad_task_in_free(&t);
@@ -233,7 +237,7 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
         if (acc >= per || i + 1 - first == MAX_TASK_REGIONS || i + 1 == n) {
             t.regions = all + first;
             t.count = (uint32_t)(i + 1 - first);
-            add_task(q, &t, &st->rule, (double)acc);
+            add_task(q, st, &t, (double)acc);
             added++;
             first = i + 1;
             acc = 0;
@@ -375,6 +379,15 @@ int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return write_outputs(job, st, err);
 }
 
+/* The refinement's rounds still to plan, as what max_evals has left. */
+void gi_quad_progress(const gi_job *job, gi_job_progress *out)
+{
+    const gi_quad_params *p = job->params;
+    const quad_state *st = job->state;
+    double left = (double)p->max_evals - st->budget_planned;
+    out->cost_unplanned = st->phase == PHASE_REFINE && left > 0 ? left : 0;
+}
+
 /* ---- checkpoints ---- */
 
 #define QUAD_STATE_VERSION 1u
@@ -426,6 +439,7 @@ int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
     st->open_final = gi_get_u64(in);
     st->err_final = gi_get_f64(in);
     st->evals = gi_get_u64(in);
+    st->budget_planned = (double)st->evals; /* the round out is not known */
     st->reevals = gi_get_u64(in);
     st->splits = gi_get_u64(in);
     st->closed = gi_get_u64(in);

@@ -26,5 +26,6 @@ const gi_method gi_method_quadrature = {
     .finish = gi_quad_finish,
     .save = gi_quad_save,
     .load = gi_quad_load,
+    .progress = gi_quad_progress,
     .release = gi_quad_release,
 };

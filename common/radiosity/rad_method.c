@@ -672,6 +672,17 @@ static int rad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return 0;
 }
 
+/* The image tiles the form factors are followed by, before they are planned. */
+static void rad_progress(const gi_job *job, gi_job_progress *out)
+{
+    const gi_rad_params *p = job->params;
+    const rad_state *st = job->state;
+    out->cost_unplanned = st->phase == PHASE_FF && images_wanted(job)
+                              ? (double)p->emissions.count * job->width * job->height *
+                                    p->image_spp
+                              : 0;
+}
+
 /* ------------------------------------------------------------------------ */
 /* Checkpoints: the counts (everything else is rebuilt from them, bit for
  * bit), and the image tiles merged so far. */
@@ -878,5 +889,6 @@ const gi_method gi_method_radiosity = {
     .finish = rad_finish,
     .save = rad_save,
     .load = rad_load,
+    .progress = rad_progress,
     .release = rad_release,
 };

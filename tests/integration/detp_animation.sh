@@ -23,8 +23,8 @@ write_job "$TMP/job.json" <<JOB
   "outputs": {"exr": "img.exr", "ply": "v.ply", "bin": "v.bin", "json": "report.json"}
 }
 JOB
-render() { # render JOB OUT WORKERS
-    "$GI" render "$1" --workers "$3" --out "$2" --progress none >"$2.log" 2>&1 ||
+render() { # render JOB OUT WORKERS [PROGRESS]
+    "$GI" render "$1" --workers "$3" --out "$2" --progress "${4:-none}" >"$2.log" 2>&1 ||
         { cat "$2.log"; fail "render $2"; }
 }
 same_frames() { # same_frames DIR_A DIR_B WHAT
@@ -35,8 +35,17 @@ same_frames() { # same_frames DIR_A DIR_B WHAT
     done
 }
 render "$TMP/job.json" "$TMP/w1" 1
-render "$TMP/job.json" "$TMP/w3" 3
+render "$TMP/job.json" "$TMP/w3" 3 json
 same_frames "$TMP/w1" "$TMP/w3" "1 vs 3 workers"
+# Progress counts the frames, and the job's fraction never goes back when a
+# frame's tasks or its image tiles are planned.
+grep '"event":"progress"' "$TMP/w3.log" | awk '
+    { match($0, /"fraction":[0-9.]*/); f = substr($0, RSTART + 11, RLENGTH - 11) + 0 }
+    f < last { print "fraction went back: " last " then " f; bad = 1 }
+    { last = f }
+    /"frame":5,"frames":6/ && f == 1 { end = 1 }
+    END { if (!end) print "no last frame at 100%"; exit bad || !end }' ||
+    { cat "$TMP/w3.log"; fail "progress of the animation"; }
 
 sed 's/"frames": 6,/"frames": 6, "update": "full",/' "$TMP/job.json" >"$TMP/full.json"
 render "$TMP/full.json" "$TMP/full" 2

@@ -49,9 +49,17 @@ wait_workers 2
 # Frame 0 is 12 tasks (8 batches, 4 tiles), every frame after it too.
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 wait_merged_tasks "$id" 30
+# Progress by frames: frame 2 or later of 8, with an ETA from the frames seen.
+view=$(api "/api/v1/jobs/$id")
+echo "$view" | grep -q '"frame":[2-7],"frames":8' || fail "no frame of 8 in the job view: $view"
+echo "$view" | grep -q '"eta_seconds":[0-9]' || fail "no ETA at frame 2 or later: $view"
 ls "$TMP"/ca/batches/*/b*.f* >/dev/null 2>&1 || fail "worker a holds no batch files"
 kill -9 "$A_PID"
 wait_state "$id" done 300
+view=$(api "/api/v1/jobs/$id")
+for want in '"progress":1,' '"eta_seconds":0,' '"frame":7,"frames":8'; do
+    echo "$view" | grep -q "$want" || fail "done job's view lacks $want: $view"
+done
 "$GI" fetch "$id" --out "$TMP/killed" >/dev/null || fail "fetch"
 same_as_ref "$TMP/killed" "worker killed"
 grep -q "affinity key .* moves from worker a to worker b" "$LOG" || fail "no batch moved to worker b"

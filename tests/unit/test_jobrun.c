@@ -1,4 +1,6 @@
-/* Unit tests: the job state machine (ordered merge, retries, follow-ups). */
+/* Unit tests: the job state machine (ordered merge, retries, follow-ups) and
+ * its progress clock. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -264,4 +266,86 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     gi_jobrun_free(&jr);
     gi_job_free(&job);
     gi_buf_free(&bad);
+}
+
+/* The fake's follow-ups, told to the progress clock before they are planned:
+ * task 5's two, then finish's one. */
+static void fake_progress(const gi_job *job, gi_job_progress *out)
+{
+    const fake_state *st = job->state;
+    int before_5 = st->merged <= 5;
+    out->cost_unplanned = (before_5 ? 2.0 : 0.0) + (st->finish_calls == 0 ? 1.0 : 0.0);
+}
+
+GI_TEST(test_jobrun_progress_counts_follow_ups_before_they_are_planned)
+{
+    gi_method m = fake_method;
+    m.progress = fake_progress;
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.method = &m;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    gi_progress_at at;
+    gi_jobrun_progress(&jr, gi_now(), &at);
+    GI_CHECK(at.fraction == 0 && at.total == FAKE_TASKS + 3 && at.frames == 1);
+    double last = 0;
+    int steps = 0;
+    while (!gi_jobrun_done(&jr)) {
+        drive(&jr, 1);
+        gi_jobrun_progress(&jr, gi_now(), &at);
+        GI_CHECK_MSG(at.fraction >= last, "step %d: %.6f after %.6f", steps, at.fraction, last);
+        GI_CHECK_MSG(fabs(at.fraction - (steps + 1.0) / (FAKE_TASKS + 3)) < 1e-12,
+                     "step %d: %.6f", steps, at.fraction);
+        last = at.fraction;
+        steps++;
+    }
+    GI_CHECK(jr.finished && steps == FAKE_TASKS + 3 && at.fraction == 1 && at.eta_s == 0);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
+/* An animation as the clock sees it (times in seconds): frame 0 bakes for
+ * 8 s then renders tiles for 2 s; frames 1.. take 1 s each, half update,
+ * half tiles; 100 units of work each way. */
+GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
+{
+    gi_progress_clock c;
+    memset(&c, 0, sizeof c);
+    gi_progress_at at;
+    gi_job_progress bake0 = {0, 4, 100}, tiles0 = {0, 4, 0};
+    gi_progress_clock_note(&c, &bake0, 0, 0, 100.0);
+    gi_progress_clock_read(&c, 100, 50, 104.0, &at);
+    GI_CHECK(fabs(at.fraction - 0.25 / 4) < 1e-12);
+    GI_CHECK(at.eta_s < 0); /* frame 0 says nothing of the frames after it */
+    gi_progress_clock_note(&c, &tiles0, 100, 100, 108.0);
+    gi_progress_clock_read(&c, 200, 150, 109.0, &at);
+    GI_CHECK(fabs(at.fraction - 0.75 / 4) < 1e-12 && at.eta_s < 0 && at.frame == 0);
+
+    gi_job_progress bake1 = {1, 4, 100}, tiles1 = {1, 4, 0}, bake2 = {2, 4, 100};
+    gi_progress_clock_note(&c, &bake1, 200, 200, 110.0);
+    gi_progress_clock_read(&c, 300, 250, 110.25, &at);
+    /* Half of frame 1's bake at 200 units/s: 150 units left in it, and two
+     * frames after it, projected at this frame's 1 s. */
+    GI_CHECK(fabs(at.fraction - 1.25 / 4) < 1e-12 && at.frame == 1 && at.frames == 4);
+    GI_CHECK_MSG(fabs(at.eta_s - (0.75 + 2 * 1.0)) < 1e-9, "eta %.9f", at.eta_s);
+    gi_progress_clock_note(&c, &tiles1, 300, 300, 110.5);
+    gi_progress_clock_note(&c, &bake2, 400, 400, 111.0);
+    /* Frame 1 was seen whole: 1 s; frame 2 is faster so far (400 units/s). */
+    gi_progress_clock_read(&c, 500, 500, 111.25, &at);
+    GI_CHECK(fabs(at.fraction - 2.5 / 4) < 1e-12);
+    GI_CHECK_MSG(fabs(at.eta_s - (0.25 + 1.0)) < 1e-9, "eta %.9f", at.eta_s);
+    gi_progress_clock_read(&c, 500, 400, 111.0, &at);
+    GI_CHECK_MSG(fabs(at.eta_s - 2.0) < 1e-9, "eta %.9f", at.eta_s); /* nothing done yet */
+
+    /* A still restored with 300 of 400 units done: its rate counts from
+     * the restart, and its fraction from the work left. */
+    gi_progress_clock r;
+    memset(&r, 0, sizeof r);
+    gi_job_progress still = {0, 1, 0};
+    gi_progress_clock_note(&r, &still, 400, 300, 50.0);
+    gi_progress_clock_read(&r, 400, 350, 52.0, &at);
+    GI_CHECK(fabs(at.fraction - 0.5) < 1e-12 && fabs(at.eta_s - 2.0) < 1e-9);
+    GI_CHECK(at.frames == 1 && at.done == 350 && at.total == 400);
 }
