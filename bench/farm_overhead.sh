@@ -4,11 +4,15 @@
 # scheduling, TCP, merging, download) against `gi render --workers 2`.
 # Runs alternate; medians are reported. Then the coordinator's merge
 # throughput (result bytes / time inside merge) from its metrics, for the
-# benchmark job and for a job with large results.
-#   bench/farm_overhead.sh BUILD_DIR [ROUNDS]
+# benchmark job and for a job with large results. With JOB.json, that job
+# instead (every output but the JSON reports compared), with the CPU seconds the coordinator and
+# the worker's relay spent on each farm run, and no merge figures.
+#   bench/farm_overhead.sh BUILD_DIR [ROUNDS] [JOB.json]
 set -eu
 BIN=$(cd "${1:-build/release}" && pwd)
 ROUNDS=${2:-5}
+JOB=${3:-}
+[ -z "$JOB" ] || JOB=$(cd "$(dirname "$JOB")" && pwd)/$(basename "$JOB")
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-farm.XXXXXX")
 PIDS=""
@@ -25,11 +29,13 @@ export GI_FARM_SECRET_FILE="$T/secret" GI_FARM_TOKEN_FILE="$T/token" GI_LOG=warn
 "$BIN/gi-farmd" --state "$T/state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 \
     >"$T/farmd.log" 2>&1 &
 PIDS="$PIDS $!"
+FARMD_PID=$!
 while [ ! -s "$T/state/addresses" ]; do sleep 0.05; done
 export GI_FARM="http://$(awk '$1 == "api" {print $2}' "$T/state/addresses")"
 "$BIN/gi-worker" --connect "$(awk '$1 == "workers" {print $2}' "$T/state/addresses")" \
     --procs 2 --cache "$T/cache" >"$T/worker.log" 2>&1 &
 PIDS="$PIDS $!"
+RELAY_PID=$!
 
 job() { # FILE W H SPP TILE PASS
     cat >"$1" <<JOB
@@ -43,6 +49,31 @@ metric() {
     curl -s -H "Authorization: Bearer $(cat "$T/token")" "$GI_FARM/metrics" | awk -v m="$1" '$1 == m {print $2}'
 }
 median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
+cpu() { awk '{print ($14 + $15) / 100}' "/proc/$1/stat"; } # user + system seconds
+
+if [ -n "$JOB" ]; then
+    echo "job: $JOB"
+    "$BIN/gi" submit "$JOB" --wait --out "$T/o" --progress none >/dev/null 2>&1
+    i=0
+    while [ $i -lt "$ROUNDS" ]; do
+        rm -rf "$T/l" "$T/f"
+        t0=$(now)
+        "$BIN/gi" render "$JOB" --workers 2 --out "$T/l" --progress none >/dev/null
+        t1=$(now)
+        c0=$(cpu "$FARMD_PID") r0=$(cpu "$RELAY_PID")
+        "$BIN/gi" submit "$JOB" --wait --out "$T/f" --progress none >/dev/null 2>&1
+        t2=$(now)
+        c1=$(cpu "$FARMD_PID") r1=$(cpu "$RELAY_PID")
+        for o in "$T"/l/*; do
+            case $o in *.json) continue ;; esac # reports hold timings
+            cmp -s "$o" "$T/f/$(basename "$o")" || { echo "outputs differ: $(basename "$o")"; exit 1; }
+        done
+        awk -v a="$t0" -v b="$t1" -v c="$t2" -v c0="$c0" -v c1="$c1" -v r0="$r0" -v r1="$r1" \
+            -v n=$((i + 1)) 'BEGIN {printf "round %d: gi render %.2f s, farm %.2f s (coordinator CPU %.2f s, worker relay CPU %.2f s)\n", n, b - a, c - b, c1 - c0, r1 - r0}'
+        i=$((i + 1))
+    done
+    exit 0
+fi
 
 # The benchmark job (override with BENCH_JOB="W H SPP TILE PASS_SPP").
 set -- ${BENCH_JOB:-320 240 96 32 16}
