@@ -102,7 +102,7 @@ void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, doubl
 
     double dt = now - c->t_frame, dd = cost_done - c->done_at_t;
     double rest = left <= 0 ? 0 : dd > 0 && dt > 0 ? left * dt / dd : -1;
-    uint32_t after = frames - frame - 1;
+    uint32_t after = frame + 1 < frames ? frames - frame - 1 : 0;
     double per_frame = -1; /* a frame past 0 */
     if (c->later_count)
         per_frame = c->later_seconds / c->later_count;
