@@ -2,10 +2,16 @@
  * it. assimp trusts counts in headers (a PLY header declaring 10^8
  * vertices makes it allocate gigabytes for a 100-byte file, and it leaks
  * that on the error path): a header whose elements cannot fit in the bytes
- * that follow it is refused here, as bad input. */
+ * that follow it is refused here, as bad input. Likewise an OBJ face that
+ * names a vertex, texture coordinate or normal the file does not have
+ * (assimp refuses it, but leaks the meshes it has built when the file has
+ * more than one; found by fuzz_mesh), with the line it is on. */
+#include <ctype.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "gi_mesh.h"
 
@@ -80,9 +86,119 @@ static int ply_precheck(const char *name, const uint8_t *data, size_t len, gi_er
     return 0;
 }
 
+/* An OBJ line: its keyword (the first word) and where its arguments start. */
+typedef struct obj_line {
+    const char *p, *end; /* the line, without its newline */
+    size_t number;       /* from 1 */
+} obj_line;
+
+static int obj_next_line(const uint8_t *data, size_t len, size_t *at, obj_line *l)
+{
+    if (*at >= len)
+        return 0;
+    const char *s = (const char *)data + *at, *e = memchr(s, '\n', len - *at);
+    if (!e)
+        e = (const char *)data + len;
+    *at = (size_t)(e - (const char *)data) + 1;
+    l->p = s;
+    l->end = e;
+    l->number++;
+    return 1;
+}
+
+/* The line's keyword: "v", "vt", "vn", "f", "l", "p" -> 0..5, else -1;
+ * *args after it. */
+static int obj_keyword(const obj_line *l, const char **args)
+{
+    static const char *const words[] = {"v", "vt", "vn", "f", "l", "p"};
+    const char *s = l->p;
+    while (s < l->end && (*s == ' ' || *s == '\t'))
+        s++;
+    const char *w = s;
+    while (s < l->end && !isspace((unsigned char)*s))
+        s++;
+    *args = s;
+    for (int k = 0; k < 6; k++)
+        if ((size_t)(s - w) == strlen(words[k]) && memcmp(w, words[k], (size_t)(s - w)) == 0)
+            return k;
+    return -1;
+}
+
+/* Every index of a face, line or point element (v, v/vt, v//vn, v/vt/vn;
+ * negative: relative to the elements defined so far) must name one the
+ * file defines. Tokens that are not plain integers are left to assimp. */
+static int obj_check_refs(const char *name, const obj_line *l, const char *s,
+                          const uint64_t total[3], const uint64_t sofar[3], gi_error *err)
+{
+    static const char *const what[] = {"vertex", "texture coordinate", "normal"};
+    while (s < l->end) {
+        while (s < l->end && isspace((unsigned char)*s))
+            s++;
+        for (int k = 0; k < 3 && s < l->end && !isspace((unsigned char)*s); k++) {
+            if (*s == '/') { /* an empty slot: v//vn */
+                s++;
+                continue;
+            }
+            char buf[32];
+            size_t n = 0;
+            while (s < l->end && !isspace((unsigned char)*s) && *s != '/' && n + 1 < sizeof buf)
+                buf[n++] = *s++;
+            buf[n] = '\0';
+            char *end;
+            errno = 0;
+            long long v = strtoll(buf, &end, 10);
+            if (end == buf || *end || errno)
+                return 0; /* not an integer: assimp decides */
+            uint64_t mag = v < 0 ? (uint64_t)0 - (uint64_t)v : (uint64_t)v;
+            if (v == 0 || (v > 0 && mag > total[k]) || (v < 0 && mag > sofar[k]))
+                return gi_fail(err, GI_EINVAL,
+                               "%s: line %zu: %s index %lld is out of range (%llu defined%s)",
+                               name, l->number, what[k], v,
+                               (unsigned long long)(v < 0 ? sofar[k] : total[k]),
+                               v < 0 ? " before it" : "");
+            if (s < l->end && *s == '/')
+                s++;
+        }
+        while (s < l->end && !isspace((unsigned char)*s))
+            s++;
+    }
+    return 0;
+}
+
+static int obj_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err)
+{
+    uint64_t total[3] = {0, 0, 0}, sofar[3] = {0, 0, 0};
+    obj_line l = {0};
+    size_t at = 0;
+    const char *args;
+    while (obj_next_line(data, len, &at, &l)) {
+        int k = obj_keyword(&l, &args);
+        if (k >= 0 && k < 3)
+            total[k]++;
+    }
+    memset(&l, 0, sizeof l);
+    at = 0;
+    while (obj_next_line(data, len, &at, &l)) {
+        int k = obj_keyword(&l, &args);
+        if (k >= 0 && k < 3)
+            sofar[k]++;
+        else if (k >= 3 && obj_check_refs(name, &l, args, total, sofar, err))
+            return -1;
+    }
+    return 0;
+}
+
+static int has_extension(const char *name, const char *ext)
+{
+    size_t n = strlen(name), e = strlen(ext);
+    return n > e && strcasecmp(name + n - e, ext) == 0;
+}
+
 int gi_mesh_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err)
 {
     if (len >= 4 && memcmp(data, "ply", 3) == 0 && (data[3] == '\n' || data[3] == '\r'))
         return ply_precheck(name, data, len, err);
+    if (has_extension(name, ".obj"))
+        return obj_precheck(name, data, len, err);
     return 0;
 }
