@@ -11,11 +11,19 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <errno.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <poll.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "gi_fs.h"
 #include "gi_log.h"
@@ -402,6 +410,326 @@ static int convert(const struct aiScene *sc, const import_ctx *c, const char *na
  * and the reading of its error are one critical section. */
 static pthread_mutex_t assimp_lock = PTHREAD_MUTEX_INITIALIZER;
 
+/* assimp's import and convert(), over the files of c (the main one first). */
+static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_error *err)
+{
+    struct aiFileIO io = {fs_open, fs_close, (aiUserData)c};
+    /* SortByPType leaves every mesh one primitive type; convert() skips
+     * the point and line meshes. (Not AI_CONFIG_PP_SBP_REMOVE: a file with
+     * nothing but lines would then fail as "No meshes remaining" instead of
+     * "no triangles".) No aiProcess_GenNormals: the scene computes
+     * area-weighted normals for meshes without, the same way for every
+     * format. */
+    unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                     aiProcess_PreTransformVertices | aiProcess_SortByPType |
+                     aiProcess_ValidateDataStructure;
+    char aimsg[600] = "";
+    pthread_mutex_lock(&assimp_lock);
+    const struct aiScene *sc = aiImportFileEx(c->files[0]->name, flags, &io);
+    if (!sc)
+        snprintf(aimsg, sizeof aimsg, "%s", aiGetErrorString());
+    pthread_mutex_unlock(&assimp_lock);
+    if (sc) {
+        int rc = convert(sc, c, name, out, err);
+        aiReleaseImport(sc);
+        return rc;
+    }
+    /* A referenced file (.mtl, .bin) that could not be read is the likely
+     * cause: say which, and keep its code (a failed fetch is not bad input). */
+    const import_file *missing = NULL;
+    for (size_t i = 1; i < c->count && !missing; i++)
+        if (!c->files[i]->ok)
+            missing = c->files[i];
+    return gi_fail(err, missing && missing->err.code != GI_OK ? missing->err.code : GI_EINVAL,
+                   "%s: cannot import: %s%s%s", name, aimsg[0] ? aimsg : "unknown assimp error",
+                   missing ? "; " : "", missing ? missing->err.msg : "");
+}
+
+/* ---- assimp in a child process --------------------------------------------
+ * assimp has assertions that malformed files reach (it is built with them:
+ * a PLY with a garbled face list aborts in its triangulation; fuzz_mesh), and
+ * leaks on some error paths. So it runs in a forked child: the parent serves
+ * the files it asks for (through the job's source, whose manifest and cache
+ * stay the parent's) and reads back the converted mesh or the error; a child
+ * that dies is an error naming the file. Messages on the socket pair:
+ * u8 type, u64 length, payload. */
+
+enum {
+    MSG_READ = 'R',  /* child: a file's name */
+    MSG_FILE = 'F',  /* parent: u8 ok, then the bytes or u32 code + message */
+    MSG_MESH = 'M',  /* child: the mesh (encode_mesh) */
+    MSG_ERROR = 'E', /* child: u32 code + message */
+};
+
+static int send_all(int fd, const void *p, size_t n)
+{
+    const uint8_t *b = p;
+    while (n) {
+        ssize_t w = send(fd, b, n, MSG_NOSIGNAL);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return -1;
+        b += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+static int recv_all(int fd, void *p, size_t n)
+{
+    uint8_t *b = p;
+    while (n) {
+        ssize_t r = recv(fd, b, n, 0);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            return -1;
+        b += r;
+        n -= (size_t)r;
+    }
+    return 0;
+}
+
+static int send_msg(int fd, uint8_t type, const gi_buf *payload)
+{
+    uint8_t head[9];
+    head[0] = type;
+    gi_le_put_u64(head + 1, payload->len);
+    return send_all(fd, head, sizeof head) || send_all(fd, payload->data, payload->len) ? -1 : 0;
+}
+
+static int recv_msg(int fd, uint8_t *type, gi_buf *payload)
+{
+    uint8_t head[9];
+    if (recv_all(fd, head, sizeof head))
+        return -1;
+    uint64_t len = gi_le_get_u64(head + 1);
+    if (len > ((uint64_t)1 << 40))
+        return -1;
+    *type = head[0];
+    gi_buf_reset(payload);
+    return recv_all(fd, gi_buf_grow(payload, (size_t)len), (size_t)len);
+}
+
+static void put_error(gi_buf *b, const gi_error *e)
+{
+    gi_buf_put_u32(b, (uint32_t)e->code);
+    gi_buf_put_str(b, e->msg);
+}
+
+static void get_error(gi_reader *r, gi_error *err)
+{
+    uint32_t code = gi_get_u32(r);
+    char *msg = gi_get_str(r, sizeof err->msg);
+    gi_fail(err, code > GI_OK && code <= GI_EINTERNAL ? (gi_errcode)code : GI_EINTERNAL, "%s",
+            msg ? msg : "mesh import: a bad error message from the importer process");
+    free(msg);
+}
+
+/* The child's source: every read is a question to the parent. */
+static int child_read(void *ctx, const char *name, gi_buf *out, gi_error *err)
+{
+    int fd = *(const int *)ctx;
+    gi_buf q;
+    gi_buf_init(&q);
+    gi_buf_put(&q, name, strlen(name));
+    uint8_t type;
+    int rc = send_msg(fd, MSG_READ, &q) || recv_msg(fd, &type, &q) || type != MSG_FILE;
+    if (rc) {
+        gi_buf_free(&q);
+        return gi_fail(err, GI_EIO, "%s: the importer lost its parent", name);
+    }
+    gi_reader r;
+    gi_reader_init(&r, q.data, q.len, "mesh file");
+    if (gi_get_u8(&r)) {
+        gi_buf_reset(out);
+        gi_buf_put(out, r.p, r.left);
+    } else {
+        get_error(&r, err);
+        rc = -1;
+    }
+    gi_buf_free(&q);
+    return rc;
+}
+
+static void encode_mesh(gi_buf *b, const gi_mesh_data *m)
+{
+    gi_buf_put_u32(b, m->vertex_count);
+    gi_buf_put_u32(b, m->triangle_count);
+    gi_buf_put_u32(b, m->material_count);
+    gi_buf_put_u8(b, m->normals != NULL);
+    gi_buf_put_f32s(b, &m->positions[0].x, 3 * (size_t)m->vertex_count);
+    if (m->normals)
+        gi_buf_put_f32s(b, &m->normals[0].x, 3 * (size_t)m->vertex_count);
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        gi_buf_put_u32(b, m->indices[i]);
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+        gi_buf_put_u32(b, m->tri_material[t]);
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        gi_buf_put_str(b, m->materials[i].name);
+        gi_buf_put_f32s(b, &m->materials[i].diffuse.x, 3);
+        gi_buf_put_f32s(b, &m->materials[i].emission.x, 3);
+    }
+}
+
+static int decode_mesh(const gi_buf *b, const char *name, gi_mesh_data *m, gi_error *err)
+{
+    gi_reader r;
+    gi_reader_init(&r, b->data, b->len, "imported mesh");
+    uint32_t nv = gi_get_u32(&r), nt = gi_get_u32(&r), nm = gi_get_u32(&r);
+    int normals = gi_get_u8(&r);
+    /* Each vertex takes 12 bytes, a triangle 16, a material 28: counts the
+     * payload cannot hold are refused before anything is allocated. */
+    if (r.failed || nv == 0 || nt == 0 || nm == 0 || r.left / 12 < nv || r.left / 16 < nt ||
+        r.left / 28 < nm)
+        return gi_fail(err, GI_EINTERNAL, "%s: the importer process sent a bad mesh", name);
+    m->vertex_count = nv;
+    m->triangle_count = nt;
+    m->positions = gi_xmalloc(((size_t)nv + 1) * sizeof *m->positions);
+    gi_get_f32s(&r, &m->positions[0].x, 3 * (size_t)nv);
+    if (normals) {
+        m->normals = gi_xmalloc(((size_t)nv + 1) * sizeof *m->normals);
+        gi_get_f32s(&r, &m->normals[0].x, 3 * (size_t)nv);
+    }
+    m->indices = gi_xmalloc(3 * (size_t)nt * sizeof *m->indices);
+    for (size_t i = 0; i < 3 * (size_t)nt; i++)
+        m->indices[i] = gi_get_u32(&r);
+    m->tri_material = gi_xmalloc((size_t)nt * sizeof *m->tri_material);
+    for (uint32_t t = 0; t < nt; t++)
+        m->tri_material[t] = gi_get_u32(&r);
+    m->materials = gi_xcalloc(nm, sizeof *m->materials);
+    m->material_count = nm;
+    for (uint32_t i = 0; i < nm && !r.failed; i++) {
+        m->materials[i].name = gi_get_str(&r, 4096);
+        gi_get_f32s(&r, &m->materials[i].diffuse.x, 3);
+        gi_get_f32s(&r, &m->materials[i].emission.x, 3);
+    }
+    gi_error e;
+    if (gi_reader_finish(&r, &e))
+        return gi_fail(err, GI_EINTERNAL, "%s: the importer process sent a bad mesh: %s", name,
+                       e.msg);
+    return 0;
+}
+
+_Static_assert(sizeof(gi_vec3) == 3 * sizeof(float), "gi_vec3 is sent as 3 floats");
+
+/* In the child: assimp over files asked of the parent; never returns. */
+static void child_main(int fd, const char *name)
+{
+    import_ctx c;
+    memset(&c, 0, sizeof c);
+    gi_asset_source src = {child_read, &fd};
+    c.src = &src;
+    gi_mesh_data m;
+    gi_mesh_data_init(&m);
+    gi_error e;
+    gi_error_clear(&e);
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = ctx_fetch(&c, name)->ok ? assimp_import(&c, name, &m, &e) : -1;
+    if (rc == 0)
+        encode_mesh(&b, &m);
+    else
+        put_error(&b, e.code != GI_OK ? &e : &c.files[0]->err);
+    rc = send_msg(fd, rc == 0 ? MSG_MESH : MSG_ERROR, &b);
+    _exit(rc ? 1 : 0); /* no atexit handlers or stdio flushes of the parent's */
+}
+
+/* How long assimp may take: a few seconds, and more for big files (it reads
+ * tens of MB a second). It loops forever on some malformed files (a PLY
+ * with a garbled header: fuzz_mesh). */
+static double import_seconds(size_t bytes) { return 5.0 + 2.0 * (double)bytes / 1e6; }
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Waits for the child to say something until the deadline: 0 when it
+ * did, 1 when time ran out, -1 on an error. */
+static int wait_readable(int fd, double deadline)
+{
+    for (;;) {
+        double left = deadline - now_s();
+        if (left <= 0)
+            return 1;
+        struct pollfd pfd = {fd, POLLIN, 0};
+        int n = poll(&pfd, 1, (int)(left * 1000.0) + 1);
+        if (n < 0 && errno == EINTR)
+            continue;
+        return n > 0 ? 0 : n == 0 ? 1 : -1;
+    }
+}
+
+/* Serves the child's reads until it sends its answer, then reaps it. */
+static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_mesh_data *out,
+                       gi_error *err)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = -1, answered = 0, late = 0;
+    uint8_t type;
+    double limit = import_seconds(c->files[0]->bytes.len), deadline = now_s() + limit;
+    while (!answered && !(late = wait_readable(fd, deadline) == 1) &&
+           recv_msg(fd, &type, &b) == 0) {
+        if (type == MSG_READ) {
+            char *want = gi_xmalloc(b.len + 1);
+            memcpy(want, b.data, b.len);
+            want[b.len] = '\0';
+            import_file *f = ctx_fetch(c, want);
+            free(want);
+            gi_buf_reset(&b);
+            gi_buf_put_u8(&b, (uint8_t)f->ok);
+            if (f->ok)
+                gi_buf_put(&b, f->bytes.data, f->bytes.len);
+            else
+                put_error(&b, &f->err);
+            if (send_msg(fd, MSG_FILE, &b))
+                break;
+        } else if (type == MSG_MESH) {
+            rc = decode_mesh(&b, name, out, err);
+            answered = 1;
+        } else if (type == MSG_ERROR) {
+            gi_reader r;
+            gi_reader_init(&r, b.data, b.len, "importer error");
+            get_error(&r, err);
+            answered = 1;
+        } else {
+            break;
+        }
+    }
+    gi_buf_free(&b);
+    close(fd);
+    if (late)
+        kill(pid, SIGKILL);
+    int status = 0;
+    pid_t w;
+    while ((w = waitpid(pid, &status, 0)) < 0 && errno == EINTR)
+        ;
+    if (answered)
+        return rc;
+    if (late)
+        return gi_fail(err, GI_EINVAL,
+                       "%s: cannot import: the importer (assimp) took more than %.0f s on its "
+                       "%zu bytes: the file is malformed or unsupported",
+                       name, limit, c->files[0]->bytes.len);
+    if (w == pid && WIFSIGNALED(status)) {
+        int sig = WTERMSIG(status);
+        /* An assertion or a bad access in assimp is the file's doing; a
+         * kill (the OOM killer, an operator) is not. */
+        int file = sig == SIGABRT || sig == SIGSEGV || sig == SIGBUS || sig == SIGFPE ||
+                   sig == SIGILL;
+        return gi_fail(err, file ? GI_EINVAL : GI_ECRASH,
+                       "%s: cannot import: the importer (assimp) died on it (%s)%s", name,
+                       strsignal(sig), file ? ": the file is malformed or unsupported" : "");
+    }
+    return gi_fail(err, GI_ECRASH, "%s: cannot import: the importer process ended without an "
+                   "answer (exit status %d)", name, w == pid && WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+}
+
 int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
                    gi_error *err)
 {
@@ -426,39 +754,33 @@ int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *o
         return -1;
     }
 
-    struct aiFileIO io = {fs_open, fs_close, (aiUserData)&c};
-    /* SortByPType leaves every mesh one primitive type; convert() skips
-     * the point and line meshes. (Not AI_CONFIG_PP_SBP_REMOVE: a file with
-     * nothing but lines would then fail as "No meshes remaining" instead of
-     * "no triangles".) No aiProcess_GenNormals: the scene computes
-     * area-weighted normals for meshes without, the same way for every
-     * format. */
-    unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                     aiProcess_PreTransformVertices | aiProcess_SortByPType |
-                     aiProcess_ValidateDataStructure;
-    char aimsg[600] = "";
-    pthread_mutex_lock(&assimp_lock);
-    const struct aiScene *sc = aiImportFileEx(main_file->name, flags, &io);
-    if (!sc)
-        snprintf(aimsg, sizeof aimsg, "%s", aiGetErrorString());
-    pthread_mutex_unlock(&assimp_lock);
-
-    int rc;
-    if (!sc) {
-        /* A referenced file (.mtl, .bin) that could not be read is the
-         * likely cause: say which, and keep its code (a failed fetch is
-         * not bad input). */
-        const import_file *missing = NULL;
-        for (size_t i = 1; i < c.count && !missing; i++)
-            if (!c.files[i]->ok)
-                missing = c.files[i];
-        rc = gi_fail(err, missing && missing->err.code != GI_OK ? missing->err.code : GI_EINVAL,
-                     "%s: cannot import: %s%s%s", name, aimsg[0] ? aimsg : "unknown assimp error",
-                     missing ? "; " : "", missing ? missing->err.msg : "");
+    gi_error e;
+    gi_error_clear(&e);
+    int sv[2], rc, why = 0;
+    pid_t pid = -1;
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) == 0) {
+        fflush(NULL); /* nothing buffered is written twice */
+        pid = fork();
+        if (pid == 0) {
+            close(sv[0]);
+            prctl(PR_SET_PDEATHSIG, SIGKILL); /* no importer outlives its parent */
+            child_main(sv[1], name);
+        }
+        why = errno;
+        close(sv[1]);
+        if (pid < 0)
+            close(sv[0]);
     } else {
-        rc = convert(sc, &c, name, out, err);
-        aiReleaseImport(sc);
+        why = errno;
     }
+    if (pid > 0) {
+        rc = parent_main(sv[0], pid, &c, name, out, &e);
+    } else {
+        gi_debug("%s: importing in this process (no child: %s)", name, strerror(why));
+        rc = assimp_import(&c, name, out, &e);
+    }
+    if (rc && err)
+        *err = e;
     ctx_free(&c);
     if (rc)
         gi_mesh_data_free(out);
