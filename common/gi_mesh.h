@@ -36,7 +36,8 @@ void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src);
 /* Loads OBJ (+ the .mtl files it names), PLY or glTF 2.0 (.gltf + .bin, or
  * .glb) through assimp. Every file is read through `src`, so the same call
  * works from disk, from a pool parent or from a farm coordinator. Errors name
- * the file: unreadable, unknown format, no triangles, bad indices. */
+ * the file: unreadable, unknown format, no triangles, bad indices, and an
+ * importer that crashed or ran out of time (assimp runs in a forked child). */
 int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
                    gi_error *err);
 

@@ -3,7 +3,8 @@
  * assimp never touches the disk: every file it opens (the mesh, an OBJ's
  * .mtl, a glTF's .bin) is read whole through the job's gi_asset_source and
  * served from memory, so imports work the same on a farm worker that has
- * only the job's assets, and the source's manifest lists every file used. */
+ * only the job's assets, and the source's manifest lists every file used.
+ * assimp itself runs in a child process (see "assimp in a child process"). */
 #include "gi_mesh.h"
 
 #include <assimp/cfileio.h>
