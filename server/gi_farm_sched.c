@@ -434,8 +434,9 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         c->host->consecutive_failures = 0;
         c->host->successes++;
     }
-    if (l.task_id < j->jr.task_count)
-        affinity_own(j, j->jr.tasks[l.task_id].task.affinity, c->host, "it returned a result");
+    const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l.task_id);
+    if (jt)
+        affinity_own(j, jt->task.affinity, c->host, "it returned a result");
     c->tasks_done++;
     c->result_bytes += r.data.len;
     /* Correct the provisional charge with what the task really cost. */

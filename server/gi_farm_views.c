@@ -78,8 +78,9 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
         st = jr->stats;
         leased = jr->leased;
         for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
-            pending += jr->tasks[i].state == GI_TASK_PENDING;
-            held += jr->tasks[i].state == GI_TASK_DONE;
+            const gi_jobrun_task *jt = gi_jobrun_task_at(jr, i);
+            pending += jt->state == GI_TASK_PENDING;
+            held += jt->state == GI_TASK_DONE;
         }
     }
     /* Work in the method's unit (samples, photons...), planned so far and

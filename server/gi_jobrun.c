@@ -62,11 +62,11 @@ static int absorb(gi_jobrun *jr, gi_task_queue *q, gi_error *err)
         if (t->id != jr->task_count)
             return gi_fail(err, GI_EINTERNAL, "task id %llu out of sequence (expected %llu)",
                            (unsigned long long)t->id, (unsigned long long)jr->task_count);
-        if (jr->task_count == jr->task_cap) {
+        if (jr->task_count - jr->task_base == jr->task_cap) {
             jr->task_cap = jr->task_cap ? 2 * jr->task_cap : 256;
             jr->tasks = gi_xrealloc(jr->tasks, jr->task_cap * sizeof *jr->tasks);
         }
-        gi_jobrun_task *jt = &jr->tasks[jr->task_count++];
+        gi_jobrun_task *jt = &jr->tasks[jr->task_count++ - jr->task_base];
         memset(jt, 0, sizeof *jt);
         jt->task = *t;
         gi_buf_init(&t->payload); /* moved */
@@ -106,13 +106,21 @@ int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
 
 void gi_jobrun_free(gi_jobrun *jr)
 {
-    for (uint64_t i = 0; i < jr->task_count; i++) {
+    for (uint64_t i = 0; i < jr->task_count - jr->task_base; i++) {
         gi_task_free(&jr->tasks[i].task);
         gi_buf_free(&jr->tasks[i].result);
     }
     free(jr->tasks);
     free(jr->pending);
     memset(jr, 0, sizeof *jr);
+}
+
+/* A pending entry whose task is still waiting for a lease (entries of tasks
+ * leased again, or merged since, are stale). */
+static int is_pending(const gi_jobrun *jr, uint64_t id)
+{
+    const gi_jobrun_task *jt = gi_jobrun_task_at(jr, id);
+    return jt && jt->state == GI_TASK_PENDING;
 }
 
 const gi_task *gi_jobrun_lease(gi_jobrun *jr) { return gi_jobrun_lease_if(jr, NULL, NULL, NULL); }
@@ -126,13 +134,12 @@ const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const 
         return NULL;
     /* Entries of tasks no longer pending (leased again after a requeue put
      * a second entry in front) are dropped as they are met. */
-    while (jr->pending_head < jr->pending_count &&
-           jr->tasks[jr->pending[jr->pending_head]].state != GI_TASK_PENDING)
+    while (jr->pending_head < jr->pending_count && !is_pending(jr, jr->pending[jr->pending_head]))
         jr->pending_head++;
     for (uint64_t i = jr->pending_head; i < jr->pending_count; i++) {
-        gi_jobrun_task *jt = &jr->tasks[jr->pending[i]];
-        if (jt->state != GI_TASK_PENDING)
+        if (!is_pending(jr, jr->pending[i]))
             continue;
+        gi_jobrun_task *jt = gi_jobrun_task_at(jr, jr->pending[i]);
         if (accept && !accept(ctx, &jt->task)) {
             if (passed)
                 ++*passed;
@@ -149,6 +156,17 @@ const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const 
     return NULL;
 }
 
+/* Drops the merged tasks from the front of the array once they are at
+ * least half of it (and 256), so moving the rest costs O(1) a task. */
+static void drop_merged(gi_jobrun *jr)
+{
+    uint64_t merged = jr->merge_next - jr->task_base, held = jr->task_count - jr->task_base;
+    if (merged < 256 || 2 * merged < held)
+        return;
+    memmove(jr->tasks, jr->tasks + merged, (held - merged) * sizeof *jr->tasks);
+    jr->task_base = jr->merge_next;
+}
+
 /* Merges every result whose turn has come; calls finish when all is merged. */
 static int advance(gi_jobrun *jr)
 {
@@ -157,8 +175,8 @@ static int advance(gi_jobrun *jr)
     gi_error_clear(&err);
     for (;;) {
         while (jr->merge_next < jr->task_count &&
-               jr->tasks[jr->merge_next].state == GI_TASK_DONE) {
-            gi_jobrun_task *jt = &jr->tasks[jr->merge_next];
+               gi_jobrun_task_at(jr, jr->merge_next)->state == GI_TASK_DONE) {
+            gi_jobrun_task *jt = gi_jobrun_task_at(jr, jr->merge_next);
             gi_task_queue q;
             gi_task_queue_init(&q, jr->task_count);
             double t0 = gi_now();
@@ -168,7 +186,7 @@ static int advance(gi_jobrun *jr)
             if (rc == 0)
                 rc = absorb(jr, &q, &err);
             gi_task_queue_free(&q);
-            jt = &jr->tasks[jr->merge_next]; /* absorb may have moved the array */
+            jt = gi_jobrun_task_at(jr, jr->merge_next); /* absorb may have moved the array */
             if (rc)
                 return job_fail(jr, &err);
             jr->held_results_bytes -= jt->result.len;
@@ -177,6 +195,7 @@ static int advance(gi_jobrun *jr)
             jt->state = GI_TASK_MERGED;
             jr->merge_next++;
         }
+        drop_merged(jr);
         if (jr->merge_next < jr->task_count)
             return 0;
         gi_task_queue q;
@@ -201,13 +220,12 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
 {
     if (gi_jobrun_done(jr))
         return jr->failed ? -1 : 0;
-    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED ||
-        jr->tasks[task_id].task.attempt != attempt) {
+    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt) {
         gi_debug("ignoring a stale result for task %llu (attempt %u)",
                  (unsigned long long)task_id, attempt);
         return 0;
     }
-    gi_jobrun_task *jt = &jr->tasks[task_id];
     gi_buf_move(&jt->result, result);
     jt->state = GI_TASK_DONE;
     jr->leased--;
@@ -225,10 +243,9 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
 {
     if (gi_jobrun_done(jr))
         return jr->failed ? -1 : 0;
-    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED ||
-        jr->tasks[task_id].task.attempt != attempt)
+    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt)
         return 0;
-    gi_jobrun_task *jt = &jr->tasks[task_id];
     jt->last_error = *why;
     jr->leased--;
     jt->task.attempt++;
@@ -252,9 +269,10 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
 
 void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 {
-    if (task_id >= jr->task_count || jr->tasks[task_id].state != GI_TASK_LEASED)
+    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    if (!jt || jt->state != GI_TASK_LEASED)
         return;
-    jr->tasks[task_id].state = GI_TASK_PENDING;
+    jt->state = GI_TASK_PENDING;
     jr->leased--;
     pending_push(jr, task_id, 1);
 }
@@ -278,7 +296,7 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     gi_buf_put_f64(out, jr->stats.seconds);
     gi_buf_put_f64(out, jr->cost_total);
     for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
-        const gi_task *t = &jr->tasks[i].task;
+        const gi_task *t = &gi_jobrun_task_at(jr, i)->task;
         gi_buf_put_u32(out, t->kind);
         gi_buf_put_u32(out, t->attempt);
         gi_buf_put_f64(out, t->cost);
@@ -321,20 +339,19 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     jr->cost_total = gi_get_f64(&r);
     if (r.failed || merged > count || count - merged > r.left / 24)
         return gi_fail(err, GI_EPROTO, "%s: checkpoint: bad task counts", job->file);
-    jr->task_cap = count ? count : 1;
+    /* Only the tasks not merged are held; the count check above keeps them
+     * within what the checkpoint's bytes can describe. */
+    jr->task_base = merged;
+    jr->task_cap = count - merged ? count - merged : 1;
     jr->tasks = gi_xcalloc(jr->task_cap, sizeof *jr->tasks);
     jr->task_count = count;
     jr->merge_next = merged;
     double unmerged_cost = 0;
-    for (uint64_t i = 0; i < count; i++) {
-        gi_jobrun_task *jt = &jr->tasks[i];
+    for (uint64_t i = merged; i < count; i++) {
+        gi_jobrun_task *jt = gi_jobrun_task_at(jr, i);
         jt->task.id = i;
         gi_buf_init(&jt->task.payload);
         gi_buf_init(&jt->result);
-        if (i < merged) {
-            jt->state = GI_TASK_MERGED;
-            continue;
-        }
         jt->task.kind = gi_get_u32(&r);
         jt->task.attempt = gi_get_u32(&r);
         jt->task.cost = gi_get_f64(&r);

@@ -31,8 +31,12 @@ typedef struct gi_jobrun_task {
 
 typedef struct gi_jobrun {
     gi_job *job;
-    gi_jobrun_task *tasks; /* indexed by task id */
-    uint64_t task_count, task_cap;
+    /* The tasks with ids [task_base, task_count), task id at
+     * tasks[id - task_base] (gi_jobrun_task_at): merged ones are dropped
+     * from the front as merging goes on, so a long animation's coordinator
+     * holds about one frame's tasks, not every task the job ever had. */
+    gi_jobrun_task *tasks;
+    uint64_t task_base, task_count, task_cap;
     uint64_t *pending; /* ids waiting for a lease; retries go first */
     uint64_t pending_head, pending_count, pending_cap;
     uint64_t leased;
@@ -78,6 +82,13 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
 
 /* The job's fraction, ETA, frame and totals now (monotonic seconds). */
 void gi_jobrun_progress(const gi_jobrun *jr, double now, gi_progress_at *out);
+
+/* The task with this id, or NULL once it was merged and dropped (or if
+ * there is no such id). */
+static inline gi_jobrun_task *gi_jobrun_task_at(const gi_jobrun *jr, uint64_t id)
+{
+    return id >= jr->task_base && id < jr->task_count ? &jr->tasks[id - jr->task_base] : NULL;
+}
 
 static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
 

@@ -232,11 +232,11 @@ GI_TEST(test_farm_affinity_survives_checkpoint_and_task_message)
     GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
     GI_REQUIRE(jr.task_count == KEYS);
     for (uint64_t i = 0; i < KEYS; i++)
-        GI_CHECK(jr.tasks[i].task.affinity == i + 1);
+        GI_CHECK(gi_jobrun_task_at(&jr, i)->task.affinity == i + 1);
     gi_buf_free(&ck);
 
     /* TASK: the key travels; a task without one encodes as it always did. */
-    gi_task *task = &jr.tasks[2].task;
+    gi_task *task = &gi_jobrun_task_at(&jr, 2)->task;
     gi_buf_put_u32(&task->payload, 0xabcdef);
     gi_buf b;
     gi_buf_init(&b);

@@ -1,0 +1,179 @@
+/* fuzz_checkpoint: libFuzzer target for job checkpoints, which gi-farmd
+ * reads back when it restarts (gi_jobrun_restore and the methods' load):
+ * a damaged one must be refused with a message (the job then starts over),
+ * never crash, leak or hang the coordinator. The first byte picks one of
+ * four small jobs (detp, a detp animation, pt, radiosity; quadrature's
+ * checkpoints are in fuzz_quad); the rest is the checkpoint.
+ *
+ * With GI_FUZZ_CHECKPOINT_SEEDS=DIR in the environment it writes the seed
+ * corpus instead: each job run in this process (an in-process worker) and
+ * checkpointed after several numbers of merged tasks, then it exits. */
+#define _XOPEN_SOURCE 700 /* nftw */
+#include <ftw.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_fs.h"
+#include "gi_job.h"
+#include "gi_jobrun.h"
+#include "gi_limits.h"
+#include "gi_log.h"
+#include "gi_worker_ctx.h"
+
+static const char scene_text[] =
+    "{\"camera\": {\"position\": [0, 0, -0.9], \"look_at\": [0, 0, 0], \"fov_y\": 60},"
+    " \"materials\": {\"wall\": {\"diffuse\": [0.6, 0.6, 0.6]},"
+    "  \"lamp\": {\"diffuse\": [0.5, 0.5, 0.5], \"emission\": [5, 5, 5]}},"
+    " \"objects\": ["
+    "  {\"name\": \"room\", \"material\": \"wall\", \"box\": {\"size\": [2, 2, 2], \"inward\": true}},"
+    "  {\"name\": \"lamp\", \"material\": \"lamp\", \"quad\": {\"size\": [0.5, 0.5]},"
+    "   \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}},"
+    "                   {\"translate\": [0, 0.99, 0]}]},"
+    "  {\"name\": \"ball\", \"material\": \"wall\", \"mobile\": true,"
+    "   \"sphere\": {\"radius\": 0.2, \"subdivisions\": 0}}]}";
+
+static const char *const job_texts[] = {
+    "{\"scene\": \"scene.json\", \"method\": \"detp\", \"seed\": 3,"
+    " \"image\": {\"width\": 8, \"height\": 6},"
+    " \"detp\": {\"photons\": 3000, \"batch\": 1000, \"tile\": 4, \"image_spp\": 1},"
+    " \"outputs\": {\"exr\": \"a.exr\", \"bin\": \"a.bin\", \"json\": \"a.json\"}}",
+    "{\"scene\": \"scene.json\", \"method\": \"detp\", \"seed\": 3,"
+    " \"image\": {\"width\": 8, \"height\": 6},"
+    " \"detp\": {\"photons\": 3000, \"batch\": 1000, \"tile\": 4, \"image_spp\": 1,"
+    "  \"animation\": {\"object\": \"ball\", \"frames\": 3,"
+    "   \"keyframes\": [{\"frame\": 0}, {\"frame\": 2, \"translate\": [0.2, 0, 0]}]}},"
+    " \"outputs\": {\"exr\": \"b.exr\", \"bin\": \"b.bin\", \"json\": \"b.json\"}}",
+    "{\"scene\": \"scene.json\", \"method\": \"pt\", \"seed\": 3,"
+    " \"image\": {\"width\": 8, \"height\": 6}, \"pt\": {\"spp\": 4, \"tile\": 4, \"pass_spp\": 1},"
+    " \"outputs\": {\"exr\": \"c.exr\"}}",
+    "{\"scene\": \"scene.json\", \"method\": \"radiosity\", \"seed\": 3,"
+    " \"image\": {\"width\": 8, \"height\": 6},"
+    " \"radiosity\": {\"patches\": 4, \"levels\": 1, \"rays\": 16, \"task_elements\": 40},"
+    " \"outputs\": {\"exr\": \"d.exr\", \"report\": \"d.json\"}}",
+};
+#define JOBS 4
+
+static char dir[256], job_path[JOBS][300];
+
+static int load(int which, gi_job *job, gi_error *err)
+{
+    if (gi_job_load(job_path[which], job, err))
+        return -1;
+    job->out_dir = gi_path_join(dir, "out");
+    return 0;
+}
+
+/* Runs job `which` in this process, writing a checkpoint after each of
+ * `stops` merged tasks as SEEDS/<which>-<stop>. */
+static int write_seeds(const char *seeds, int which, gi_error *err)
+{
+    static const uint64_t stops[] = {1, 2, 4, 7, 11, 16, 30, 60, 100};
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    if (load(which, &job, err) || gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest,
+                                                     NULL, NULL, job.assets, err))
+        return -1;
+    ctx.batch_dir = gi_path_join(dir, "batches");
+    if (gi_jobrun_start(&jr, &job, err))
+        return -1;
+    uint64_t done = 0;
+    size_t next = 0;
+    int rc = 0;
+    while (rc == 0 && !gi_jobrun_done(&jr)) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        if (!t)
+            return gi_fail(err, GI_EINTERNAL, "nothing to lease");
+        gi_buf res;
+        gi_buf_init(&res);
+        rc = gi_worker_run_task(&ctx, t, &res, err);
+        if (rc == 0 && gi_jobrun_complete(&jr, t->id, t->attempt, &res, &ctx.stats))
+            rc = gi_fail(err, GI_EINTERNAL, "%s", jr.error.msg);
+        gi_buf_free(&res);
+        if (rc || next == sizeof stops / sizeof stops[0] || ++done != stops[next])
+            continue;
+        next++;
+        gi_buf ck;
+        gi_buf_init(&ck);
+        gi_buf_put_u8(&ck, (uint8_t)which);
+        rc = gi_jobrun_checkpoint(&jr, &ck, err);
+        char path[600];
+        snprintf(path, sizeof path, "%s/job%d-after-%llu", seeds, which,
+                 (unsigned long long)done);
+        if (rc == 0)
+            rc = gi_write_file_atomic(path, ck.data, ck.len, err);
+        gi_buf_free(&ck);
+    }
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+    return rc;
+}
+
+static int remove_one(const char *path, const struct stat *st, int type, struct FTW *ftw)
+{
+    (void)st;
+    (void)type;
+    (void)ftw;
+    return remove(path);
+}
+
+static void remove_dir(void) { nftw(dir, remove_one, 16, FTW_DEPTH | FTW_PHYS); }
+
+int LLVMFuzzerInitialize(int *argc, char ***argv)
+{
+    (void)argc;
+    (void)argv;
+    gi_log_set_level(GI_LOG_ERROR); /* restores and refusals are logged */
+    snprintf(dir, sizeof dir, "%s/gi-fuzz-checkpoint.XXXXXX",
+             getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+    gi_error err;
+    if (!mkdtemp(dir))
+        abort();
+    atexit(remove_dir);
+    char *out = gi_path_join(dir, "out");
+    if (gi_mkdirs(out, &err))
+        abort();
+    free(out);
+    char *scene = gi_path_join(dir, "scene.json");
+    if (gi_write_file_atomic(scene, scene_text, strlen(scene_text), &err))
+        abort();
+    free(scene);
+    for (int i = 0; i < JOBS; i++) {
+        snprintf(job_path[i], sizeof job_path[i], "%s/job%d.json", dir, i);
+        if (gi_write_file_atomic(job_path[i], job_texts[i], strlen(job_texts[i]), &err))
+            abort();
+    }
+    const char *seeds = getenv("GI_FUZZ_CHECKPOINT_SEEDS");
+    if (seeds) {
+        for (int i = 0; i < JOBS; i++)
+            if (write_seeds(seeds, i, &err)) {
+                fprintf(stderr, "job %d: %s\n", i, err.msg);
+                exit(1);
+            }
+        exit(0);
+    }
+    return 0;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (size < 1)
+        return 0;
+    gi_job job;
+    gi_error err;
+    if (load(data[0] % JOBS, &job, &err))
+        abort(); /* the jobs are fixed: they load */
+    gi_buf ck;
+    gi_buf_init(&ck);
+    gi_buf_put(&ck, data + 1, size - 1);
+    gi_jobrun jr;
+    gi_error_clear(&err);
+    if (gi_jobrun_restore(&jr, &job, &ck, &err) != 0 && (!err.msg[0] || strchr(err.msg, '\n')))
+        abort();
+    gi_jobrun_free(&jr);
+    gi_buf_free(&ck);
+    gi_job_free(&job);
+    return 0;
+}
