@@ -7,7 +7,8 @@
 # (bench/anim_frames image), frame 0's and the mean over frames 1.. of the
 # bake's wall time, the tiles' worker seconds and the image phase's wall
 # time; then bench/image_write on the last frame's EXR (the coordinator's
-# output writing, which the reports do not time).
+# output writing, which the reports do not time). Also the peak RSS of
+# gi render's parent (the coordinator), polled.
 #   bench/detp_anim_image.sh BUILD_DIR [FRAMES] [WIDTH] [HEIGHT] [WORKERS] [OUT]
 set -eu
 BIN=${1:-build/release}
@@ -37,9 +38,16 @@ workers=
 [ "$WORKERS" -gt 0 ] && workers="--workers $WORKERS"
 t0=$(date +%s.%N)
 # shellcheck disable=SC2086
-"$BIN/gi" render "$OUT/job.json" $workers --out "$OUT" --progress none >"$OUT/log" 2>&1 ||
-    { cat "$OUT/log"; exit 1; }
+"$BIN/gi" render "$OUT/job.json" $workers --out "$OUT" --progress none >"$OUT/log" 2>&1 &
+pid=$!
+hwm=0 # the coordinator's (gi render's parent's) peak RSS, polled
+while kill -0 "$pid" 2>/dev/null; do
+    h=$(awk '/^VmHWM/ {print $2}' "/proc/$pid/status" 2>/dev/null || true)
+    [ -n "$h" ] && hwm=$h
+    sleep 0.1
+done
+wait "$pid" || { cat "$OUT/log"; exit 1; }
 t1=$(date +%s.%N)
-awk "BEGIN { printf \"%d frames at ${WIDTH}x${HEIGHT}, 4 spp, EXR + PNG: %.2f s in all\\n\", $FRAMES, $t1 - $t0 }"
+awk "BEGIN { printf \"%d frames at ${WIDTH}x${HEIGHT}, 4 spp, EXR + PNG: %.2f s in all; gi render's parent peaked at %.0f MB\\n\", $FRAMES, $t1 - $t0, $hwm / 1024 }"
 "$BIN/bench/anim_frames" image "$FRAMES" "$OUT/r"
 "$BIN/bench/image_write" "$(printf '%s/f.%04d.exr' "$OUT" $last)" 9
