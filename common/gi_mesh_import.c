@@ -765,6 +765,11 @@ int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *o
         if (pid == 0) {
             close(sv[0]);
             prctl(PR_SET_PDEATHSIG, SIGKILL); /* no importer outlives its parent */
+            /* Die by the signal (the parent names it), whatever handlers this
+             * process had installed (a crash reporter, a fuzzer's). */
+            static const int crash_signals[] = {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
+            for (size_t i = 0; i < sizeof crash_signals / sizeof crash_signals[0]; i++)
+                signal(crash_signals[i], SIG_DFL);
             child_main(sv[1], name);
         }
         why = errno;
