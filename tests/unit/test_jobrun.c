@@ -88,6 +88,14 @@ static const gi_method fake_method = {
 
 static double task_value(uint64_t id) { return 1.0 / (double)(id + 3) * 1e-3 + (id % 7) * 1e10; }
 
+/* A fresh job of method m, planned into jr. */
+static int start(const gi_method *m, gi_job *job, gi_jobrun *jr, gi_error *err)
+{
+    memset(job, 0, sizeof *job);
+    job->method = m;
+    return gi_jobrun_start(jr, job, err);
+}
+
 /* Runs the job completing leased tasks in a shuffled order, with some
  * failures and stale duplicates; returns the merge sum. */
 static double run_shuffled(uint64_t seed, fake_state *out)
@@ -164,11 +172,9 @@ GI_TEST(test_jobrun_merges_in_id_order_whatever_the_completion_order)
 GI_TEST(test_jobrun_fails_after_max_attempts_and_on_bad_input)
 {
     gi_job job;
-    memset(&job, 0, sizeof job);
-    job.method = &fake_method;
     gi_jobrun jr;
     gi_error err;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
     gi_error crash;
     gi_fail(&crash, GI_ECRASH, "boom");
     for (uint32_t attempt = 0; attempt < jr.max_attempts; attempt++) {
@@ -182,9 +188,7 @@ GI_TEST(test_jobrun_fails_after_max_attempts_and_on_bad_input)
     gi_jobrun_free(&jr);
     gi_job_free(&job);
 
-    memset(&job, 0, sizeof job);
-    job.method = &fake_method;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
     const gi_task *t = gi_jobrun_lease(&jr);
     gi_error bad;
     gi_fail(&bad, GI_EINVAL, "mesh.obj: garbage");
@@ -222,11 +226,9 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     int stops[] = {0, 3, 6, 20, 42, 43};
     for (size_t k = 0; k < sizeof stops / sizeof stops[0]; k++) {
         gi_job job;
-        memset(&job, 0, sizeof job);
-        job.method = &fake_method;
         gi_jobrun jr;
         gi_error err;
-        GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+        GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
         drive(&jr, stops[k]);
         /* One task leased but not answered: it must run again after restore. */
         const gi_task *lost = gi_jobrun_lease(&jr);
@@ -282,11 +284,9 @@ GI_TEST(test_jobrun_progress_counts_follow_ups_before_they_are_planned)
     gi_method m = fake_method;
     m.progress = fake_progress;
     gi_job job;
-    memset(&job, 0, sizeof job);
-    job.method = &m;
     gi_jobrun jr;
     gi_error err;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(&m, &job, &jr, &err));
     gi_progress_at at;
     gi_jobrun_progress(&jr, gi_now(), &at);
     GI_CHECK(at.fraction == 0 && at.total == FAKE_TASKS + 3 && at.frames == 1);
@@ -390,11 +390,9 @@ GI_TEST(test_jobrun_holds_only_the_tasks_not_yet_merged)
     m.merge = frames_merge;
     m.finish = frames_finish;
     gi_job job;
-    memset(&job, 0, sizeof job);
-    job.method = &m;
     gi_jobrun jr;
     gi_error err;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(&m, &job, &jr, &err));
     uint64_t most_held = 0;
     /* Results out of order within a window of 8, a late duplicate of a
      * merged (and dropped) task ignored. */
