@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "gi_batch_dir.h"
+#include "gi_local_checkpoint.h"
 #include "gi_log.h"
 #include "gi_pool.h"
 
@@ -97,6 +98,43 @@ static int default_workers(void)
     return n > 0 ? (int)n : 1;
 }
 
+/* The end of a render: a finished job's checkpoint removed; one stopped
+ * from outside (interrupted, its pool failing) checkpointed so that
+ * --resume continues it. Frees the run and ckpt. */
+static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
+                     gi_local_summary *summary, int rc, gi_error *err)
+{
+    gi_job *job = lr->job;
+    if (!checkpoints) {
+        /* none */
+    } else if (rc == 0) {
+        unlink(ckpt);
+    } else if (!lr->jr.failed && job->method->save) {
+        gi_error cerr;
+        if (gi_local_checkpoint_write(&lr->jr, ckpt, &cerr) == 0 && err) {
+            gi_progress_at at;
+            gi_jobrun_progress(&lr->jr, gi_now(), &at);
+            char where[64] = "";
+            if (at.frames > 1)
+                snprintf(where, sizeof where, ", frame %u of %u", at.frame, at.frames);
+            gi_error e = *err;
+            gi_fail(err, e.code, "%s; the work done (%.0f%%%s) is kept in %s: `gi render %s --out %s "
+                    "--resume` continues", e.msg, 100.0 * at.fraction, where, ckpt, job->file,
+                    job->out_dir);
+        } else if (err) {
+            gi_warn("%s", cerr.msg);
+        }
+    }
+    summary->seconds = gi_now() - t0;
+    summary->tasks = lr->jr.task_count;
+    summary->retries = lr->jr.retries;
+    summary->crashes = lr->crashes;
+    summary->stats = lr->jr.stats;
+    gi_jobrun_free(&lr->jr);
+    free(ckpt);
+    return rc;
+}
+
 int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *summary,
                     gi_error *err)
 {
@@ -105,21 +143,47 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     memset(summary, 0, sizeof *summary);
     lr.job = job;
     double t0 = gi_now();
-    if (gi_jobrun_start(&lr.jr, job, err)) {
+    char *ckpt = gi_local_checkpoint_path(job);
+    int resumed = 0, checkpoints = opts->checkpoint_s >= 0;
+    if (opts->resume && checkpoints) {
+        resumed = gi_local_checkpoint_restore(&lr.jr, job, ckpt, err);
+        if (resumed > 0) {
+            gi_progress_at at;
+            gi_jobrun_progress(&lr.jr, gi_now(), &at);
+            fprintf(stderr, "gi: %s: resuming from %s (%.0f%% done", job->name, ckpt,
+                    100.0 * at.fraction);
+            if (at.frames > 1)
+                fprintf(stderr, ", at frame %u of %u", at.frame, at.frames);
+            fprintf(stderr, ")\n");
+        } else if (resumed == 0) {
+            fprintf(stderr, "gi: %s: no checkpoint in %s; starting from the beginning\n",
+                    job->name, job->out_dir);
+        }
+    } else if (checkpoints && access(ckpt, F_OK) == 0) {
+        gi_warn("%s holds an earlier run that was stopped; this run starts over and replaces "
+                "it (--resume continues it)",
+                ckpt);
+    }
+    if (resumed < 0 || (resumed == 0 && gi_jobrun_start(&lr.jr, job, err))) {
         gi_jobrun_free(&lr.jr);
+        free(ckpt);
         return -1;
     }
+    if (gi_jobrun_done(&lr.jr)) /* resumed from a checkpoint taken at the very end */
+        return local_end(&lr, ckpt, checkpoints, t0, summary, 0, err);
     int workers = opts->workers > 0 ? opts->workers : default_workers();
     if ((uint64_t)workers > lr.jr.task_count)
         workers = (int)lr.jr.task_count;
     summary->workers = workers;
     if (batch_root_make(&lr, err)) {
         gi_jobrun_free(&lr.jr);
+        free(ckpt);
         return -1;
     }
     if (gi_pool_start(&lr.pool, workers, lr.batch_root, err)) {
         batch_root_remove(&lr);
         gi_jobrun_free(&lr.jr);
+        free(ckpt);
         return -1;
     }
     /* Crashes are retried on fresh children, but a job whose tasks kill every
@@ -130,6 +194,8 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
     gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
     int rc = 0;
+    double last_ckpt = gi_now();
+    uint64_t ckpt_merged = lr.jr.merge_next;
     while (!gi_jobrun_done(&lr.jr)) {
         if (gi_local_interrupted) {
             rc = gi_fail(err, GI_ECANCEL, "%s: interrupted", job->file);
@@ -162,6 +228,15 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
                 gi_debug("sending a task to child %d failed: %s", idle, serr.msg);
         }
         gi_pool_poll(&lr.pool, 200, &ev);
+        double now = gi_now();
+        if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= opts->checkpoint_s &&
+            lr.jr.merge_next != ckpt_merged && !gi_jobrun_done(&lr.jr) && job->method->save) {
+            gi_error cerr;
+            if (gi_local_checkpoint_write(&lr.jr, ckpt, &cerr))
+                gi_warn("%s", cerr.msg);
+            last_ckpt = now;
+            ckpt_merged = lr.jr.merge_next;
+        }
         gi_progress_at at;
         gi_jobrun_progress(&lr.jr, gi_now(), &at);
         gi_progress_update(&prog, &at, 0);
@@ -181,11 +256,5 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     batch_root_remove(&lr);
     gi_debug("%s: peak bytes of results held for in-order merging: %llu", job->name,
              (unsigned long long)lr.jr.held_results_peak);
-    summary->seconds = gi_now() - t0;
-    summary->tasks = lr.jr.task_count;
-    summary->retries = lr.jr.retries;
-    summary->crashes = lr.crashes;
-    summary->stats = lr.jr.stats;
-    gi_jobrun_free(&lr.jr);
-    return rc;
+    return local_end(&lr, ckpt, checkpoints, t0, summary, rc, err);
 }

@@ -11,6 +11,12 @@
 typedef struct gi_local_opts {
     int workers; /* pool children; <= 0: one per core */
     gi_progress_mode progress;
+    /* Checkpoints (gi_local_checkpoint.h): written every checkpoint_s
+     * seconds (0: only when interrupted) and removed when the job ends
+     * well; resume restores from one instead of starting over. < 0: no
+     * checkpoint file at all (not read, written or removed). */
+    double checkpoint_s;
+    int resume;
 } gi_local_opts;
 
 typedef struct gi_local_summary {
@@ -24,7 +30,8 @@ typedef struct gi_local_summary {
 int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *summary,
                     gi_error *err);
 
-/* Set by a SIGINT/SIGTERM handler to stop the render (no outputs written). */
+/* Set by a SIGINT/SIGTERM handler to stop the render: the outputs written so
+ * far stay (an animation's finished frames), and a checkpoint is written. */
 extern volatile int gi_local_interrupted;
 
 #endif

@@ -1,6 +1,7 @@
 /* gi: the command line.
  *
- *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE]
+ *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE] [--checkpoint S]
+ *             [--resume]
  *   gi validate JOB.json
  *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] ...
  *   gi methods
@@ -27,6 +28,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
+            "                          [--checkpoint S] [--resume]\n"
             "       gi validate JOB.json\n"
             "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--threads N]\n"
             "       gi methods\n"
@@ -36,6 +38,8 @@ static void usage(FILE *out)
             "render    renders a job on this machine with a pool of N worker processes\n"
             "          (default: one per core) and writes its outputs into DIR (default: out)\n"
             "          MODE: auto (a bar on a terminal, lines otherwise), bar, lines, json, none\n"
+            "          A checkpoint, DIR/.NAME.checkpoint, is written every S seconds (30;\n"
+            "          0: never) and when interrupted; --resume continues from it\n"
             "validate  checks a job and its scene without rendering\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
             "          (in DIR): PLY and report per emission set; --images renders the camera\n"
@@ -90,12 +94,19 @@ static void print_summary(const gi_job *job, const gi_local_summary *s)
 static int cmd_render(int argc, char **argv)
 {
     const char *job_path = NULL, *out_dir = "out", *progress = "auto", *workers_s = NULL;
+    const char *checkpoint_s = NULL;
+    int resume = 0;
     for (int i = 2; i < argc; i++) {
         const char *v;
         if (arg_value(argc, argv, &i, "--workers", &workers_s) ||
             arg_value(argc, argv, &i, "--out", &out_dir) ||
-            arg_value(argc, argv, &i, "--progress", &progress))
+            arg_value(argc, argv, &i, "--progress", &progress) ||
+            arg_value(argc, argv, &i, "--checkpoint", &checkpoint_s))
             continue;
+        if (strcmp(argv[i], "--resume") == 0) {
+            resume = 1;
+            continue;
+        }
         if (argv[i][0] == '-' && argv[i][1]) {
             fprintf(stderr, "gi render: unknown option %s\n", argv[i]);
             return 2;
@@ -111,7 +122,17 @@ static int cmd_render(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    gi_local_opts opts = {0, GI_PROGRESS_AUTO};
+    gi_local_opts opts = {0, GI_PROGRESS_AUTO, 30.0, resume};
+    if (checkpoint_s) {
+        char *end;
+        double v = strtod(checkpoint_s, &end);
+        if (*end || !(v >= 0 && v <= 86400)) {
+            fprintf(stderr, "gi render: --checkpoint must be seconds in [0, 86400], got \"%s\"\n",
+                    checkpoint_s);
+            return 2;
+        }
+        opts.checkpoint_s = v;
+    }
     if (workers_s) {
         char *end;
         long n = strtol(workers_s, &end, 10);

@@ -159,7 +159,8 @@ static int relight(const relight_args *a, gi_error *err)
         p->relight_model = &md;
         p->relight_factor = &f;
         p->relight_emissions = &em;
-        gi_local_opts opts = {a->workers, a->progress};
+        /* No checkpoint: relighting is fast, and its state lives in memory. */
+        gi_local_opts opts = {a->workers, a->progress, -1.0, 0};
         if (gi_mkdirs(a->out, err))
             goto done;
         job.out_dir = gi_xstrdup(a->out);

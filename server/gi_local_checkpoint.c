@@ -1,0 +1,97 @@
+/* gi_local_checkpoint: the checkpoint file of `gi render` (see the header). */
+#include "gi_local_checkpoint.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "gi_fs.h"
+
+#define LOCAL_CHECKPOINT_MAGIC 0x434C4947u /* "GILC" */
+#define LOCAL_CHECKPOINT_VERSION 1u
+
+char *gi_local_checkpoint_path(const gi_job *job)
+{
+    size_t n = strlen(job->name) + 16;
+    char *file = gi_xmalloc(n);
+    snprintf(file, n, ".%s.checkpoint", job->name);
+    char *path = gi_path_join(job->out_dir ? job->out_dir : ".", file);
+    free(file);
+    return path;
+}
+
+/* What the results depend on: the job's text and the bytes of every file
+ * its scene read (by their hashes). */
+static void identity(const gi_job *job, char out[GI_HASH_HEX])
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_str(&b, job->text);
+    for (size_t i = 0; i < job->manifest.count; i++) {
+        gi_buf_put_str(&b, job->manifest.entries[i].name);
+        gi_buf_put_str(&b, job->manifest.entries[i].hash);
+    }
+    gi_hash_hex(b.data, b.len, out);
+    gi_buf_free(&b);
+}
+
+int gi_local_checkpoint_write(const gi_jobrun *jr, const char *path, gi_error *err)
+{
+    char id[GI_HASH_HEX];
+    identity(jr->job, id);
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_u32(&b, LOCAL_CHECKPOINT_MAGIC);
+    gi_buf_put_u32(&b, LOCAL_CHECKPOINT_VERSION);
+    gi_buf_put_str(&b, id);
+    int rc = gi_jobrun_checkpoint(jr, &b, err);
+    if (rc == 0)
+        rc = gi_write_file_atomic(path, b.data, b.len, err);
+    gi_buf_free(&b);
+    return rc ? gi_error_prefix(err, "checkpoint %s", path) : 0;
+}
+
+int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, gi_error *err)
+{
+    if (access(path, F_OK) != 0) {
+        if (errno == ENOENT)
+            return 0;
+        return gi_fail(err, GI_EIO, "checkpoint %s: %s", path, strerror(errno));
+    }
+    gi_buf b;
+    gi_buf_init(&b);
+    if (gi_read_file(path, (size_t)1 << 40, &b, err)) {
+        gi_buf_free(&b);
+        return -1;
+    }
+    gi_reader r;
+    gi_reader_init(&r, b.data, b.len, path);
+    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    char *id = gi_get_str(&r, GI_HASH_HEX);
+    char want[GI_HASH_HEX];
+    identity(job, want);
+    int rc = 0;
+    if (r.failed || magic != LOCAL_CHECKPOINT_MAGIC || version != LOCAL_CHECKPOINT_VERSION || !id)
+        rc = gi_fail(err, GI_EINVAL, "%s: not a gi render checkpoint (remove it to start over)",
+                     path);
+    else if (strcmp(id, want) != 0)
+        rc = gi_fail(err, GI_EINVAL,
+                     "%s: a checkpoint of another run (%s or its scene's files changed since); "
+                     "remove it to start over",
+                     path, job->file);
+    free(id);
+    if (rc == 0) {
+        gi_buf rest;
+        gi_buf_init(&rest);
+        gi_buf_put(&rest, r.p, r.left);
+        gi_error e;
+        if (gi_jobrun_restore(jr, job, &rest, &e))
+            rc = gi_fail(err, e.code == GI_EPROTO ? GI_EINVAL : e.code,
+                         "%s: %s; remove it to start over", path, e.msg);
+        gi_buf_free(&rest);
+    }
+    gi_buf_free(&b);
+    return rc ? -1 : 1;
+}

@@ -1,0 +1,99 @@
+# `gi render --resume`: a detp animation interrupted (SIGINT) in the middle,
+# and another killed outright (SIGKILL, so only the periodic checkpoint is
+# left), each resumed to frames byte-identical with an uninterrupted render
+# (the batches are regenerated: the first render's temporary batch files are
+# gone). A checkpoint of an edited job is refused; a finished render leaves
+# no checkpoint behind. Then a pt still, interrupted and resumed the same way.
+. "$(dirname "$0")/lib.sh"
+mkdir -p "$TMP/tmp"
+export TMPDIR="$TMP/tmp"
+write_job "$TMP/job.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene-mobile.json", "method": "detp", "seed": 5,
+ "image": {"width": 48, "height": 36},
+ "detp": {"photons": 200000, "batch": 25000, "subdivide": 40, "tile": 16, "image_spp": 1,
+          "animation": {"object": "mobile", "frames": 16,
+                        "keyframes": [{"frame": 0, "translate": [340, -338.9, -90]},
+                                      {"frame": 15, "translate": [248, -338.9, -0.4]}]}},
+ "outputs": {"exr": "img.exr", "bin": "v.bin", "json": "report.json"}}
+JOB
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none \
+    >"$TMP/ref.log" 2>&1 || { cat "$TMP/ref.log"; fail "reference render"; }
+[ ! -e "$TMP/ref/.job.checkpoint" ] || fail "a finished render left its checkpoint"
+
+same_as_ref() { # same_as_ref DIR WHAT
+    n=0
+    for f in "$TMP"/ref/*; do
+        case $f in *.json) continue ;; esac # reports hold timings
+        cmp "$f" "$1/$(basename "$f")" || fail "$2: $(basename "$f") differs"
+        n=$((n + 1))
+    done
+    [ $n -eq 32 ] || fail "$2: $n outputs compared, expected 32"
+}
+# start_and_stop DIR SIGNAL: renders into DIR, and once its frame 3 is
+# written, sends SIGNAL; the render must end without finishing.
+start_and_stop() {
+    "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$1" --progress none \
+        --checkpoint 0.1 >"$1.log" 2>&1 &
+    pid=$!
+    n=0
+    until [ -e "$1/img.0003.exr" ]; do
+        n=$((n + 1))
+        [ $n -lt 600 ] || fail "frame 3 never appeared in $1"
+        kill -0 $pid 2>/dev/null || { cat "$1.log"; fail "the render of $1 ended too soon"; }
+        sleep 0.05
+    done
+    kill "-$2" $pid
+    st=0
+    wait $pid || st=$?
+    [ $st -ne 0 ] || fail "the render of $1 finished before its $2"
+    [ ! -e "$1/img.0015.exr" ] || fail "$1: the last frame was written before the $2"
+    [ -s "$1/.job.checkpoint" ] || { cat "$1.log"; fail "$1: no checkpoint after $2"; }
+}
+
+start_and_stop "$TMP/int" INT
+grep -q "is kept in .*--resume. continues" "$TMP/int.log" || { cat "$TMP/int.log"; fail "no resume hint"; }
+# The job edited since: its checkpoint is refused, and kept.
+sed 's/"seed": 5/"seed": 6/' "$TMP/job.json" >"$TMP/job.edited"
+cp "$TMP/job.json" "$TMP/job.orig"
+cp "$TMP/job.edited" "$TMP/job.json"
+st=0
+"$GI_RELEASE" render "$TMP/job.json" --out "$TMP/int" --progress none --resume >"$TMP/edit.log" 2>&1 ||
+    st=$?
+[ $st -eq 2 ] || { cat "$TMP/edit.log"; fail "resuming an edited job: exit $st, expected 2"; }
+grep -q "a checkpoint of another run" "$TMP/edit.log" || { cat "$TMP/edit.log"; fail "edited job"; }
+cp "$TMP/job.orig" "$TMP/job.json"
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/int" --progress none --resume \
+    >"$TMP/int-resume.log" 2>&1 || { cat "$TMP/int-resume.log"; fail "resume after SIGINT"; }
+grep -q "resuming from" "$TMP/int-resume.log" || fail "the resume did not say so"
+same_as_ref "$TMP/int" "resumed after SIGINT"
+[ ! -e "$TMP/int/.job.checkpoint" ] || fail "a resumed render left its checkpoint"
+
+start_and_stop "$TMP/kill" KILL
+"$GI_RELEASE" render "$TMP/job.json" --workers 3 --out "$TMP/kill" --progress none --resume \
+    >"$TMP/kill-resume.log" 2>&1 || { cat "$TMP/kill-resume.log"; fail "resume after SIGKILL"; }
+same_as_ref "$TMP/kill" "resumed after SIGKILL (3 workers)"
+
+# A still: pt, interrupted among its passes.
+write_job "$TMP/pt.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 2,
+ "image": {"width": 96, "height": 72}, "pt": {"spp": 256, "tile": 16, "pass_spp": 4},
+ "outputs": {"exr": "pt.exr"}}
+JOB
+"$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt-ref" --progress none >/dev/null 2>&1 ||
+    fail "pt reference"
+"$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt" --progress none --checkpoint 0.1 \
+    >"$TMP/pt.log" 2>&1 &
+pid=$!
+n=0
+until [ -s "$TMP/pt/.pt.checkpoint" ]; do
+    n=$((n + 1))
+    [ $n -lt 600 ] || fail "no pt checkpoint"
+    sleep 0.05
+done
+kill -INT $pid
+wait $pid && fail "the pt render finished before its SIGINT"
+[ ! -e "$TMP/pt/pt.exr" ] || fail "an interrupted still wrote its image"
+"$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt" --progress none --resume \
+    >"$TMP/pt-resume.log" 2>&1 || { cat "$TMP/pt-resume.log"; fail "pt resume"; }
+cmp "$TMP/pt-ref/pt.exr" "$TMP/pt/pt.exr" || fail "pt: the resumed image differs"
+echo "detp animation resumed after SIGINT and SIGKILL, pt after SIGINT: identical outputs"
