@@ -6,7 +6,12 @@
  * in memory), created before the pool starts and removed when the render
  * ends, whether it succeeded, failed or was interrupted (SIGINT/SIGTERM).
  * Only a killed process leaves it behind. Affinity keys are ignored here:
- * one host, one disk. */
+ * one host, one disk.
+ *
+ * Checkpoints (gi_local_checkpoint.h) are written every few seconds and
+ * when the render is stopped, so that `gi render --resume` continues it; an
+ * animation's batches are then regenerated from their seeds, since the
+ * batch directory went with the stopped render. */
 #include "gi_local.h"
 
 #include <errno.h>
@@ -169,7 +174,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         free(ckpt);
         return -1;
     }
-    if (gi_jobrun_done(&lr.jr)) /* resumed from a checkpoint taken at the very end */
+    if (lr.jr.finished) /* resumed from a checkpoint taken at the very end */
         return local_end(&lr, ckpt, checkpoints, t0, summary, 0, err);
     int workers = opts->workers > 0 ? opts->workers : default_workers();
     if ((uint64_t)workers > lr.jr.task_count)
@@ -238,7 +243,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             ckpt_merged = lr.jr.merge_next;
         }
         gi_progress_at at;
-        gi_jobrun_progress(&lr.jr, gi_now(), &at);
+        gi_jobrun_progress(&lr.jr, now, &at);
         gi_progress_update(&prog, &at, 0);
     }
     if (rc == 0 && lr.jr.failed) {
