@@ -20,6 +20,10 @@ int gi_net_listen(const char *addr, char *bound, size_t bound_len, gi_error *err
  * trying each resolved address in turn within timeout_s. */
 int gi_net_connect(const char *addr, double timeout_s, gi_error *err);
 
+/* 1 if the socket's peer is on this host (127.0.0.0/8, ::1 or a v4-mapped
+ * loopback address, or a Unix socket), else 0. */
+int gi_net_peer_is_loopback(int fd);
+
 /* "10.0.0.7:51234" for a connected socket's peer. */
 void gi_net_peer(int fd, char *out, size_t n);
 struct sockaddr;

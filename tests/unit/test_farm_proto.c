@@ -4,11 +4,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "gi_auth.h"
 #include "gi_frame.h"
 #include "gi_msg_ctrl.h"
+#include "gi_net.h"
 #include "gi_test.h"
 
 static gi_msg_hello sample_hello(void)
@@ -253,4 +258,37 @@ GI_TEST(test_frame_zero_limit_refuses_type)
     GI_CHECK(strstr(err.msg, "RESULT frames are not accepted on this connection") != NULL);
     gi_frame_decoder_free(&d);
     gi_buf_free(&b);
+}
+
+/* A worker sends results uncompressed to a coordinator on its own host. */
+GI_TEST(test_net_peer_is_loopback)
+{
+    int sv[2];
+    GI_REQUIRE(socketpair(AF_UNIX, SOCK_STREAM, 0, sv) == 0);
+    GI_CHECK(gi_net_peer_is_loopback(sv[0]) == 1);
+    close(sv[0]);
+    close(sv[1]);
+    gi_error err;
+    char bound[64];
+    int l = gi_net_listen("127.0.0.1:0", bound, sizeof bound, &err);
+    GI_REQUIRE_OK(l < 0 ? -1 : 0);
+    int c = gi_net_connect(bound, 5.0, &err);
+    GI_REQUIRE_OK(c < 0 ? -1 : 0);
+    GI_CHECK(gi_net_peer_is_loopback(c) == 1);
+    close(c);
+    close(l);
+    int p[2];
+    GI_REQUIRE(pipe(p) == 0);
+    GI_CHECK(gi_net_peer_is_loopback(p[0]) == 0); /* not a socket */
+    close(p[0]);
+    close(p[1]);
+    /* Another host (TEST-NET-1, RFC 5737): a UDP connect sends nothing, but
+     * needs a route, which a sandbox may lack. */
+    int u = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons(9)};
+    inet_pton(AF_INET, "192.0.2.1", &a.sin_addr);
+    if (u >= 0 && connect(u, (struct sockaddr *)&a, sizeof a) == 0)
+        GI_CHECK(gi_net_peer_is_loopback(u) == 0);
+    if (u >= 0)
+        close(u);
 }
