@@ -8,6 +8,14 @@ cornell_job "$TMP/job.json" 5 96 96 384
 netns_farm "gik$$" --heartbeat 0.5 --lease 5 --dead 20
 id=$($FARM_EXEC "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 wait_merged "$id" 10
+# Kill it while it holds a lease (on a loaded machine it can be between tasks).
+n=0
+until [ "$(api /api/v1/workers | tr '{' '\n' | grep '"name":"host2"' |
+    sed -n 's/.*"tasks_leased":\([0-9]*\).*/\1/p')" -gt 0 ] 2>/dev/null; do
+    n=$((n + 1))
+    [ $n -lt 200 ] || fail "host2 never held a lease"
+    sleep 0.02
+done
 pids=$(ip netns pids "$P-w2")
 [ -n "$pids" ] || fail "no process on host2"
 # shellcheck disable=SC2086
