@@ -211,6 +211,12 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *cmd = argv[1];
+    /* `gi render --help` and the like: the usage, not "unknown option". */
+    for (int i = 2; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return 0;
+        }
     if (strcmp(cmd, "render") == 0)
         return cmd_render(argc, argv);
     if (strcmp(cmd, "validate") == 0)

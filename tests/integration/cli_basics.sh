@@ -1,4 +1,4 @@
-# The command line: validate, methods, JSON progress, the summary, a bare
+# The command line: validate, methods, --help, JSON progress, the summary, a bare
 # OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, and an
 # interrupted render leaving no output.
 . "$(dirname "$0")/lib.sh"
@@ -12,6 +12,10 @@ grep -q "ok (pt, scene two_materials.obj: 1 objects, 3 triangles, 1 emissive)" "
     { cat "$TMP/validate.txt"; fail "validate output"; }
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
+for cmd in "" render submit relight; do
+    # shellcheck disable=SC2086
+    "$GI" $cmd --help | grep -q "^usage: gi render" || fail "gi $cmd --help"
+done
 
 "$GI" render "$TMP/obj.json" --workers 2 --out "$TMP/out" --progress json >"$TMP/summary.txt" 2>"$TMP/progress.txt" ||
     { cat "$TMP/progress.txt"; fail "render"; }
