@@ -554,19 +554,21 @@ static int child_read(void *ctx, const char *name, gi_buf *out, gi_error *err)
     return rc;
 }
 
+/* The child is this program on this host: the arrays go as their bytes. */
+_Static_assert(sizeof(gi_vec3) == 3 * sizeof(float), "a gi_vec3 is 3 packed floats");
 static void encode_mesh(gi_buf *b, const gi_mesh_data *m)
 {
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+    gi_buf_reserve(b, 16 + (m->normals ? 24 : 12) * nv + 16 * nt + 64 * m->material_count);
     gi_buf_put_u32(b, m->vertex_count);
     gi_buf_put_u32(b, m->triangle_count);
     gi_buf_put_u32(b, m->material_count);
     gi_buf_put_u8(b, m->normals != NULL);
-    gi_buf_put_f32s(b, &m->positions[0].x, 3 * (size_t)m->vertex_count);
+    gi_buf_put(b, m->positions, nv * sizeof *m->positions);
     if (m->normals)
-        gi_buf_put_f32s(b, &m->normals[0].x, 3 * (size_t)m->vertex_count);
-    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
-        gi_buf_put_u32(b, m->indices[i]);
-    for (uint32_t t = 0; t < m->triangle_count; t++)
-        gi_buf_put_u32(b, m->tri_material[t]);
+        gi_buf_put(b, m->normals, nv * sizeof *m->normals);
+    gi_buf_put(b, m->indices, 3 * nt * sizeof *m->indices);
+    gi_buf_put(b, m->tri_material, nt * sizeof *m->tri_material);
     for (uint32_t i = 0; i < m->material_count; i++) {
         gi_buf_put_str(b, m->materials[i].name);
         gi_buf_put_f32s(b, &m->materials[i].diffuse.x, 3);
@@ -588,17 +590,15 @@ static int decode_mesh(const gi_buf *b, const char *name, gi_mesh_data *m, gi_er
     m->vertex_count = nv;
     m->triangle_count = nt;
     m->positions = gi_xmalloc(((size_t)nv + 1) * sizeof *m->positions);
-    gi_get_f32s(&r, &m->positions[0].x, 3 * (size_t)nv);
+    gi_get(&r, m->positions, (size_t)nv * sizeof *m->positions);
     if (normals) {
         m->normals = gi_xmalloc(((size_t)nv + 1) * sizeof *m->normals);
-        gi_get_f32s(&r, &m->normals[0].x, 3 * (size_t)nv);
+        gi_get(&r, m->normals, (size_t)nv * sizeof *m->normals);
     }
     m->indices = gi_xmalloc(3 * (size_t)nt * sizeof *m->indices);
-    for (size_t i = 0; i < 3 * (size_t)nt; i++)
-        m->indices[i] = gi_get_u32(&r);
+    gi_get(&r, m->indices, 3 * (size_t)nt * sizeof *m->indices);
     m->tri_material = gi_xmalloc((size_t)nt * sizeof *m->tri_material);
-    for (uint32_t t = 0; t < nt; t++)
-        m->tri_material[t] = gi_get_u32(&r);
+    gi_get(&r, m->tri_material, (size_t)nt * sizeof *m->tri_material);
     m->materials = gi_xcalloc(nm, sizeof *m->materials);
     m->material_count = nm;
     for (uint32_t i = 0; i < nm && !r.failed; i++) {
@@ -613,7 +613,6 @@ static int decode_mesh(const gi_buf *b, const char *name, gi_mesh_data *m, gi_er
     return 0;
 }
 
-_Static_assert(sizeof(gi_vec3) == 3 * sizeof(float), "gi_vec3 is sent as 3 floats");
 
 /* In the child: assimp over files asked of the parent; never returns. */
 static void child_main(int fd, const char *name)
