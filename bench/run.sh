@@ -25,6 +25,8 @@ echo "== detp_anim_image: a 1080p animation with EXR + PNG outputs (2 workers): 
 sh bench/detp_anim_image.sh "$BIN" 24 1920 1080
 echo "== detp_anim_memory: 100 M photon paths, moving sphere, 2 workers: peak RSS and batch disk (TMPDIR needs ~13 GB; ~11 min)"
 sh bench/detp_anim_memory.sh "$BIN" 100000000 3 250000
+echo "== mesh_import: gi validate on a 25 MB OBJ (980k triangles; assimp in a child process)"
+sh bench/mesh_import.sh "$BIN" 700 5
 echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
 sh bench/farm_overhead.sh "$BIN" 5
 echo "== quad_genz: adaptive cubature on Genz's test families (evaluations for 1e-3 and 1e-6)"
