@@ -67,6 +67,14 @@ const gi_manifest_entry *gi_manifest_find(const gi_manifest *m, const char *name
     return NULL;
 }
 
+int gi_manifest_has_hash(const gi_manifest *m, const char *hash)
+{
+    for (size_t i = 0; i < m->count; i++)
+        if (strcmp(m->entries[i].hash, hash) == 0)
+            return 1;
+    return 0;
+}
+
 void gi_manifest_encode(const gi_manifest *m, gi_buf *out)
 {
     gi_buf_put_u32(out, (uint32_t)m->count);
@@ -153,6 +161,18 @@ const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void
     gi_buf_put(&e->bytes, data, len);
     s->bytes += len;
     return &e->bytes;
+}
+
+int gi_asset_store_remove(gi_asset_store *s, const char *hash)
+{
+    for (size_t i = 0; i < s->count; i++)
+        if (memcmp(s->entries[i].hash, hash, 64) == 0) {
+            s->bytes -= s->entries[i].bytes.len;
+            gi_buf_free(&s->entries[i].bytes);
+            s->entries[i] = s->entries[--s->count];
+            return 1;
+        }
+    return 0;
 }
 
 size_t gi_asset_store_bytes(const gi_asset_store *s) { return s->bytes; }

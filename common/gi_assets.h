@@ -51,6 +51,8 @@ void gi_manifest_free(gi_manifest *m);
 /* Adds or replaces name's entry. */
 void gi_manifest_put(gi_manifest *m, const char *name, const char *hash, uint64_t size);
 const gi_manifest_entry *gi_manifest_find(const gi_manifest *m, const char *name);
+/* 1 if some file of the manifest has these bytes. */
+int gi_manifest_has_hash(const gi_manifest *m, const char *hash);
 void gi_manifest_encode(const gi_manifest *m, gi_buf *out);
 int gi_manifest_decode(gi_reader *r, gi_manifest *m, gi_error *err);
 
@@ -62,6 +64,9 @@ void gi_asset_store_free(gi_asset_store *s);
 const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void *data,
                                  size_t len);
 const gi_buf *gi_asset_store_get(const gi_asset_store *s, const char *hash);
+/* Drops hash's bytes (pointers from get and put into the store are stale
+ * after it); 1 if it was there. */
+int gi_asset_store_remove(gi_asset_store *s, const char *hash);
 size_t gi_asset_store_bytes(const gi_asset_store *s);
 /* Iteration (insertion order): the i-th entry's bytes, its hash into hash. */
 size_t gi_asset_store_count(const gi_asset_store *s);

@@ -270,3 +270,10 @@ void gi_job_publish(gi_job *job, const void *data, size_t len, char hash[GI_HASH
         job->assets = gi_asset_store_new();
     gi_asset_store_put(job->assets, hash, data, len);
 }
+
+void gi_job_unpublish(gi_job *job, const char *hash)
+{
+    /* Never a file the job read (the same bytes). */
+    if (job->assets && !gi_manifest_has_hash(&job->manifest, hash))
+        gi_asset_store_remove(job->assets, hash);
+}

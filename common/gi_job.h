@@ -84,5 +84,8 @@ void gi_job_note_output(gi_job *job, const char *kind, const char *path);
 /* Coordinator-published data that tasks need (e.g. per-vertex radiance for
  * image tiles): stored by content hash; workers fetch it like any asset. */
 void gi_job_publish(gi_job *job, const void *data, size_t len, char hash[GI_HASH_HEX]);
+/* Drops published data no task will ask for again (an animation's frame
+ * before), so that a long job does not hold every frame's. */
+void gi_job_unpublish(gi_job *job, const char *hash);
 
 #endif

@@ -55,6 +55,11 @@ int gi_worker_blob(gi_worker_ctx *ctx, const char hash[GI_HASH_HEX], const gi_bu
         return gi_fail(err, GI_EIO, "published data %.12s is not available", hash);
     if (ctx->source.fetch(ctx->source.fetch_ctx, hash, err))
         return gi_error_prefix(err, "published data %.12s", hash);
+    char *oldest = ctx->recent_blobs[ctx->recent_next];
+    if (oldest[0] && !gi_manifest_has_hash(&ctx->job.manifest, oldest))
+        gi_asset_store_remove(ctx->store, oldest);
+    memcpy(oldest, hash, GI_HASH_HEX);
+    ctx->recent_next = (ctx->recent_next + 1) % GI_WORKER_BLOBS_KEPT;
     *out = gi_asset_store_get(ctx->store, hash);
     return *out ? 0 : gi_fail(err, GI_EIO, "published data %.12s was not delivered", hash);
 }

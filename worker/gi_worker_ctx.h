@@ -11,6 +11,8 @@
 #include "gi_rt.h"
 #include "gi_task.h"
 
+#define GI_WORKER_BLOBS_KEPT 8
+
 struct gi_worker_ctx {
     uint64_t job_id;
     gi_job job;
@@ -22,6 +24,11 @@ struct gi_worker_ctx {
     /* Assets and published data: bytes by hash, fetched on demand. */
     gi_asset_store *store;
     gi_manifest_source source;
+    /* The published blobs fetched last: an older one is dropped from store
+     * when a new one comes (an animation publishes a frame's radiance each
+     * frame; kept, they would add up for the life of the job). */
+    char recent_blobs[GI_WORKER_BLOBS_KEPT][GI_HASH_HEX];
+    unsigned recent_next;
     /* This job's directory on this host's disk for method caches, shared by
      * the host's pool children and removed by the host process when the job
      * ends (docs/farm.md, "Batch directories"); NULL when the host gives

@@ -247,13 +247,19 @@ void detp_vertex_data_free(detp_vertex_data *v)
 }
 
 /* The reflected radiance per vertex, as the tiles read it. */
+/* The frame's radiance for its tiles; the frame before's is dropped (its
+ * tiles are all merged by now). */
 static void publish_radiance(gi_job *job, detp_state *st, const detp_vertex_data *v)
 {
+    char before[GI_HASH_HEX];
+    memcpy(before, st->hash, sizeof before);
     gi_buf b;
     gi_buf_init(&b);
     gi_buf_put_f32s(&b, v->reflected, (size_t)st->nv * 3);
     gi_job_publish(job, b.data, b.len, st->hash);
     gi_buf_free(&b);
+    if (before[0] && strcmp(before, st->hash) != 0)
+        gi_job_unpublish(job, before);
 }
 
 static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)

@@ -226,3 +226,80 @@ GI_TEST(test_detp_automatic_radius_and_photon_count)
     GI_CHECK((uint64_t)p->batch <= p->photon_count);
     gi_job_free(&job);
 }
+
+/* A worker's fetch: the bytes from the coordinator's store into its own. */
+typedef struct fetch_link {
+    const gi_asset_store *from;
+    gi_asset_store *to;
+} fetch_link;
+
+static int copy_from_coordinator(void *fctx, const char *hash, gi_error *err)
+{
+    const fetch_link *l = fctx;
+    const gi_buf *b = gi_asset_store_get(l->from, hash);
+    if (!b)
+        return gi_fail(err, GI_EIO, "%.12s is not published", hash);
+    gi_asset_store_put(l->to, hash, b->data, b->len);
+    return 0;
+}
+
+/* An animation publishes each frame's radiance for its tiles: the coordinator
+ * drops the frame before's, and a worker keeps only its last few, so neither
+ * holds every frame's for the life of the job. */
+GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
+{
+    char text[2048], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
+             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
+             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
+             "  \"tile\": 8, \"image_spp\": 1,"
+             "  \"animation\": {\"object\": \"mobile\", \"frames\": %d,"
+             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
+             "                   {\"frame\": %d, \"translate\": [248, -338.9, -0.4]}]}},"
+             " \"outputs\": {\"exr\": \"a.exr\"}}",
+             gi_test_srcdir(), GI_WORKER_BLOBS_KEPT + 4, GI_WORKER_BLOBS_KEPT + 3);
+    snprintf(path, sizeof path, "%s/anim-blobs.json", gi_test_tmpdir());
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    GI_REQUIRE_OK(load(path, "out-anim-blobs", &job, &ctx, &err));
+    /* A worker with a store of its own, as in a pool child. */
+    gi_asset_store *worker_store = gi_asset_store_new();
+    for (size_t i = 0; i < gi_asset_store_count(job.assets); i++) {
+        char hash[GI_HASH_HEX];
+        const gi_buf *b = gi_asset_store_at(job.assets, i, hash);
+        gi_asset_store_put(worker_store, hash, b->data, b->len);
+    }
+    fetch_link link = {job.assets, worker_store};
+    ctx.store = ctx.source.store = worker_store;
+    ctx.source.fetch = copy_from_coordinator;
+    ctx.source.fetch_ctx = &link;
+    ctx.batch_dir = gi_path_join(gi_test_tmpdir(), "anim-blobs-batches");
+    size_t files = gi_asset_store_count(job.assets);
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    size_t most_coordinator = 0, most_worker = 0;
+    while (!gi_jobrun_done(&jr)) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t);
+        gi_buf res;
+        gi_buf_init(&res);
+        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &res, &err));
+        gi_jobrun_complete(&jr, t->id, t->attempt, &res, &ctx.stats);
+        gi_buf_free(&res);
+        size_t c = gi_asset_store_count(job.assets), w = gi_asset_store_count(worker_store);
+        most_coordinator = c > most_coordinator ? c : most_coordinator;
+        most_worker = w > most_worker ? w : most_worker;
+    }
+    GI_CHECK_MSG(jr.finished, "%s", jr.error.msg);
+    GI_CHECK_MSG(most_coordinator <= files + 1, "the coordinator held %zu blobs at once",
+                 most_coordinator - files);
+    GI_CHECK_MSG(most_worker <= files + GI_WORKER_BLOBS_KEPT, "the worker held %zu blobs",
+                 most_worker - files);
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_asset_store_free(worker_store);
+    gi_job_free(&job);
+}
