@@ -27,6 +27,12 @@ typedef struct gi_tile {
  * task cost is pixels * spp. */
 void gi_tiles_plan(gi_task_queue *q, uint32_t kind, int width, int height, int tile, int spp,
                    const gi_buf *extra);
+/* The summed cost of the tasks gi_tiles_plan adds (for progress before
+ * they are planned). */
+static inline double gi_tiles_cost(int width, int height, int spp)
+{
+    return (double)width * height * spp;
+}
 /* Reads a tile from the front of a task payload (checks it against the
  * image size); the reader is left after it, at the method's extra bytes. */
 int gi_tile_read(gi_reader *r, int width, int height, gi_tile *out, gi_error *err);

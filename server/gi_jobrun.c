@@ -137,9 +137,9 @@ const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const 
     while (jr->pending_head < jr->pending_count && !is_pending(jr, jr->pending[jr->pending_head]))
         jr->pending_head++;
     for (uint64_t i = jr->pending_head; i < jr->pending_count; i++) {
-        if (!is_pending(jr, jr->pending[i]))
-            continue;
         gi_jobrun_task *jt = gi_jobrun_task_at(jr, jr->pending[i]);
+        if (!jt || jt->state != GI_TASK_PENDING)
+            continue;
         if (accept && !accept(ctx, &jt->task)) {
             if (passed)
                 ++*passed;

@@ -347,7 +347,7 @@ static void detp_progress(const gi_job *job, gi_job_progress *out)
     out->frame = st->anim ? detp_anim_frame(st) : 0;
     out->frames = st->anim ? p->anim.frames : 1;
     out->cost_unplanned = st->phase == DETP_PHASE_BAKE && wants_image(job)
-                              ? (double)job->width * job->height * p->image_spp
+                              ? gi_tiles_cost(job->width, job->height, p->image_spp)
                               : 0;
 }
 

@@ -678,8 +678,8 @@ static void rad_progress(const gi_job *job, gi_job_progress *out)
     const gi_rad_params *p = job->params;
     const rad_state *st = job->state;
     out->cost_unplanned = st->phase == PHASE_FF && images_wanted(job)
-                              ? (double)p->emissions.count * job->width * job->height *
-                                    p->image_spp
+                              ? p->emissions.count *
+                                    gi_tiles_cost(job->width, job->height, p->image_spp)
                               : 0;
 }
 
