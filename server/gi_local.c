@@ -4,16 +4,20 @@
  * lies under a private temporary directory, $TMPDIR/gi-render-XXXXXX
  * (/var/tmp when TMPDIR is unset: batches can be large and /tmp is often
  * in memory), created before the pool starts and removed when the render
- * ends, whether it succeeded, failed or was interrupted (SIGINT/SIGTERM).
- * Only a killed process leaves it behind. Affinity keys are ignored here:
- * one host, one disk.
+ * ends, unless it was stopped from outside with work to resume (below).
+ * Affinity keys are ignored here: one host, one disk.
  *
  * Checkpoints (gi_local_checkpoint.h) are written every few seconds and
- * when the render is stopped, so that `gi render --resume` continues it; an
- * animation's batches are then regenerated from their seeds, since the
- * batch directory went with the stopped render. */
+ * when the render is stopped, so that `gi render --resume` continues it.
+ * Each names the batch root; a render stopped by a signal keeps it (when it
+ * holds anything), and so does a killed one, so that the resumed render
+ * reads an animation's photon batches as stored instead of tracing them
+ * again (a batch whose files are gone or torn is regenerated from its
+ * seeds, as anywhere). A render that replaces a checkpoint instead of
+ * resuming it removes the batch root it names. */
 #include "gi_local.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,7 +71,8 @@ static const gi_buf *on_asset(void *user, const char *hash)
     return lr->job->assets ? gi_asset_store_get(lr->job->assets, hash) : NULL;
 }
 
-/* Creates the render's private batch root. */
+/* Creates the render's private batch root (an absolute path: a checkpoint
+ * names it, and --resume may run from another directory). */
 static int batch_root_make(local_run *lr, gi_error *err)
 {
     const char *tmp = getenv("TMPDIR");
@@ -83,6 +88,11 @@ static int batch_root_make(local_run *lr, gi_error *err)
         lr->batch_root = NULL;
         return -1;
     }
+    char *abs = realpath(lr->batch_root, NULL);
+    if (abs) {
+        free(lr->batch_root);
+        lr->batch_root = abs;
+    }
     return 0;
 }
 
@@ -97,39 +107,88 @@ static void batch_root_remove(local_run *lr)
     lr->batch_root = NULL;
 }
 
+/* 1 if dir holds anything (a job's batch directory). */
+static int dir_has_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return 0;
+    struct dirent *e;
+    int any = 0;
+    while (!any && (e = readdir(d)) != NULL)
+        any = strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0;
+    closedir(d);
+    return any;
+}
+
+/* Lets go of the batch root: kept on disk if asked and it holds anything,
+ * removed otherwise. */
+static void batch_root_end(local_run *lr, int keep)
+{
+    if (keep && lr->batch_root && dir_has_entries(lr->batch_root)) {
+        free(lr->batch_root);
+        lr->batch_root = NULL;
+        return;
+    }
+    batch_root_remove(lr);
+}
+
+/* The batch root a render stopped before this one kept beside ckpt, if it
+ * is one of ours: removed, since this render starts over. */
+static void remove_kept_batch_root(const char *ckpt)
+{
+    char *root = gi_local_checkpoint_batch_root(ckpt);
+    if (root && gi_local_batch_root_ours(root)) {
+        gi_error err;
+        if (gi_batch_dir_remove(root, &err))
+            gi_warn("%s", err.msg);
+    }
+    free(root);
+}
+
 static int default_workers(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n > 0 ? (int)n : 1;
 }
 
-/* The end of a render: a finished job's checkpoint removed; one stopped
- * from outside (interrupted, its pool failing) checkpointed so that
- * --resume continues it. Frees the run and ckpt. */
+/* The end of a render (its pool stopped, if it had one): a finished job's
+ * checkpoint removed; one stopped from outside (interrupted, its pool
+ * failing) checkpointed so that --resume continues it, its batch root kept
+ * for it if that holds anything. Frees the run and ckpt. */
 static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
                      gi_local_summary *summary, int rc, gi_error *err)
 {
     gi_job *job = lr->job;
+    int keep_batches = 0;
     if (!checkpoints) {
         /* none */
     } else if (rc == 0) {
         unlink(ckpt);
     } else if (!lr->jr.failed && job->method->save) {
         gi_error cerr;
-        if (gi_local_checkpoint_write(&lr->jr, ckpt, &cerr) == 0 && err) {
-            gi_progress_at at;
-            gi_jobrun_progress(&lr->jr, gi_now(), &at);
-            char where[64] = "";
-            if (at.frames > 1)
-                snprintf(where, sizeof where, ", frame %u of %u", at.frame, at.frames);
-            gi_error e = *err;
-            gi_fail(err, e.code, "%s; the work done (%.0f%%%s) is kept in %s: `gi render %s --out %s "
-                    "--resume` continues", e.msg, 100.0 * at.fraction, where, ckpt, job->file,
-                    job->out_dir);
-        } else if (err) {
-            gi_warn("%s", cerr.msg);
+        keep_batches = lr->batch_root && dir_has_entries(lr->batch_root);
+        const char *root = keep_batches ? lr->batch_root : NULL;
+        if (gi_local_checkpoint_write(&lr->jr, root, ckpt, &cerr) == 0) {
+            if (err) {
+                gi_progress_at at;
+                gi_jobrun_progress(&lr->jr, gi_now(), &at);
+                char where[64] = "";
+                if (at.frames > 1)
+                    snprintf(where, sizeof where, ", frame %u of %u", at.frame, at.frames);
+                gi_error e = *err;
+                gi_fail(err, e.code, "%s; the work done (%.0f%%%s) is kept in %s%s%s: "
+                        "`gi render %s --out %s --resume` continues", e.msg, 100.0 * at.fraction,
+                        where, ckpt, root ? " and its photon batches in " : "", root ? root : "",
+                        job->file, job->out_dir);
+            }
+        } else {
+            keep_batches = 0;
+            if (err)
+                gi_warn("%s", cerr.msg);
         }
     }
+    batch_root_end(lr, keep_batches);
     summary->seconds = gi_now() - t0;
     summary->tasks = lr->jr.task_count;
     summary->retries = lr->jr.retries;
@@ -151,7 +210,8 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     char *ckpt = gi_local_checkpoint_path(job);
     int resumed = 0, checkpoints = opts->checkpoint_s >= 0;
     if (opts->resume && checkpoints) {
-        resumed = gi_local_checkpoint_restore(&lr.jr, job, ckpt, err);
+        char *root = NULL;
+        resumed = gi_local_checkpoint_restore(&lr.jr, job, ckpt, &root, err);
         if (resumed > 0) {
             gi_progress_at at;
             gi_jobrun_progress(&lr.jr, gi_now(), &at);
@@ -160,6 +220,14 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             if (at.frames > 1)
                 fprintf(stderr, ", at frame %u of %u", at.frame, at.frames);
             fprintf(stderr, ")\n");
+            if (root && gi_local_batch_root_ours(root)) {
+                lr.batch_root = root; /* the stopped render's batches, read again */
+                root = NULL;
+                if (dir_has_entries(lr.batch_root))
+                    fprintf(stderr, "gi: %s: reading the photon batches kept in %s\n",
+                            job->name, lr.batch_root);
+            }
+            free(root);
         } else if (resumed == 0) {
             fprintf(stderr, "gi: %s: no checkpoint in %s; starting from the beginning\n",
                     job->name, job->out_dir);
@@ -168,6 +236,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         gi_warn("%s holds an earlier run that was stopped; this run starts over and replaces "
                 "it (--resume continues it)",
                 ckpt);
+        remove_kept_batch_root(ckpt);
     }
     if (resumed < 0 || (resumed == 0 && gi_jobrun_start(&lr.jr, job, err))) {
         gi_jobrun_free(&lr.jr);
@@ -180,13 +249,13 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     if ((uint64_t)workers > lr.jr.task_count)
         workers = (int)lr.jr.task_count;
     summary->workers = workers;
-    if (batch_root_make(&lr, err)) {
+    if (!lr.batch_root && batch_root_make(&lr, err)) {
         gi_jobrun_free(&lr.jr);
         free(ckpt);
         return -1;
     }
     if (gi_pool_start(&lr.pool, workers, lr.batch_root, err)) {
-        batch_root_remove(&lr);
+        batch_root_end(&lr, resumed > 0); /* the checkpoint may name it still */
         gi_jobrun_free(&lr.jr);
         free(ckpt);
         return -1;
@@ -237,7 +306,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= opts->checkpoint_s &&
             lr.jr.merge_next != ckpt_merged && !gi_jobrun_done(&lr.jr) && job->method->save) {
             gi_error cerr;
-            if (gi_local_checkpoint_write(&lr.jr, ckpt, &cerr))
+            if (gi_local_checkpoint_write(&lr.jr, lr.batch_root, ckpt, &cerr))
                 gi_warn("%s", cerr.msg);
             last_ckpt = now;
             ckpt_merged = lr.jr.merge_next;
@@ -258,7 +327,6 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     }
     gi_progress_end(&prog);
     gi_pool_stop(&lr.pool); /* children gone: nothing writes below batch_root now */
-    batch_root_remove(&lr);
     gi_debug("%s: peak bytes of results held for in-order merging: %llu", job->name,
              (unsigned long long)lr.jr.held_results_peak);
     return local_end(&lr, ckpt, checkpoints, t0, summary, rc, err);

@@ -5,12 +5,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "gi_fs.h"
 
 #define LOCAL_CHECKPOINT_MAGIC 0x434C4947u /* "GILC" */
-#define LOCAL_CHECKPOINT_VERSION 1u
+#define LOCAL_CHECKPOINT_VERSION 2u /* 1: no batch root */
+#define LOCAL_BATCH_ROOT_MAX 4096
 
 char *gi_local_checkpoint_path(const gi_job *job)
 {
@@ -37,7 +39,8 @@ static void identity(const gi_job *job, char out[GI_HASH_HEX])
     gi_buf_free(&b);
 }
 
-int gi_local_checkpoint_write(const gi_jobrun *jr, const char *path, gi_error *err)
+int gi_local_checkpoint_write(const gi_jobrun *jr, const char *batch_root, const char *path,
+                              gi_error *err)
 {
     char id[GI_HASH_HEX];
     identity(jr->job, id);
@@ -46,6 +49,7 @@ int gi_local_checkpoint_write(const gi_jobrun *jr, const char *path, gi_error *e
     gi_buf_put_u32(&b, LOCAL_CHECKPOINT_MAGIC);
     gi_buf_put_u32(&b, LOCAL_CHECKPOINT_VERSION);
     gi_buf_put_str(&b, id);
+    gi_buf_put_str(&b, batch_root ? batch_root : "");
     int rc = gi_jobrun_checkpoint(jr, &b, err);
     if (rc == 0)
         rc = gi_write_file_atomic(path, b.data, b.len, err);
@@ -53,8 +57,35 @@ int gi_local_checkpoint_write(const gi_jobrun *jr, const char *path, gi_error *e
     return rc ? gi_error_prefix(err, "checkpoint %s", path) : 0;
 }
 
-int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, gi_error *err)
+/* The header of the checkpoint in b: 0 and *id, *root (malloc'ed; *root
+ * NULL if none), the reader left at gi_jobrun_checkpoint's bytes; -1 if it
+ * is not a checkpoint. */
+static int read_header(const gi_buf *b, const char *path, gi_reader *r, char **id, char **root)
 {
+    gi_reader_init(r, b->data, b->len, path);
+    uint32_t magic = gi_get_u32(r), version = gi_get_u32(r);
+    *id = gi_get_str(r, GI_HASH_HEX);
+    *root = NULL;
+    if (!r->failed && version >= 2)
+        *root = gi_get_str(r, LOCAL_BATCH_ROOT_MAX);
+    if (r->failed || magic != LOCAL_CHECKPOINT_MAGIC || version < 1 ||
+        version > LOCAL_CHECKPOINT_VERSION || !*id || (version >= 2 && !*root)) {
+        free(*id);
+        free(*root);
+        *id = *root = NULL;
+        return -1;
+    }
+    if (*root && !(*root)[0]) {
+        free(*root);
+        *root = NULL;
+    }
+    return 0;
+}
+
+int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, char **batch_root,
+                                gi_error *err)
+{
+    *batch_root = NULL;
     if (access(path, F_OK) != 0) {
         if (errno == ENOENT)
             return 0;
@@ -67,13 +98,11 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, gi
         return -1;
     }
     gi_reader r;
-    gi_reader_init(&r, b.data, b.len, path);
-    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
-    char *id = gi_get_str(&r, GI_HASH_HEX);
+    char *id, *root;
     char want[GI_HASH_HEX];
     identity(job, want);
     int rc = 0;
-    if (r.failed || magic != LOCAL_CHECKPOINT_MAGIC || version != LOCAL_CHECKPOINT_VERSION || !id)
+    if (read_header(&b, path, &r, &id, &root))
         rc = gi_fail(err, GI_EINVAL, "%s: not a gi render checkpoint (remove it to start over)",
                      path);
     else if (strcmp(id, want) != 0)
@@ -93,5 +122,42 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, gi
         gi_buf_free(&rest);
     }
     gi_buf_free(&b);
-    return rc ? -1 : 1;
+    if (rc) {
+        free(root);
+        return -1;
+    }
+    *batch_root = root;
+    return 1;
+}
+
+char *gi_local_checkpoint_batch_root(const char *path)
+{
+    /* The header alone: a checkpoint can be hundreds of MB of sums. */
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    gi_buf b;
+    gi_buf_init(&b);
+    char head[16 + GI_HASH_HEX + LOCAL_BATCH_ROOT_MAX];
+    size_t n = fread(head, 1, sizeof head, f);
+    fclose(f);
+    gi_buf_put(&b, head, n);
+    gi_reader r;
+    char *id, *root;
+    if (read_header(&b, path, &r, &id, &root) == 0)
+        free(id);
+    gi_buf_free(&b);
+    return root;
+}
+
+int gi_local_batch_root_ours(const char *dir)
+{
+    if (!dir || dir[0] != '/')
+        return 0;
+    const char *base = strrchr(dir, '/') + 1;
+    if (strncmp(base, "gi-render-", 10) != 0 || strstr(dir, "/../") || strstr(dir, "/./"))
+        return 0;
+    struct stat sb;
+    return lstat(dir, &sb) == 0 && S_ISDIR(sb.st_mode) && sb.st_uid == geteuid() &&
+           (sb.st_mode & 077) == 0;
 }

@@ -3,7 +3,10 @@
  * a damaged one must be refused with a message (the job then starts over),
  * never crash, leak or hang the coordinator. The first byte picks one of
  * four small jobs (detp, a detp animation, pt, radiosity; quadrature's
- * checkpoints are in fuzz_quad); the rest is the checkpoint.
+ * checkpoints are in fuzz_quad); the rest is the checkpoint. With the
+ * byte's high bit set, the rest is a `gi render` checkpoint file instead
+ * (gi_local_checkpoint.h: its header, the job's identity and batch root,
+ * then the same state), read back as `gi render --resume` does.
  *
  * With GI_FUZZ_CHECKPOINT_SEEDS=DIR in the environment it writes the seed
  * corpus instead: each job run in this process (an in-process worker) and
@@ -18,6 +21,7 @@
 #include "gi_job.h"
 #include "gi_jobrun.h"
 #include "gi_limits.h"
+#include "gi_local_checkpoint.h"
 #include "gi_log.h"
 #include "gi_worker_ctx.h"
 
@@ -54,7 +58,7 @@ static const char *const job_texts[] = {
 };
 #define JOBS 4
 
-static char dir[256], job_path[JOBS][300];
+static char dir[256], job_path[JOBS][300], local_path[300];
 
 static int load(int which, gi_job *job, gi_error *err)
 {
@@ -64,8 +68,28 @@ static int load(int which, gi_job *job, gi_error *err)
     return 0;
 }
 
+/* A seed: the selector byte, then the bytes of the file at path. */
+static int write_local_seed(const char *seeds, int which, uint64_t done, const char *path,
+                            gi_error *err)
+{
+    gi_buf file, ck;
+    gi_buf_init(&file);
+    gi_buf_init(&ck);
+    int rc = gi_read_file(path, (size_t)1 << 30, &file, err);
+    gi_buf_put_u8(&ck, (uint8_t)(which | 0x80));
+    gi_buf_put(&ck, file.data, file.len);
+    char seed[600];
+    snprintf(seed, sizeof seed, "%s/local%d-after-%llu", seeds, which, (unsigned long long)done);
+    if (rc == 0)
+        rc = gi_write_file_atomic(seed, ck.data, ck.len, err);
+    gi_buf_free(&file);
+    gi_buf_free(&ck);
+    return rc;
+}
+
 /* Runs job `which` in this process, writing a checkpoint after each of
- * `stops` merged tasks as SEEDS/<which>-<stop>. */
+ * `stops` merged tasks as SEEDS/job<which>-after-<stop>, and the same as a
+ * `gi render` checkpoint as SEEDS/local<which>-after-<stop>. */
 static int write_seeds(const char *seeds, int which, gi_error *err)
 {
     static const uint64_t stops[] = {1, 2, 4, 7, 11, 16, 30, 60, 100};
@@ -104,6 +128,12 @@ static int write_seeds(const char *seeds, int which, gi_error *err)
         if (rc == 0)
             rc = gi_write_file_atomic(path, ck.data, ck.len, err);
         gi_buf_free(&ck);
+        char *local = gi_path_join(dir, "local.checkpoint");
+        if (rc == 0)
+            rc = gi_local_checkpoint_write(&jr, "/var/tmp/gi-render-Seed01", local, err);
+        if (rc == 0)
+            rc = write_local_seed(seeds, which, done, local, err);
+        free(local);
     }
     gi_jobrun_free(&jr);
     gi_worker_ctx_free(&ctx);
@@ -140,6 +170,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     if (gi_write_file_atomic(scene, scene_text, strlen(scene_text), &err))
         abort();
     free(scene);
+    snprintf(local_path, sizeof local_path, "%s/fuzzed.checkpoint", dir);
     for (int i = 0; i < JOBS; i++) {
         snprintf(job_path[i], sizeof job_path[i], "%s/job%d.json", dir, i);
         if (gi_write_file_atomic(job_path[i], job_texts[i], strlen(job_texts[i]), &err))
@@ -165,11 +196,28 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_error err;
     if (load(data[0] % JOBS, &job, &err))
         abort(); /* the jobs are fixed: they load */
+    gi_jobrun jr;
+    gi_error_clear(&err);
+    if (data[0] & 0x80) {
+        memset(&jr, 0, sizeof jr); /* freed whatever the restore did, as gi_local does */
+        if (gi_write_file_atomic(local_path, data + 1, size - 1, &err))
+            abort();
+        char *root = gi_local_checkpoint_batch_root(local_path), *restored_root = NULL;
+        int rc = gi_local_checkpoint_restore(&jr, &job, local_path, &restored_root, &err);
+        if (rc < 0 && (!err.msg[0] || strchr(err.msg, '\n')))
+            abort();
+        /* The header alone and the whole restore agree on the root. */
+        if (rc > 0 && (!root != !restored_root || (root && strcmp(root, restored_root) != 0)))
+            abort();
+        gi_jobrun_free(&jr);
+        free(root);
+        free(restored_root);
+        gi_job_free(&job);
+        return 0;
+    }
     gi_buf ck;
     gi_buf_init(&ck);
     gi_buf_put(&ck, data + 1, size - 1);
-    gi_jobrun jr;
-    gi_error_clear(&err);
     if (gi_jobrun_restore(&jr, &job, &ck, &err) != 0 && (!err.msg[0] || strchr(err.msg, '\n')))
         abort();
     gi_jobrun_free(&jr);

@@ -1,9 +1,12 @@
 # `gi render --resume`: a detp animation interrupted (SIGINT) in the middle,
 # and another killed outright (SIGKILL, so only the periodic checkpoint is
-# left), each resumed to frames byte-identical with an uninterrupted render
-# (the batches are regenerated: the first render's temporary batch files are
-# gone). A checkpoint of an edited job is refused; a finished render leaves
-# no checkpoint behind. Then a pt still, interrupted and resumed the same way.
+# left), each resumed to frames byte-identical with an uninterrupted render.
+# The stopped render keeps its photon batches under TMPDIR and the resumed
+# one reads them instead of tracing them again (no frame regenerated), then
+# removes them. A checkpoint of an edited job is refused; a finished render
+# leaves no checkpoint behind; a render that starts over in place of a
+# stopped one removes the batches that one kept. Then a pt still,
+# interrupted and resumed the same way.
 . "$(dirname "$0")/lib.sh"
 mkdir -p "$TMP/tmp"
 export TMPDIR="$TMP/tmp"
@@ -50,8 +53,13 @@ start_and_stop() {
     [ -s "$1/.job.checkpoint" ] || { cat "$1.log"; fail "$1: no checkpoint after $2"; }
 }
 
+# batch_roots: how many render batch roots TMPDIR holds.
+batch_roots() { ls "$TMPDIR" | grep -c '^gi-render-' || true; }
+
 start_and_stop "$TMP/int" INT
-grep -q "is kept in .*--resume. continues" "$TMP/int.log" || { cat "$TMP/int.log"; fail "no resume hint"; }
+grep -q "is kept in .* and its photon batches in $TMPDIR/gi-render-.*--resume. continues" \
+    "$TMP/int.log" || { cat "$TMP/int.log"; fail "no resume hint naming the batches"; }
+[ "$(batch_roots)" -eq 1 ] || fail "the interrupted render kept $(batch_roots) batch roots, not 1"
 # The job edited since: its checkpoint is refused, and kept.
 sed 's/"seed": 5/"seed": 6/' "$TMP/job.json" >"$TMP/job.edited"
 cp "$TMP/job.json" "$TMP/job.orig"
@@ -65,13 +73,29 @@ cp "$TMP/job.orig" "$TMP/job.json"
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/int" --progress none --resume \
     >"$TMP/int-resume.log" 2>&1 || { cat "$TMP/int-resume.log"; fail "resume after SIGINT"; }
 grep -q "resuming from" "$TMP/int-resume.log" || fail "the resume did not say so"
+grep -q "reading the photon batches kept in" "$TMP/int-resume.log" ||
+    { cat "$TMP/int-resume.log"; fail "the resume did not read the kept batches"; }
 same_as_ref "$TMP/int" "resumed after SIGINT"
 [ ! -e "$TMP/int/.job.checkpoint" ] || fail "a resumed render left its checkpoint"
+# Every frame found its batches stored: none was traced again.
+regen=$(grep -ho '"frames_regenerated":[^,}]*' "$TMP"/int/report.*.json | grep -vc ':[[:space:]]*0$' || true)
+[ "$regen" -eq 0 ] || fail "$regen frames regenerated batches after the resume"
+[ "$(batch_roots)" -eq 0 ] || fail "the finished render left its batch root"
 
 start_and_stop "$TMP/kill" KILL
 "$GI_RELEASE" render "$TMP/job.json" --workers 3 --out "$TMP/kill" --progress none --resume \
     >"$TMP/kill-resume.log" 2>&1 || { cat "$TMP/kill-resume.log"; fail "resume after SIGKILL"; }
 same_as_ref "$TMP/kill" "resumed after SIGKILL (3 workers)"
+[ "$(batch_roots)" -eq 0 ] || fail "the render resumed after SIGKILL left its batch root"
+
+# Starting over instead of resuming: the stopped render's batches go.
+start_and_stop "$TMP/over" INT
+[ "$(batch_roots)" -eq 1 ] || fail "no batch root kept for $TMP/over"
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/over" --progress none \
+    >"$TMP/over-again.log" 2>&1 || { cat "$TMP/over-again.log"; fail "starting over"; }
+grep -q "this run starts over" "$TMP/over-again.log" || fail "starting over did not warn"
+same_as_ref "$TMP/over" "started over"
+[ "$(batch_roots)" -eq 0 ] || fail "starting over left the stopped render's batch root"
 
 # A still: pt, interrupted among its passes.
 write_job "$TMP/pt.json" <<JOB

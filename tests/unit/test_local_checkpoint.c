@@ -1,0 +1,83 @@
+/* Unit tests: the batch root a `gi render` checkpoint names, and which
+ * directories a render takes for its own batch root (it removes them, so a
+ * damaged or hostile checkpoint must not name anything else). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "gi_buf.h"
+#include "gi_fs.h"
+#include "gi_local_checkpoint.h"
+#include "gi_test.h"
+
+/* A checkpoint's header as gi_local_checkpoint_write lays it out, then a
+ * byte of the run's state. */
+static void put_checkpoint(const char *path, uint32_t version, const char *root, size_t cut)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_u32(&b, 0x434C4947u);
+    gi_buf_put_u32(&b, version);
+    gi_buf_put_str(&b, "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef");
+    if (root)
+        gi_buf_put_str(&b, root);
+    gi_buf_put_u8(&b, 1);
+    gi_error err;
+    GI_CHECK_OK(gi_write_file_atomic(path, b.data, cut ? cut : b.len, &err));
+    gi_buf_free(&b);
+}
+
+GI_TEST(test_local_checkpoint_batch_root)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/.job.checkpoint", gi_test_tmpdir());
+    put_checkpoint(path, 2, "/var/tmp/gi-render-abc123", 0);
+    char *root = gi_local_checkpoint_batch_root(path);
+    GI_CHECK_MSG(root && strcmp(root, "/var/tmp/gi-render-abc123") == 0, "%s",
+                 root ? root : "(none)");
+    free(root);
+    put_checkpoint(path, 2, "", 0); /* none recorded */
+    GI_CHECK(gi_local_checkpoint_batch_root(path) == NULL);
+    put_checkpoint(path, 1, NULL, 0); /* before batch roots were recorded */
+    GI_CHECK(gi_local_checkpoint_batch_root(path) == NULL);
+    put_checkpoint(path, 2, "/var/tmp/gi-render-abc123", 80); /* torn in the root */
+    GI_CHECK(gi_local_checkpoint_batch_root(path) == NULL);
+    put_checkpoint(path, 3, "/var/tmp/gi-render-abc123", 0); /* a newer format */
+    GI_CHECK(gi_local_checkpoint_batch_root(path) == NULL);
+    unlink(path);
+    GI_CHECK(gi_local_checkpoint_batch_root(path) == NULL);
+}
+
+GI_TEST(test_local_batch_root_ours)
+{
+    char base[512], dir[600], other[600], link[600], open_dir[600];
+    if (!realpath(gi_test_tmpdir(), base)) {
+        GI_CHECK_MSG(0, "realpath %s", gi_test_tmpdir());
+        return;
+    }
+    snprintf(dir, sizeof dir, "%s/gi-render-Ab12Cd", base);
+    snprintf(other, sizeof other, "%s/batches", base);
+    snprintf(link, sizeof link, "%s/gi-render-link", base);
+    snprintf(open_dir, sizeof open_dir, "%s/gi-render-open", base);
+    GI_CHECK(mkdir(dir, 0700) == 0 && mkdir(other, 0700) == 0 && mkdir(open_dir, 0700) == 0);
+    GI_CHECK(chmod(open_dir, 0755) == 0 && symlink(dir, link) == 0);
+
+    GI_CHECK(gi_local_batch_root_ours(dir));
+    GI_CHECK(!gi_local_batch_root_ours(other));    /* not a render's name */
+    GI_CHECK(!gi_local_batch_root_ours(link));     /* a link, even to one */
+    GI_CHECK(!gi_local_batch_root_ours(open_dir)); /* others may enter */
+    GI_CHECK(!gi_local_batch_root_ours("/"));
+    GI_CHECK(!gi_local_batch_root_ours("gi-render-Ab12Cd")); /* relative */
+    GI_CHECK(!gi_local_batch_root_ours(NULL));
+    char up[700];
+    snprintf(up, sizeof up, "%s/gi-render-Ab12Cd/../gi-render-Ab12Cd", base);
+    GI_CHECK(!gi_local_batch_root_ours(up));
+    snprintf(up, sizeof up, "%s/gi-render-gone", base); /* missing */
+    GI_CHECK(!gi_local_batch_root_ours(up));
+    rmdir(dir);
+    rmdir(other);
+    rmdir(open_dir);
+    unlink(link);
+}
