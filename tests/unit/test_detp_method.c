@@ -11,6 +11,7 @@
 #include "gi_jobrun.h"
 #include "gi_test.h"
 #include "gi_worker_ctx.h"
+#include "test_drive.h"
 
 static char *write_job(const char *name, const char *estimator, const char *extra)
 {
@@ -52,38 +53,22 @@ static int run(const char *path, const char *out, uint64_t stop_after, gi_error 
     gi_jobrun jr;
     if (load(path, out, &job, &ctx, err) || gi_jobrun_start(&jr, &job, err))
         return -1;
-    uint64_t done = 0;
-    int rc = 0;
-    while (rc == 0 && !gi_jobrun_done(&jr)) {
-        const gi_task *t = gi_jobrun_lease(&jr);
-        if (!t)
-            return gi_fail(err, GI_EINTERNAL, "nothing to lease");
-        gi_buf res;
-        gi_buf_init(&res);
-        rc = gi_worker_run_task(&ctx, t, &res, err);
-        if (rc == 0 && gi_jobrun_complete(&jr, t->id, t->attempt, &res, &ctx.stats)) {
-            *err = jr.error;
-            rc = -1;
-        }
-        gi_buf_free(&res);
-        if (rc == 0 && ++done == stop_after) {
-            gi_buf ck;
-            gi_buf_init(&ck);
-            rc = gi_jobrun_checkpoint(&jr, &ck, err);
-            gi_jobrun_free(&jr);
-            gi_worker_ctx_free(&ctx);
-            gi_job_free(&job);
-            if (rc == 0)
-                rc = load(path, out, &job, &ctx, err);
-            if (rc == 0)
-                rc = gi_jobrun_restore(&jr, &job, &ck, err);
-            gi_buf_free(&ck);
-        }
+    int rc = stop_after ? gi_test_drive(&jr, &ctx, stop_after, err) : 0;
+    if (rc == 0 && stop_after && !gi_jobrun_done(&jr)) {
+        gi_buf ck;
+        gi_buf_init(&ck);
+        rc = gi_jobrun_checkpoint(&jr, &ck, err);
+        gi_jobrun_free(&jr);
+        gi_worker_ctx_free(&ctx);
+        gi_job_free(&job);
+        if (rc == 0)
+            rc = load(path, out, &job, &ctx, err);
+        if (rc == 0)
+            rc = gi_jobrun_restore(&jr, &job, &ck, err);
+        gi_buf_free(&ck);
     }
-    if (rc == 0 && jr.failed) {
-        *err = jr.error;
-        rc = -1;
-    }
+    if (rc == 0)
+        rc = gi_test_drive(&jr, &ctx, UINT64_MAX, err);
     gi_jobrun_free(&jr);
     gi_worker_ctx_free(&ctx);
     gi_job_free(&job);

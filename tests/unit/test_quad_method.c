@@ -2,6 +2,7 @@
  * process (coordinator and a worker context side by side): checkpoints
  * taken between rounds resume to the same bits, damaged results and tasks
  * are refused, and the parameter block is validated. */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,7 @@
 #include "gi_test.h"
 #include "gi_worker_ctx.h"
 #include "quadrature/quad_farm.h"
+#include "test_drive.h"
 
 static const char *job_text(int hybrid)
 {
@@ -46,29 +48,6 @@ static int load_job(gi_job *job, int hybrid, const char *out, gi_error *err)
     return gi_mkdirs(path, err);
 }
 
-/* Runs leased tasks until done or `stop` tasks were completed. */
-static int drive(gi_jobrun *jr, gi_worker_ctx *ctx, int stop, gi_error *err)
-{
-    int done = 0;
-    const gi_task *t;
-    while (!gi_jobrun_done(jr) && done < stop && (t = gi_jobrun_lease(jr))) {
-        gi_buf res;
-        gi_buf_init(&res);
-        if (gi_worker_run_task(ctx, t, &res, err)) {
-            gi_buf_free(&res);
-            return -1;
-        }
-        if (gi_jobrun_complete(jr, t->id, t->attempt, &res, &ctx->stats)) {
-            gi_buf_free(&res);
-            *err = jr->error;
-            return -1;
-        }
-        gi_buf_free(&res);
-        done++;
-    }
-    return 0;
-}
-
 static int read_file(const char *dir, gi_buf *out)
 {
     char path[1024];
@@ -95,7 +74,7 @@ GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
                                          job.assets, &err));
         gi_jobrun jr;
         GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
-        GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+        GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
         GI_REQUIRE(jr.finished);
         uint64_t tasks = jr.task_count;
         GI_CHECK_MSG(tasks > 12, "only %llu tasks", (unsigned long long)tasks);
@@ -113,7 +92,7 @@ GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
             snprintf(out, sizeof out, "ck%d-%zu", hybrid, s);
             GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
             GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
-            GI_REQUIRE_OK(drive(&jr, &ctx, stops[s], &err));
+            GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, (uint64_t)stops[s], &err));
             gi_buf ck;
             gi_buf_init(&ck);
             GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
@@ -122,7 +101,7 @@ GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
 
             GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
             GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
-            GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+            GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
             GI_CHECK(jr.finished && jr.task_count == tasks);
             gi_jobrun_free(&jr);
             gi_job_free(&job);

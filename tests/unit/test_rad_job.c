@@ -1,5 +1,6 @@
 /* Unit tests: the radiosity method as a job - parameter validation, and
  * checkpoints (a run stopped anywhere and restored gives the same bits). */
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,6 +9,7 @@
 #include "gi_jobrun.h"
 #include "gi_test.h"
 #include "gi_worker_ctx.h"
+#include "test_drive.h"
 
 static const char *job_text =
     "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"radiosity\", \"seed\": 3,"
@@ -36,27 +38,6 @@ static int load(const char *dir, const char *params, gi_job *job, gi_error *err)
     return 0;
 }
 
-/* Runs leased tasks in this process until done or `stop` tasks ran. */
-static int drive(gi_jobrun *jr, gi_worker_ctx *ctx, int stop, gi_error *err)
-{
-    const gi_task *t;
-    int ran = 0;
-    while (!gi_jobrun_done(jr) && ran < stop && (t = gi_jobrun_lease(jr))) {
-        gi_buf res;
-        gi_buf_init(&res);
-        if (gi_worker_run_task(ctx, t, &res, err)) {
-            gi_buf_free(&res);
-            return -1;
-        }
-        gi_jobrun_complete(jr, t->id, t->attempt, &res, &ctx->stats);
-        gi_buf_free(&res);
-        ran++;
-    }
-    if (jr->failed)
-        return gi_fail(err, jr->error.code, "%s", jr->error.msg);
-    return 0;
-}
-
 static int read_all(const char *dir, const char *name, gi_buf *out, gi_error *err)
 {
     char *path = gi_path_join(dir, name);
@@ -80,7 +61,7 @@ GI_TEST(test_rad_job_checkpoint_restore_gives_the_same_outputs)
     gi_jobrun jr;
     GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
     uint64_t ff_tasks = jr.task_count;
-    GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+    GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
     GI_REQUIRE(jr.finished);
     uint64_t all_tasks = jr.task_count;
     GI_CHECK(all_tasks > ff_tasks); /* image tiles followed */
@@ -98,7 +79,7 @@ GI_TEST(test_rad_job_checkpoint_restore_gives_the_same_outputs)
         GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, fetch_none,
                                          NULL, job.assets, &err));
         GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
-        GI_REQUIRE_OK(drive(&jr, &ctx, stops[s], &err));
+        GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, (uint64_t)stops[s], &err));
         gi_jobrun_lease(&jr); /* leased, never answered: runs again after restore */
         gi_buf ck;
         gi_buf_init(&ck);
@@ -111,7 +92,7 @@ GI_TEST(test_rad_job_checkpoint_restore_gives_the_same_outputs)
         GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
         GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, fetch_none,
                                          NULL, job.assets, &err));
-        GI_REQUIRE_OK(drive(&jr, &ctx, 1 << 30, &err));
+        GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
         GI_CHECK_MSG(jr.finished && jr.task_count == all_tasks, "stop %d", stops[s]);
         static const char *const files[] = {"r.fact", "r.ply", "r.exr"};
         for (int f = 0; f < 3; f++) {

@@ -1,0 +1,24 @@
+/* Unit tests that run a whole job in this process (see the header). */
+#include "test_drive.h"
+
+int gi_test_drive(gi_jobrun *jr, gi_worker_ctx *ctx, uint64_t stop, gi_error *err)
+{
+    for (uint64_t ran = 0; ran < stop && !gi_jobrun_done(jr); ran++) {
+        const gi_task *t = gi_jobrun_lease(jr);
+        if (!t) /* one worker, nothing leased elsewhere: a task is always due */
+            return gi_fail(err, GI_EINTERNAL, "nothing to lease before the job is done");
+        gi_buf res;
+        gi_buf_init(&res);
+        int rc = gi_worker_run_task(ctx, t, &res, err);
+        if (rc == 0)
+            gi_jobrun_complete(jr, t->id, t->attempt, &res, &ctx->stats); /* jr->failed says */
+        gi_buf_free(&res);
+        if (rc)
+            return rc;
+        if (jr->failed)
+            break;
+    }
+    if (jr->failed)
+        return gi_fail(err, jr->error.code, "%s", jr->error.msg);
+    return 0;
+}
