@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "gi_error.h"
+#include "gi_msg_ctrl.h"
 
 void gi_affinity_init(gi_affinity *m) { memset(m, 0, sizeof *m); }
 
@@ -76,4 +77,44 @@ int gi_affinity_may_take(const gi_affinity *m, uint64_t key, const void *host,
 {
     const void *owner = key ? gi_affinity_owner(m, key) : NULL;
     return !owner || owner == host || !present(ctx, owner);
+}
+
+#define AFFINITY_MAGIC 0x46414947u /* "GIAF" */
+#define AFFINITY_VERSION 1u
+
+void gi_affinity_encode(const gi_affinity *m, const char *(*name)(const void *owner),
+                        gi_buf *out)
+{
+    gi_buf_put_u32(out, AFFINITY_MAGIC);
+    gi_buf_put_u32(out, AFFINITY_VERSION);
+    uint64_t n = 0;
+    for (size_t i = 0; i < m->cap; i++)
+        n += m->slots[i].key && m->slots[i].owner;
+    gi_buf_put_u64(out, n);
+    for (size_t i = 0; i < m->cap; i++)
+        if (m->slots[i].key && m->slots[i].owner) {
+            gi_buf_put_u64(out, m->slots[i].key);
+            gi_buf_put_str(out, name(m->slots[i].owner));
+        }
+}
+
+int gi_affinity_decode(const void *data, size_t len, const char *what,
+                       void (*each)(void *ctx, uint64_t key, const char *name), void *ctx,
+                       gi_error *err)
+{
+    gi_reader r;
+    gi_reader_init(&r, data, len, what);
+    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    uint64_t n = gi_get_u64(&r);
+    /* An entry takes 12 bytes at least: a count beyond that is damage. */
+    if (r.failed || magic != AFFINITY_MAGIC || version != AFFINITY_VERSION || n > r.left / 12)
+        return gi_fail(err, GI_EPROTO, "%s: not an affinity file", what);
+    for (uint64_t i = 0; i < n && !r.failed; i++) {
+        uint64_t key = gi_get_u64(&r);
+        char *name = gi_get_str(&r, GI_MSG_MAX_NAME);
+        if (name && key && name[0])
+            each(ctx, key, name);
+        free(name);
+    }
+    return gi_reader_finish(&r, err) ? 1 : 0;
 }

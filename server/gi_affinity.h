@@ -19,6 +19,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "gi_buf.h"
+#include "gi_error.h"
+
 typedef struct gi_affinity_slot {
     uint64_t key; /* 0: empty */
     const void *owner;
@@ -43,5 +46,19 @@ typedef int (*gi_affinity_present_fn)(void *ctx, const void *owner);
  * has no owner, is owned by host, or its owner is not present. */
 int gi_affinity_may_take(const gi_affinity *m, uint64_t key, const void *host,
                          gi_affinity_present_fn present, void *ctx);
+
+/* The affinity file that gi-farmd keeps beside a job's checkpoint, so that
+ * a restarted coordinator sends each key's tasks back to the host holding
+ * its files: u32 "GIAF", u32 version 1, u64 count, then count times (u64
+ * key, string owner name). name(owner) gives an owner's name. */
+void gi_affinity_encode(const gi_affinity *m, const char *(*name)(const void *owner),
+                        gi_buf *out);
+/* Reads such a file's bytes (`what` names it in errors), calling each(ctx,
+ * key, name) for every entry with a non-zero key and a name. Returns 0 when
+ * all was read; -1 with err if it is not an affinity file (each never
+ * called); 1 with err if it is damaged after the entries given to each. */
+int gi_affinity_decode(const void *data, size_t len, const char *what,
+                       void (*each)(void *ctx, uint64_t key, const char *name), void *ctx,
+                       gi_error *err);
 
 #endif

@@ -214,29 +214,31 @@ static void affinity_own(gi_farm_job *j, uint64_t key, gi_farm_host *host, const
             (unsigned long long)j->id, (unsigned long long)key, prev->name, host->name, how);
 }
 
-#define AFFINITY_MAGIC 0x46414947u /* "GIAF" */
-#define AFFINITY_VERSION 1u
+static const char *host_name(const void *owner)
+{
+    return ((const gi_farm_host *)owner)->name;
+}
 
 void gi_farm_affinity_save(const gi_farm_job *j, const char *path)
 {
-    const gi_affinity *m = &j->affinity;
     gi_buf b;
     gi_buf_init(&b);
-    gi_buf_put_u32(&b, AFFINITY_MAGIC);
-    gi_buf_put_u32(&b, AFFINITY_VERSION);
-    uint64_t n = 0;
-    for (size_t i = 0; i < m->cap; i++)
-        n += m->slots[i].key && m->slots[i].owner;
-    gi_buf_put_u64(&b, n);
-    for (size_t i = 0; i < m->cap; i++)
-        if (m->slots[i].key && m->slots[i].owner) {
-            gi_buf_put_u64(&b, m->slots[i].key);
-            gi_buf_put_str(&b, ((const gi_farm_host *)m->slots[i].owner)->name);
-        }
+    gi_affinity_encode(&j->affinity, host_name, &b);
     gi_error err;
     if (gi_write_file_atomic(path, b.data, b.len, &err))
         gi_warn("job %llu: saving affinity owners: %s", (unsigned long long)j->id, err.msg);
     gi_buf_free(&b);
+}
+
+typedef struct affinity_loader {
+    gi_farm *farm;
+    gi_affinity map;
+} affinity_loader;
+
+static void affinity_loaded(void *ctx, uint64_t key, const char *name)
+{
+    affinity_loader *l = ctx;
+    gi_affinity_set(&l->map, key, gi_farm_host_get(l->farm, name));
 }
 
 void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path)
@@ -251,26 +253,19 @@ void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path)
         gi_buf_free(&b);
         return;
     }
-    gi_reader r;
-    gi_reader_init(&r, b.data, b.len, path);
-    uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
-    uint64_t n = gi_get_u64(&r);
-    if (r.failed || magic != AFFINITY_MAGIC || version != AFFINITY_VERSION || n > r.left / 12) {
-        gi_warn("%s: not an affinity file (ignored)", path);
-        gi_buf_free(&b);
-        return;
-    }
-    gi_affinity_free(&j->affinity);
-    for (uint64_t i = 0; i < n && !r.failed; i++) {
-        uint64_t key = gi_get_u64(&r);
-        char *name = gi_get_str(&r, GI_MSG_MAX_NAME);
-        if (name && key && name[0])
-            gi_affinity_set(&j->affinity, key, gi_farm_host_get(f, name));
-        free(name);
-    }
-    if (gi_reader_finish(&r, &err)) {
-        gi_warn("job %llu: affinity owners partly restored: %s", (unsigned long long)j->id,
-                err.msg);
+    /* A file that is not one is ignored; a damaged one gives what it holds. */
+    affinity_loader l = {f, {0}};
+    gi_affinity_init(&l.map);
+    int rc = gi_affinity_decode(b.data, b.len, path, affinity_loaded, &l, &err);
+    if (rc < 0) {
+        gi_warn("job %llu: affinity owners not restored: %s", (unsigned long long)j->id, err.msg);
+        gi_affinity_free(&l.map);
+    } else {
+        if (rc > 0)
+            gi_warn("job %llu: affinity owners partly restored: %s", (unsigned long long)j->id,
+                    err.msg);
+        gi_affinity_free(&j->affinity);
+        j->affinity = l.map;
     }
     gi_debug("job %llu: %zu affinity owners restored", (unsigned long long)j->id,
              j->affinity.count);

@@ -1,14 +1,17 @@
 /* fuzz_farm: libFuzzer target for what gi-farmd and gi read from outside
  * besides frames: the journal (a file that a crash may have torn), job
- * submission bodies (POST /api/v1/jobs), and HTTP response heads and
- * chunked bodies (what `gi` reads from a farm). The first byte picks the
- * parser. Whatever parses must survive a round trip: journal records encode
- * back to the same bytes; a submission rebuilt by `gi submit`'s builder
- * parses to the same job text, priority and asset map. */
+ * submission bodies (POST /api/v1/jobs), HTTP response heads and chunked
+ * bodies (what `gi` reads from a farm), and a job's affinity file (read
+ * back when gi-farmd restarts). The first byte picks the parser. Whatever
+ * parses must survive a round trip: journal records encode back to the same
+ * bytes; a submission rebuilt by `gi submit`'s builder parses to the same
+ * job text, priority and asset map; the affinity owners read, written again,
+ * read back the same. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_affinity.h"
 #include "gi_farm_submit.h"
 #include "gi_http_client.h"
 #include "gi_journal.h"
@@ -78,19 +81,81 @@ static void http(const uint8_t *data, size_t size)
     gi_buf_free(&b);
 }
 
+/* The owners read: each name once (owners are compared by address). */
+typedef struct owners {
+    gi_affinity map;
+    char **names;
+    size_t count;
+} owners;
+
+static void owner_read(void *ctx, uint64_t key, const char *name)
+{
+    owners *o = ctx;
+    const char *owner = NULL;
+    for (size_t i = 0; i < o->count && !owner; i++)
+        if (strcmp(o->names[i], name) == 0)
+            owner = o->names[i];
+    if (!owner) {
+        o->names = realloc(o->names, (o->count + 1) * sizeof *o->names);
+        if (!o->names)
+            abort();
+        owner = o->names[o->count++] = strdup(name);
+    }
+    gi_affinity_set(&o->map, key, owner);
+}
+
+static const char *owner_name(const void *owner) { return owner; }
+
+static void owners_free(owners *o)
+{
+    for (size_t i = 0; i < o->count; i++)
+        free(o->names[i]);
+    free(o->names);
+    gi_affinity_free(&o->map);
+}
+
+static void affinity(const uint8_t *data, size_t size)
+{
+    owners a = {{0}, NULL, 0}, b = {{0}, NULL, 0};
+    gi_error err;
+    int rc = gi_affinity_decode(data, size, "affinity", owner_read, &a, &err);
+    if (rc != 0 && (!err.msg[0] || strchr(err.msg, '\n')))
+        abort();
+    if (rc < 0 && a.map.count)
+        abort(); /* not an affinity file: nothing may have been read */
+    gi_buf out;
+    gi_buf_init(&out);
+    gi_affinity_encode(&a.map, owner_name, &out);
+    if (gi_affinity_decode(out.data, out.len, "written", owner_read, &b, &err) != 0 ||
+        b.map.count != a.map.count)
+        abort();
+    for (size_t i = 0; i < a.map.cap; i++) {
+        const gi_affinity_slot *s = &a.map.slots[i];
+        const char *again = s->key ? gi_affinity_owner(&b.map, s->key) : NULL;
+        if (s->key && s->owner && (!again || strcmp(again, s->owner) != 0))
+            abort();
+    }
+    gi_buf_free(&out);
+    owners_free(&a);
+    owners_free(&b);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return 0;
-    switch (data[0] % 3) {
+    switch (data[0] % 4) {
     case 0:
         journal(data + 1, size - 1);
         break;
     case 1:
         submission(data + 1, size - 1);
         break;
-    default:
+    case 2:
         http(data + 1, size - 1);
+        break;
+    default:
+        affinity(data + 1, size - 1);
         break;
     }
     return 0;

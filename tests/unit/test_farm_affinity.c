@@ -8,6 +8,7 @@
 
 #include "gi_affinity.h"
 #include "gi_farm_impl.h"
+#include "gi_fs.h"
 #include "gi_jobrun.h"
 #include "gi_msg.h"
 #include "gi_test.h"
@@ -289,6 +290,15 @@ GI_TEST(test_farm_affinity_owners_survive_a_restart)
             GI_CHECK_MSG(h && strcmp(h->name, k % 3 ? "render-a" : "render-b") == 0,
                          "key %llu", (unsigned long long)k);
     }
+    /* A file torn in its last entry gives the owners before it. */
+    gi_buf whole;
+    gi_buf_init(&whole);
+    gi_error err;
+    GI_REQUIRE_OK(gi_read_file(path, 1 << 20, &whole, &err));
+    GI_REQUIRE_OK(gi_write_file_atomic(path, whole.data, whole.len - 5, &err));
+    gi_buf_free(&whole);
+    gi_farm_affinity_load(g, j, path);
+    GI_CHECK_MSG(j->affinity.count == 98, "%zu owners from a torn file", j->affinity.count);
     /* Damaged or foreign files are ignored (a hint, never fatal). */
     FILE *fp = fopen(path, "wb");
     fputs("garbage", fp);
