@@ -6,10 +6,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "gi_clock.h"
 #include "gi_error.h"
 #include "radiosity/rad_relight.h"
 
-static inline double now(void) { return gi_rad_seconds(); }
+static inline double now(void) { return gi_now(); }
 
 /* Prints "<program>: <message>" and exits 1. */
 static inline void rad_bench_die(const char *program, const gi_error *err)

@@ -23,9 +23,9 @@
 #include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
+#include "gi_clock.h"
 #include "gi_fs.h"
 #include "gi_log.h"
 
@@ -641,19 +641,12 @@ static void child_main(int fd, const char *name)
  * with a garbled header: fuzz_mesh). */
 static double import_seconds(size_t bytes) { return 5.0 + 2.0 * (double)bytes / 1e6; }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Waits for the child to say something until the deadline: 0 when it
  * did, 1 when time ran out, -1 on an error. */
 static int wait_readable(int fd, double deadline)
 {
     for (;;) {
-        double left = deadline - now_s();
+        double left = deadline - gi_now();
         if (left <= 0)
             return 1;
         struct pollfd pfd = {fd, POLLIN, 0};
@@ -672,7 +665,7 @@ static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_me
     gi_buf_init(&b);
     int rc = -1, answered = 0, late = 0;
     uint8_t type;
-    double limit = import_seconds(c->files[0]->bytes.len), deadline = now_s() + limit;
+    double limit = import_seconds(c->files[0]->bytes.len), deadline = gi_now() + limit;
     while (!answered && !(late = wait_readable(fd, deadline) == 1) &&
            recv_msg(fd, &type, &b) == 0) {
         if (type == MSG_READ) {

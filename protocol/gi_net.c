@@ -1,5 +1,6 @@
 /* gi_net: TCP listen / connect / peer names. */
 #include "gi_net.h"
+#include "gi_clock.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -12,7 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
-#include <time.h>
 #include <unistd.h>
 
 int gi_net_split(const char *addr, char **host, char **port, gi_error *err)
@@ -125,13 +125,6 @@ void gi_net_tune(int fd)
     setsockopt(fd, SOL_SOCKET, SO_KEEPALIVE, &one, sizeof one);
 }
 
-static double mono(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Connects one address within the time left; 0 on success. */
 static int connect_one(int fd, const struct addrinfo *ai, double deadline)
 {
@@ -140,7 +133,7 @@ static int connect_one(int fd, const struct addrinfo *ai, double deadline)
     if (errno != EINPROGRESS)
         return -1;
     for (;;) {
-        double left = deadline - mono();
+        double left = deadline - gi_now();
         if (left <= 0) {
             errno = ETIMEDOUT;
             return -1;
@@ -171,7 +164,7 @@ int gi_net_connect(const char *addr, double timeout_s, gi_error *err)
     struct addrinfo *res;
     if (resolve(addr, 0, &res, err))
         return -1;
-    double deadline = mono() + timeout_s;
+    double deadline = gi_now() + timeout_s;
     int fd = -1, last = 0;
     for (struct addrinfo *ai = res; ai; ai = ai->ai_next) {
         fd = socket(ai->ai_family, ai->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC,

@@ -3,15 +3,7 @@
 
 #include <math.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
-
-double gi_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 const char *gi_si(double v, char *buf, size_t n)
 {

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "gi_clock.h"
 #include "gi_method.h"
 
 typedef enum {
@@ -71,7 +72,6 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force);
 /* Clears the bar line (before other output). */
 void gi_progress_end(gi_progress *p);
 
-double gi_now(void); /* monotonic seconds */
 /* "1.23 M" / "500 " style formatting of a number into buf, for a unit to
  * follow. */
 const char *gi_si(double v, char *buf, size_t n);

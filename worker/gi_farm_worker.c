@@ -15,6 +15,7 @@
 #include "gi_asset_cache.h"
 #include "gi_auth.h"
 #include "gi_batch_dir.h"
+#include "gi_clock.h"
 #include "gi_frame.h"
 #include "gi_fs.h"
 #include "gi_log.h"
@@ -94,13 +95,6 @@ typedef struct worker {
      * send here). */
     int loopback;
 } worker;
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void lose(worker *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
@@ -576,7 +570,7 @@ static void coord_readable(worker *w)
         }
         if (n > 0) {
             budget -= (size_t)n;
-            w->last_heard = now_s();
+            w->last_heard = gi_now();
         }
         drain_frames(w);
         if (n < 0 || budget == 0)
@@ -593,8 +587,8 @@ static void coord_writable(worker *w)
 /* Blocking flush with a time limit (before hanging up). */
 static void flush(worker *w, double seconds)
 {
-    double end = now_s() + seconds;
-    while (!w->lost && gi_outq_pending(&w->out) && now_s() < end) {
+    double end = gi_now() + seconds;
+    while (!w->lost && gi_outq_pending(&w->out) && gi_now() < end) {
         struct pollfd p = {.fd = w->fd, .events = POLLOUT};
         if (poll(&p, 1, 100) > 0)
             coord_writable(w);
@@ -610,7 +604,7 @@ static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
         int got = gi_frame_decoder_next(&w->dec, fr, err);
         if (got)
             return got < 0 ? -1 : 0;
-        double left = deadline - now_s();
+        double left = deadline - gi_now();
         if (left <= 0)
             return gi_fail(err, GI_EIO, "no answer from the coordinator within %.0f s", HANDSHAKE_S);
         struct pollfd p = {.fd = w->fd, .events = POLLIN};
@@ -651,7 +645,7 @@ static int expect(worker *w, double deadline, uint16_t type, gi_frame *fr, gi_er
 
 static int handshake(worker *w, gi_error *err)
 {
-    double deadline = now_s() + HANDSHAKE_S;
+    double deadline = gi_now() + HANDSHAKE_S;
     gi_msg_hello h;
     memset(&h, 0, sizeof h);
     h.proto_min = h.proto_max = GI_PROTO_VERSION;
@@ -802,7 +796,7 @@ static int session(worker *w, gi_error *err)
         return SESSION_LOST;
     }
     w->established = 1;
-    double now = now_s();
+    double now = gi_now();
     w->last_heard = now;
     w->next_hb = now;
     double dead_s = 4.0 * w->lease_s > 10.0 ? 4.0 * w->lease_s : 10.0;
@@ -811,7 +805,7 @@ static int session(worker *w, gi_error *err)
     gi_pool_events ev = {w, on_result, on_fail, on_crash, NULL, on_asset_async};
     int result = SESSION_LOST;
     while (!w->lost) {
-        now = now_s();
+        now = gi_now();
         if (signals_seen >= 2) {
             gi_warn("second signal: stopping now, handing every task back");
             result = stop_now(w, 1);
@@ -907,14 +901,14 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
     /* Left by an earlier run of this worker: kept while recent (the
      * coordinator may send the same jobs again), swept when idle for long. */
     sweep_batches(&w);
-    w.next_sweep = now_s() + SWEEP_EVERY_S;
+    w.next_sweep = gi_now() + SWEEP_EVERY_S;
     if (gi_pool_start(&w.pool, o->procs, w.batch_root, err)) {
         gi_asset_cache_close(&w.cache);
         free(w.batch_root);
         return -1;
     }
     w.tokens = 2.0 * o->procs + 4;
-    w.tokens_at = now_s();
+    w.tokens_at = gi_now();
     double backoff = 0.25;
     int rc = -1;
     gi_error serr;

@@ -16,6 +16,7 @@
 
 #include "detp_anim.h"
 #include "detp_method.h"
+#include "gi_clock.h"
 
 typedef struct detp_anim_state {
     uint32_t frame;   /* the frame being computed */
@@ -89,7 +90,7 @@ static void reset_frame_counters(detp_state *st)
     st->rays_trace = st->rays_image = 0;
     st->sec_trace = st->sec_build = st->sec_estimate = st->sec_image = 0;
     memset(&st->stats, 0, sizeof st->stats);
-    st->anim->wall_frame = detp_now();
+    st->anim->wall_frame = gi_now();
     st->wall_start = st->anim->wall_frame;
 }
 
@@ -257,6 +258,6 @@ int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, gi_error *err)
         a->hits[i] = (int64_t)gi_get_u64(in);
     if (in->failed)
         return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
-    a->wall_frame = detp_now();
+    a->wall_frame = gi_now();
     return 0;
 }

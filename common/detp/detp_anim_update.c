@@ -12,17 +12,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "detp_anim.h"
 #include "detp_sphere.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "gi_clock.h"
 
 gi_detp_mobile_pose gi_detp_object_sphere(const gi_scene *s, uint32_t object)
 {
@@ -157,7 +150,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
         }
         if (retrace) {
             /* Fig. 4.2: the old suffix out, a new one from this segment. */
-            double t0 = in->timed ? now() : 0.0;
+            double t0 = in->timed ? gi_now() : 0.0;
             if (!keep_unchanged && !changed)
                 append(out, path, k); /* the unchanged prefix */
             append(old_list, &path[k], n - k);
@@ -171,7 +164,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
             st->old_segments += n - k;
             st->new_segments += added.count;
             if (in->timed)
-                st->seconds_retrace += now() - t0;
+                st->seconds_retrace += gi_now() - t0;
             return 1;
         }
         /* Rule 1: the surface behind the hit may be the mobile's, at
@@ -179,7 +172,7 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
         if (tr->second_hit && isfinite(g->t_hit) &&
             (gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->old_pose) ||
              gi_detp_ray_may_meet(g->org, g->dir, g->t_hit, g->t_second, in->new_pose))) {
-            double t0 = in->timed ? now() : 0.0;
+            double t0 = in->timed ? gi_now() : 0.0;
             st->second_tests++;
             float t2 = second_distance(tr, g);
             if (!same_float(t2, g->t_second)) {
@@ -197,11 +190,11 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
                 st->old_segments++;
                 st->new_segments++;
                 if (in->timed)
-                    st->seconds_retrace += now() - t0;
+                    st->seconds_retrace += gi_now() - t0;
                 continue;
             }
             if (in->timed)
-                st->seconds_retrace += now() - t0;
+                st->seconds_retrace += gi_now() - t0;
         }
         if (keep_unchanged || changed)
             *gi_detp_segments_push(out) = *g;
@@ -215,7 +208,7 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
 {
     const gi_detp_segment *prev = in->prev;
     size_t n = in->prev_count;
-    double t_start = in->timed ? now() : 0.0, retrace0 = st->seconds_retrace;
+    double t_start = in->timed ? gi_now() : 0.0, retrace0 = st->seconds_retrace;
     reserve(next, n);
     for (size_t i = 0; i < n;) {
         uint64_t photon = prev[i].photon;
@@ -231,7 +224,7 @@ int gi_detp_anim_update(const gi_detp_anim_update_in *in, gi_detp_segments *next
         i = j;
     }
     if (in->timed)
-        st->seconds_test += now() - t_start - (st->seconds_retrace - retrace0);
+        st->seconds_test += gi_now() - t_start - (st->seconds_retrace - retrace0);
     return 0;
 }
 

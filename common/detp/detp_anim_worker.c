@@ -19,6 +19,7 @@
 #include "detp_batch_shelf.h"
 #include "detp_method.h"
 #include "detp_sphere.h"
+#include "gi_clock.h"
 #include "gi_tile_hits.h"
 #include "gi_worker_ctx.h"
 
@@ -595,18 +596,18 @@ static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char 
 static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
                       detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
 {
-    double t0 = detp_now();
+    double t0 = gi_now();
     if (detp_worker_index(ctx, w, err) || trace_frame0(ctx, a, p0, p1, &w->segs, err))
         return -1;
-    double t1 = detp_now();
+    double t1 = gi_now();
     if (detp_batch_write_base(dir, &a->grid, h->batch, p0, p1, 0, &w->segs, err))
         return -1;
-    double t2 = detp_now();
+    double t2 = gi_now();
     gi_detp_accum_clear(&w->acc);
     w->acc.sign = 1;
     if (detp_worker_estimate(ctx, w, &h->stats, err))
         return -1;
-    double t3 = detp_now();
+    double t3 = gi_now();
     mobile_frame m;
     if (mobile_at(ctx, a, 0, &m, err))
         return -1;
@@ -614,10 +615,10 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     collect_near(a, m.near, w->segs.v, w->segs.count);
     if (mobile_vertices(ctx, w, a, &a->near, &h->stats, err))
         return -1;
-    double t4 = detp_now();
+    double t4 = gi_now();
     keep_for_frame1(ctx, a, dir, h->batch, p0, p1, &w->segs);
     h->sec_trace = t1 - t0;
-    h->sec_store = (t2 - t1) + (detp_now() - t4);
+    h->sec_store = (t2 - t1) + (gi_now() - t4);
     h->sec_static = t3 - t2;
     h->sec_mobile = t4 - t3;
     h->segments = h->segments_new = w->segs.count;
@@ -633,7 +634,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
 {
     const gi_detp_params *p = ctx->job.params;
     uint32_t f = h->frame;
-    double t0 = detp_now();
+    double t0 = gi_now();
     detp_batch prev;
     gi_error miss;
     gi_error_clear(&miss);
@@ -643,16 +644,16 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     if (found < 0)
         return gi_fail(err, miss.code, "%s", miss.msg);
     if (!found) {
-        double tr0 = detp_now();
+        double tr0 = gi_now();
         if (regenerate(ctx, a, dir, h->batch, p0, p1, f - 1, h, err))
             return -1;
-        h->sec_regenerate = detp_now() - tr0;
+        h->sec_regenerate = gi_now() - tr0;
         found = detp_batch_open(dir, &a->grid, h->batch, p0, p1, f - 1, &prev, err);
         if (found != 1)
             return found < 0 ? -1 : gi_fail(err, GI_EIO, "detp batch %u: stored state lost",
                                             h->batch);
     }
-    double t1 = detp_now();
+    double t1 = gi_now();
     gi_detp_tracer tr;
     gi_detp_anim_update_in in;
     if (tracer_at(ctx, a, f, &tr, err) || update_in(ctx, a, f, &tr, &in, err)) {
@@ -707,7 +708,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
             collect_near(a, nt, run.seg, run.count);
         }
     }
-    double t2 = detp_now();
+    double t2 = gi_now();
     gi_detp_accum_clear(&w->acc);
     int rc = 0;
     int full = p->anim.update == GI_DETP_UPDATE_FULL;
@@ -721,10 +722,10 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     } else {
         static_update(ctx, w, a, &prev, nrun, &h->stats);
     }
-    double t3 = detp_now();
+    double t3 = gi_now();
     if (rc == 0)
         rc = mobile_vertices(ctx, w, a, full ? &w->segs : &a->near, &h->stats, err);
-    double t4 = detp_now();
+    double t4 = gi_now();
     if (rc == 0)
         rc = detp_batch_write_frame(dir, &a->grid, &prev, f, &a->changed, err);
     h->segments = segments;
@@ -751,7 +752,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     h->sec_trace = t2 - t1;
     h->sec_static = t3 - t2;
     h->sec_mobile = t4 - t3;
-    h->sec_store = detp_now() - t4;
+    h->sec_store = gi_now() - t4;
     return rc;
 }
 
@@ -776,10 +777,10 @@ int detp_anim_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     detp_worker *w = detp_worker_state(ctx);
     detp_anim_worker *a;
     const char *dir;
-    double t0 = detp_now();
+    double t0 = gi_now();
     if (anim_state(ctx, w, &a, err) || gi_worker_batch_dir(ctx, &dir, err))
         return -1;
-    h.sec_build = detp_now() - t0;
+    h.sec_build = gi_now() - t0;
     h.photons = p1 - p0;
     uint64_t rays0 = ctx->rt.rays;
     int rc = h.frame == 0 ? run_frame0(ctx, w, a, dir, &h, p0, p1, err)

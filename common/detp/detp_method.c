@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "detp_method.h"
+#include "gi_clock.h"
 #include "gi_log.h"
 #include "gi_outputs.h"
 #include "gi_tiles.h"
@@ -83,7 +84,7 @@ static int state_new(gi_job *job, detp_state **out, gi_error *err)
         state_free(job, st);
         return -1;
     }
-    st->wall_start = detp_now();
+    st->wall_start = gi_now();
     *out = st;
     return 0;
 }
@@ -309,7 +310,7 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         return -1;
     int rc = 0;
     if (st->phase == DETP_PHASE_BAKE) {
-        st->wall_bake = detp_now() - st->wall_start;
+        st->wall_bake = gi_now() - st->wall_start;
         if (wants_image(job)) {
             static const char *const names[] = {"R", "G", "B"};
             gi_image_free(&st->img);
@@ -318,13 +319,13 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
                 publish_radiance(job, st, &v);
                 plan_tiles(job, st, fq);
                 st->phase = DETP_PHASE_IMAGE;
-                st->wall_start = detp_now();
+                st->wall_start = gi_now();
             }
             detp_vertex_data_free(&v);
             return rc;
         }
     } else {
-        st->wall_image = detp_now() - st->wall_start;
+        st->wall_image = gi_now() - st->wall_start;
         /* The frame before's outputs are written by now; this frame's are
          * written while the next frame runs, if one follows. */
         rc = gi_image_writer_finish(job, &st->writer, err);

@@ -175,6 +175,5 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
 void detp_anim_worker_free(struct detp_anim_worker *a);
 int detp_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
 
-double detp_now(void);
 
 #endif

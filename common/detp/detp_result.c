@@ -3,19 +3,11 @@
  * form then sends only the vertices that got something. */
 #include <math.h>
 #include <string.h>
-#include <time.h>
 
 #include "detp_method.h"
 
 #define BATCH_MAGIC 0x42505444u /* "DTPB" */
 enum { FORM_DENSE = 0, FORM_SPARSE = 1 };
-
-double detp_now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 /* Varints go a whole value at a time (a frame's result holds tens of
  * thousands of them): the bytes gathered, then one append or one read. */

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "detp_method.h"
+#include "gi_clock.h"
 #include "gi_light.h"
 #include "gi_rng.h"
 #include "gi_tiles.h"
@@ -140,10 +141,10 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
     detp_worker *w = detp_worker_state(ctx);
     detp_batch_result h;
     memset(&h, 0, sizeof h);
-    double t0 = detp_now();
+    double t0 = gi_now();
     if (detp_worker_discs(ctx, w, err) || detp_worker_index(ctx, w, err))
         return -1;
-    double t1 = detp_now();
+    double t1 = gi_now();
     gi_detp_tracer tr;
     gi_detp_tracer_init(&tr, &ctx->rt, &job->scene, job->seed, p->photon_count, p->max_bounces,
                         p->artifact == GI_DETP_AC_SECOND_HIT);
@@ -157,11 +158,11 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
                            (unsigned long long)(p1 - p0));
     }
     gi_detp_set_extent(&w->segs, p->artifact, p->extent_eps);
-    double t2 = detp_now();
+    double t2 = gi_now();
     gi_detp_accum_clear(&w->acc);
     if (detp_worker_estimate(ctx, w, &h.stats, err))
         return -1;
-    double t3 = detp_now();
+    double t3 = gi_now();
     h.photons = p1 - p0;
     h.segments = w->segs.count;
     h.rays = ctx->rt.rays - rays0;
@@ -199,14 +200,14 @@ static int run_visibility(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, 
         return gi_fail(err, GI_EPROTO, "detp visibility task %llu: bad vertex range",
                        (unsigned long long)t->id);
     need_inward(ctx, w);
-    double t0 = detp_now();
+    double t0 = gi_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf body;
     gi_buf_init(&body);
     for (uint32_t i = v0; i < v1; i++)
         gi_buf_put_f32(&body, gi_detp_visible_fraction(&ctx->rt, &w->discs.d[i],
                                                        w->discs.radius, w->inward[i]));
-    gi_buf_put_f64(result, detp_now() - t0);
+    gi_buf_put_f64(result, gi_now() - t0);
     gi_buf_put_u64(result, ctx->rt.rays - rays0);
     gi_buf_put(result, body.data, body.len);
     gi_buf_free(&body);
@@ -240,7 +241,7 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
      * top edge on the ceiling) is evaluated a hair inside its own
      * triangles: the limit of the irradiance from its own side. */
     float nudge = (float)(1e-4 * p->scene_size);
-    double t0 = detp_now();
+    double t0 = gi_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf body;
     gi_buf_init(&body);
@@ -262,7 +263,7 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
         gi_buf_put_f64s(&body, sum, 3);
         gi_buf_put_f64(&body, lum2);
     }
-    gi_buf_put_f64(result, detp_now() - t0);
+    gi_buf_put_f64(result, gi_now() - t0);
     gi_buf_put_u64(result, ctx->rt.rays - rays0);
     gi_buf_put(result, body.data, body.len);
     gi_buf_free(&body);
@@ -332,7 +333,7 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
         memcpy(w->hash, hash, GI_HASH_HEX);
     }
     free(hash);
-    double t0 = detp_now();
+    double t0 = gi_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf px;
     gi_buf_init(&px);
@@ -341,7 +342,7 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
                  ? detp_anim_render_tile(ctx, w, &tile, frame, shade, &sc, &px, err)
                  : gi_tile_render(&ctx->rt, job, &tile, p->image_spp, shade, &sc, &px, err);
     if (rc == 0) {
-        gi_buf_put_f64(result, detp_now() - t0);
+        gi_buf_put_f64(result, gi_now() - t0);
         gi_buf_put_u64(result, ctx->rt.rays - rays0);
         gi_buf_put(result, px.data, px.len);
     }

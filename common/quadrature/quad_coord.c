@@ -4,9 +4,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "gi_job.h"
+#include "gi_clock.h"
 #include "gi_log.h"
 #include "gi_outputs.h"
 #include "quad_accum.h"
@@ -47,13 +47,6 @@ typedef struct quad_state {
     double t0;
 } quad_state;
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static quad_state *state_new(gi_job *job, gi_error *err)
 {
     const gi_quad_params *p = job->params;
@@ -66,7 +59,7 @@ static quad_state *state_new(gi_job *job, gi_error *err)
     if (!st->image)
         return NULL;
     st->heap = gi_qheap_create(p->heap);
-    st->t0 = now();
+    st->t0 = gi_now();
     return st;
 }
 
@@ -306,7 +299,7 @@ static int write_outputs(gi_job *job, quad_state *st, gi_error *err)
     gi_image_free(&img);
     if (rc)
         return -1;
-    double seconds = st->seconds + (now() - st->t0), err_est = st->err_final;
+    double seconds = st->seconds + (gi_now() - st->t0), err_est = st->err_final;
     uint64_t open = st->open_final;
     gi_info("%s: %llu evaluations (%llu re-evaluated), %llu regions, error estimate %.3g "
             "(relative %.3g), %.2f s",
@@ -400,7 +393,7 @@ int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err)
     gi_buf_put_u32(out, (uint32_t)st->phase);
     gi_buf_put_f64(out, st->threshold_abs);
     gi_buf_put_f64(out, st->splat_rel);
-    gi_buf_put_f64(out, st->seconds + (now() - st->t0));
+    gi_buf_put_f64(out, st->seconds + (gi_now() - st->t0));
     gi_buf_put_f64s(out, st->total, GI_QUAD_CHANNELS);
     gi_buf_put_f64s(out, st->mc_total, GI_QUAD_CHANNELS);
     gi_buf_put_f64(out, st->closed_err);

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "gi_job.h"
+#include "gi_clock.h"
 #include "gi_log.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
@@ -275,7 +276,7 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
     /* One BLAS thread: LAPACK's results then do not depend on the core
      * count of the coordinator (the pool uses the cores anyway). */
     openblas_set_num_threads(1);
-    double t0 = gi_rad_seconds();
+    double t0 = gi_now();
     if (p->relight_factor) {
         st->info = *p->relight_info;
         st->md = p->relight_model;
@@ -338,11 +339,11 @@ static int build(gi_job *job, rad_state *st, gi_error *err)
         if (rc || gi_rad_model_build(&st->model, &st->mesh, &job->scene, err))
             return -1;
         gi_rad_model_reflectance(&st->model, st->factor.rho);
-        st->build_seconds = gi_rad_seconds() - t0;
-        t0 = gi_rad_seconds();
+        st->build_seconds = gi_now() - t0;
+        t0 = gi_now();
         if (gi_rad_factor_prepare(&st->factor, err))
             return gi_error_prefix(err, "%s", job->file);
-        st->prepare_seconds = gi_rad_seconds() - t0;
+        st->prepare_seconds = gi_now() - t0;
         snprintf(st->info.method, sizeof st->info.method, "%s",
                  p->factorization == GI_RAD_2MF ? "2mf" : "2mce");
         st->info.levels = st->mesh.levels;

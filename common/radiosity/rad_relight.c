@@ -5,17 +5,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "gi_clock.h"
 #include "gi_fs.h"
 #include "gi_ply.h"
-
-double gi_rad_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 void gi_rad_solve_opts_default(gi_rad_solve_opts *o)
 {
@@ -41,12 +34,12 @@ int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
         gi_rad_emission_vector(em, i, md, e);
         gi_rad_solve_info *in = &info[i];
         memset(in, 0, sizeof *in);
-        double t0 = gi_rad_seconds();
+        double t0 = gi_now();
         int rc = o->solver == GI_RAD_NEUMANN
                      ? gi_rad_factor_neumann(f, e, B + i * n3, o->tolerance, o->max_iterations,
                                              o->threads, &in->iterations, &in->residual, err)
                      : gi_rad_factor_relight(f, e, B + i * n3, 1, o->threads, err);
-        in->seconds = gi_rad_seconds() - t0;
+        in->seconds = gi_now() - t0;
         if (rc) {
             free(e);
             return gi_error_prefix(err, "emission set \"%s\"", em->items[i].name);

@@ -36,8 +36,6 @@ typedef struct gi_rad_solve_info {
 
 void gi_rad_solve_opts_default(gi_rad_solve_opts *o);
 
-/* Monotonic clock, seconds (timings in reports). */
-double gi_rad_seconds(void);
 
 /* Radiosity for every emission set: E and B are count x n x 3 (E may be
  * NULL when not wanted), info has count entries. Each set is solved on its
