@@ -40,6 +40,7 @@ typedef struct local_run {
     char *batch_root; /* private temporary directory */
     uint64_t crashes;
     unsigned respawn_budget;
+    int ckpt_ours; /* the checkpoint file holds this run's work (resumed or written) */
 } local_run;
 
 static void on_result(void *user, int child, gi_msg_result *r)
@@ -187,6 +188,19 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
             if (err)
                 gi_warn("%s", cerr.msg);
         }
+    } else if (lr->jr.failed && lr->jr.error.code == GI_EIO && lr->ckpt_ours) {
+        /* A write failed (a full disk, a path in the way): the last
+         * checkpoint, taken with every output before it on disk, still
+         * holds the work up to it, and with it the batches it names. */
+        char *named = gi_local_checkpoint_batch_root(ckpt);
+        keep_batches = named && lr->batch_root && strcmp(named, lr->batch_root) == 0;
+        free(named);
+        if (err) {
+            gi_error e = *err;
+            gi_fail(err, e.code, "%s; the work checkpointed before it is kept in %s: once that is "
+                    "fixed, `gi render %s --out %s --resume` continues", e.msg, ckpt, job->file,
+                    job->out_dir);
+        }
     }
     batch_root_end(lr, keep_batches);
     summary->seconds = gi_now() - t0;
@@ -213,6 +227,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         char *root = NULL;
         resumed = gi_local_checkpoint_restore(&lr.jr, job, ckpt, &root, err);
         if (resumed > 0) {
+            lr.ckpt_ours = 1;
             gi_progress_at at;
             gi_jobrun_progress(&lr.jr, gi_now(), &at);
             fprintf(stderr, "gi: %s: resuming from %s (%.0f%% done", job->name, ckpt,
@@ -308,6 +323,8 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             gi_error cerr;
             if (gi_local_checkpoint_write(&lr.jr, lr.batch_root, ckpt, &cerr))
                 gi_warn("%s", cerr.msg);
+            else
+                lr.ckpt_ours = 1;
             last_ckpt = now;
             ckpt_merged = lr.jr.merge_next;
         }

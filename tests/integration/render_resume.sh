@@ -3,7 +3,9 @@
 # left), each resumed to frames byte-identical with an uninterrupted render.
 # The stopped render keeps its photon batches under TMPDIR and the resumed
 # one reads them instead of tracing them again (no frame regenerated), then
-# removes them. A checkpoint of an edited job is refused; a finished render
+# removes them. A render that fails on a write (an output path taken by a
+# directory) keeps its last checkpoint and batches and resumes once the way
+# is clear. A checkpoint of an edited job is refused; a finished render
 # leaves no checkpoint behind; a render that starts over in place of a
 # stopped one removes the batches that one kept. Then a pt still,
 # interrupted and resumed the same way.
@@ -87,6 +89,23 @@ start_and_stop "$TMP/kill" KILL
     >"$TMP/kill-resume.log" 2>&1 || { cat "$TMP/kill-resume.log"; fail "resume after SIGKILL"; }
 same_as_ref "$TMP/kill" "resumed after SIGKILL (3 workers)"
 [ "$(batch_roots)" -eq 0 ] || fail "the render resumed after SIGKILL left its batch root"
+
+# An output that cannot be written (a directory in its way, as a full disk
+# would): the render fails naming it, keeps its last checkpoint and batches,
+# and once the way is clear, --resume finishes it.
+mkdir -p "$TMP/blocked/img.0009.exr"
+st=0
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none \
+    --checkpoint 0.05 >"$TMP/blocked.log" 2>&1 || st=$?
+[ $st -ne 0 ] || fail "a render whose output path is a directory succeeded"
+grep -q "img.0009.exr: rename: .*is kept in .*--resume. continues" "$TMP/blocked.log" ||
+    { cat "$TMP/blocked.log"; fail "no resume hint after a failed write"; }
+[ "$(batch_roots)" -eq 1 ] || fail "the failed render kept $(batch_roots) batch roots, not 1"
+rmdir "$TMP/blocked/img.0009.exr"
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none --resume \
+    >"$TMP/blocked-resume.log" 2>&1 || { cat "$TMP/blocked-resume.log"; fail "resume after a failed write"; }
+same_as_ref "$TMP/blocked" "resumed after a failed write"
+[ "$(batch_roots)" -eq 0 ] || fail "the render resumed after a failed write left its batch root"
 
 # Starting over instead of resuming: the stopped render's batches go.
 start_and_stop "$TMP/over" INT
