@@ -28,6 +28,7 @@ const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
     "       gi status ID [--json] | gi jobs [--json] | gi workers [--json]\n"
     "       gi wait ID [--out DIR] [--progress MODE] | gi cancel ID | gi fetch ID [--out DIR]\n"
+    "       gi retry ID [--wait] [--out DIR]  (a failed or cancelled job, from its checkpoint)\n"
     "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070) and\n"
     "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN)\n";
 
@@ -49,7 +50,7 @@ typedef struct client {
     const char *arg; /* the command's operand (job file or id) */
 } client;
 
-static const char *const commands[] = {"submit", "status", "wait",  "cancel",
+static const char *const commands[] = {"submit", "status", "wait",  "cancel", "retry",
                                        "jobs",   "workers", "fetch", NULL};
 
 int gi_client_is_command(const char *cmd)
@@ -515,6 +516,20 @@ static int cmd_cancel(client *c, uint64_t id)
     return rc;
 }
 
+static int cmd_retry(client *c, uint64_t id)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu/retry", (unsigned long long)id);
+    gi_buf b;
+    gi_buf_init(&b);
+    int rc = call(c, "POST", path, NULL, 0, NULL, 200, 0, &b, NULL);
+    gi_buf_free(&b);
+    if (rc)
+        return rc;
+    printf("job %llu runs again\n", (unsigned long long)id);
+    return c->wait ? wait_job(c, id, 1) : 0;
+}
+
 static int cmd_fetch(client *c, uint64_t id)
 {
     cJSON *job = NULL;
@@ -557,7 +572,8 @@ int gi_client_main(int argc, char **argv)
         }
         if (strcmp(argv[i], "--json") == 0)
             c.json = 1;
-        else if (strcmp(argv[i], "--wait") == 0 && strcmp(cmd, "submit") == 0)
+        else if (strcmp(argv[i], "--wait") == 0 &&
+                 (strcmp(cmd, "submit") == 0 || strcmp(cmd, "retry") == 0))
             c.wait = 1;
         else if (strncmp(argv[i], "--token", 7) == 0)
             return fail_msg(2, "tokens are not taken from the command line (other users can read "
@@ -598,6 +614,8 @@ int gi_client_main(int argc, char **argv)
         rc = wait_job(&c, id, 1);
     else if (strcmp(cmd, "cancel") == 0)
         rc = cmd_cancel(&c, id);
+    else if (strcmp(cmd, "retry") == 0)
+        rc = cmd_retry(&c, id);
     else if (strcmp(cmd, "jobs") == 0)
         rc = cmd_jobs(&c);
     else if (strcmp(cmd, "workers") == 0)

@@ -37,6 +37,7 @@ typedef enum {
     R_JOBS_SUBMIT,
     R_JOB_GET,
     R_JOB_DELETE,
+    R_JOB_RETRY,
     R_JOB_OUTPUT,
     R_ASSET_PUT,
     R_ASSET_HEAD,
@@ -225,6 +226,9 @@ static unsigned route(const char *method, const char *url, api_req *r)
                 return MHD_HTTP_METHOD_NOT_ALLOWED;
             return 0;
         }
+        if (strcmp(slash, "/retry") == 0)
+            return strcmp(method, "POST") == 0 ? (r->route = R_JOB_RETRY, 0)
+                                               : MHD_HTTP_METHOD_NOT_ALLOWED;
         if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/') &&
             strlen(slash + 9) < sizeof r->name) {
             snprintf(r->name, sizeof r->name, "%s", slash + 9);
@@ -312,7 +316,8 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
                                 const char *method, const char *url)
 {
     gi_farm_job *j = NULL;
-    if (r->route == R_JOB_GET || r->route == R_JOB_DELETE || r->route == R_JOB_OUTPUT) {
+    if (r->route == R_JOB_GET || r->route == R_JOB_DELETE || r->route == R_JOB_RETRY ||
+        r->route == R_JOB_OUTPUT) {
         j = gi_farm_job_find(f, r->job_id);
         if (!j)
             return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no job %llu",
@@ -344,6 +349,14 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
             snprintf(body, sizeof body, "{\"id\":%llu,\"purged\":true}", (unsigned long long)id);
             return send_json(conn, MHD_HTTP_OK, gi_xstrdup(body));
         }
+    case R_JOB_RETRY:
+        if (gi_farm_job_retry(f, j, &err))
+            return refuse(f, conn, r, method, url,
+                          err.code == GI_EINVAL    ? MHD_HTTP_CONFLICT
+                          : err.code == GI_ENOMEM ? MHD_HTTP_SERVICE_UNAVAILABLE
+                                                  : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                          "%s", err.msg);
+        return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
     case R_JOB_OUTPUT:
         return do_output(f, conn, r, j, method, url);
     case R_ASSET_HEAD: {

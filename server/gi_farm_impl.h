@@ -214,6 +214,10 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
 int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why);
 int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err);
+/* Runs a failed or cancelled job again, from its last checkpoint if it has
+ * one (journaled first). GI_EINVAL: the job is not failed or cancelled;
+ * GI_ENOMEM: the farm is at its limit of unfinished jobs. */
+int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err);
 /* Called after merges: ends the job if its run is done (outputs written or failed). */
 void gi_farm_job_settle(gi_farm *f, gi_farm_job *j);
 void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why);

@@ -272,7 +272,7 @@ static void ckpt_record(const gi_farm_job *j, gi_jrec *r)
 }
 
 /* Rewrites the journal as the current state: per job one SUBMIT, the last
- * CHECKPOINT of an unfinished job, and the END of a finished one. */
+ * CHECKPOINT of a job not done, and the END of an ended one. */
 static int compact(gi_farm *f, gi_error *err)
 {
     size_t n = 0;
@@ -281,10 +281,11 @@ static int compact(gi_farm *f, gi_error *err)
     for (size_t i = 0; i < f->job_count; i++) {
         const gi_farm_job *j = f->jobs[i];
         submit_record(j, &recs[n++]);
+        /* A failed or cancelled job's checkpoint may still be retried. */
+        if (j->ckpt_seq && j->state != GI_FJ_DONE)
+            ckpt_record(j, &recs[n++]);
         if (terminal(j))
             end_record(j, &recs[n++]);
-        else if (j->ckpt_seq)
-            ckpt_record(j, &recs[n++]);
     }
     for (size_t i = 0; i < n; i++)
         ptrs[i] = &recs[i];
@@ -292,6 +293,22 @@ static int compact(gi_farm *f, gi_error *err)
     free(ptrs);
     free(recs); /* every string was borrowed */
     return rc;
+}
+
+/* A failed or cancelled job made unfinished again: it is checked and
+ * loaded like a job of a restarted coordinator, from its checkpoint if it
+ * has one. What its last run counted starts over. */
+static void reopen(gi_farm_job *j)
+{
+    j->state = GI_FJ_CHECKING;
+    j->ended = 0;
+    gi_error_clear(&j->error);
+    j->final_tasks = j->final_merged = j->final_retries = 0;
+    memset(&j->final_stats, 0, sizeof j->final_stats);
+    memset(&j->final_progress, 0, sizeof j->final_progress);
+    j->resumed_merged = j->results_accepted = j->results_late = 0;
+    j->leases = j->lease_expiries = j->result_bytes = j->merged_bytes = 0;
+    j->merge_s = j->finish_s = 0.0;
 }
 
 static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
@@ -328,6 +345,10 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
             snprintf(j->error.msg, sizeof j->error.msg, "%s", r->message ? r->message : "");
             j->ended = r->when;
         }
+        return 0;
+    case GI_JREC_RETRY:
+        if (j && (j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED))
+            reopen(j);
         return 0;
     case GI_JREC_PURGE:
         for (size_t i = 0; i < f->job_count; i++)
@@ -520,9 +541,11 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
         gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
     }
     run_free(j);
-    char *ck = checkpoint_path(j);
-    unlink(ck); /* nothing left to resume */
-    free(ck);
+    if (state == GI_FJ_DONE) {
+        char *ck = checkpoint_path(j);
+        unlink(ck); /* nothing left to resume */
+        free(ck);
+    } /* a failed or cancelled job's stays for gi_farm_job_retry */
 }
 
 void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
@@ -543,6 +566,30 @@ int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why)
     gi_farm_job_log(j, "cancelled: %s", why);
     f->m.jobs_cancelled++;
     end_job(f, j, GI_FJ_CANCELLED);
+    return 0;
+}
+
+int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err)
+{
+    if (j->state != GI_FJ_FAILED && j->state != GI_FJ_CANCELLED)
+        return gi_fail(err, GI_EINVAL, "job %llu is %s: only a failed or cancelled job is retried",
+                       (unsigned long long)j->id, gi_fj_state_name(j->state));
+    if (unfinished_jobs(f) >= f->cfg.max_jobs)
+        return gi_fail(err, GI_ENOMEM, "the farm already has %u unfinished jobs (its limit)",
+                       f->cfg.max_jobs);
+    gi_jrec r;
+    gi_jrec_init(&r, GI_JREC_RETRY, j->id);
+    r.when = gi_farm_wallnow();
+    if (gi_journal_append(&f->journal, &r, err))
+        return -1;
+    char *ck = checkpoint_path(j);
+    int has_ckpt = access(ck, F_OK) == 0;
+    free(ck);
+    gi_farm_job_log(j, "retried after it %s (%s): %s",
+                    j->state == GI_FJ_FAILED ? "failed" : "was cancelled", j->error.msg,
+                    has_ckpt ? "resuming from its last checkpoint" : "starting over");
+    reopen(j);
+    start_checkers(f);
     return 0;
 }
 

@@ -17,7 +17,7 @@
 #include "gi_log.h"
 
 #define JOURNAL_MAGIC "GIJ1"
-#define JOURNAL_VERSION 1u
+#define JOURNAL_VERSION 2u /* 2: RETRY records */
 #define HEADER_BYTES 8
 #define RECORD_OVERHEAD 12 /* type, length, crc */
 #define MAX_FILE_NAME 4096
@@ -63,6 +63,9 @@ static void encode_payload(const gi_jrec *r, gi_buf *out)
         gi_buf_put_f64(out, r->when);
         break;
     case GI_JREC_PURGE:
+        break;
+    case GI_JREC_RETRY:
+        gi_buf_put_f64(out, r->when);
         break;
     }
 }
@@ -113,6 +116,9 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
         break;
     case GI_JREC_PURGE:
         break;
+    case GI_JREC_RETRY:
+        r->when = gi_get_f64(&rd);
+        break;
     default:
         return gi_fail(err, GI_EPROTO, "journal record type %u is unknown", type);
     }
@@ -127,7 +133,7 @@ int gi_journal_parse(const uint8_t *data, size_t len,
     if (len < HEADER_BYTES || memcmp(data, JOURNAL_MAGIC, 4) != 0)
         return gi_fail(err, GI_EPROTO, "not a gi-farm journal (bad header)");
     uint32_t version = gi_le_get_u32(data + 4);
-    if (version != JOURNAL_VERSION)
+    if (version < 1 || version > JOURNAL_VERSION)
         return gi_fail(err, GI_EPROTO, "journal version %u is not supported (this build: %u)",
                        version, JOURNAL_VERSION);
     size_t off = HEADER_BYTES;

@@ -2,7 +2,8 @@
  * state directory, so a restarted gi-farmd knows every job it had.
  *
  * File layout (little-endian; docs/farm.md, "Journal"):
- *   header   "GIJ1" | u32 version (1)
+ *   header   "GIJ1" | u32 version (2; version 1 journals, without RETRY,
+ *            are read too)
  *   record   u32 type | u32 length | payload | u32 crc32c(type, length, payload)
  * Records:
  *   SUBMIT      job id, priority, submit time, job file name, job text, manifest
@@ -11,11 +12,14 @@
  *   END         job id, final state (done / failed / cancelled), error code
  *               and message, time
  *   PURGE       job id: forget the job (its files are removed)
+ *   RETRY       job id, time: a failed or cancelled job runs again, from its
+ *               last checkpoint if it has one
  * Each append is written with one write() and fdatasync'ed before the
  * coordinator acts on it. A crash can only tear the last record; replay
  * stops at the first record that is short or fails its CRC and the journal
  * is then rewritten without it (compaction: one SUBMIT, the last CHECKPOINT
- * and the END of every job). */
+ * and the END of every job; a retried job is unfinished again, so no RETRY
+ * survives it). */
 #ifndef GI_JOURNAL_H
 #define GI_JOURNAL_H
 
@@ -32,7 +36,8 @@ typedef enum gi_jrec_type {
     GI_JREC_SUBMIT = 1,
     GI_JREC_CHECKPOINT = 2,
     GI_JREC_END = 3,
-    GI_JREC_PURGE = 4
+    GI_JREC_PURGE = 4,
+    GI_JREC_RETRY = 5
 } gi_jrec_type;
 
 /* Final job states in END records. */
@@ -57,7 +62,7 @@ typedef struct gi_jrec {
     uint32_t end;  /* gi_job_end */
     uint32_t code; /* gi_errcode */
     char *message;
-    double when;
+    double when; /* END, RETRY */
 } gi_jrec;
 
 void gi_jrec_init(gi_jrec *r, gi_jrec_type type, uint64_t job_id);

@@ -187,3 +187,30 @@ GI_TEST(test_journal_file_append_replay_rewrite)
     GI_CHECK(s.n == 2 && !damaged && s.ids[0] == 9 && s.types[1] == GI_JREC_PURGE);
     gi_journal_close(&j);
 }
+
+GI_TEST(test_journal_retry_record_and_versions)
+{
+    /* The sample is a version 1 journal (no RETRY): still read. */
+    gi_buf b;
+    gi_buf_init(&b);
+    size_t ends[4];
+    sample(&b, ends);
+    b.len = ends[2]; /* SUBMIT, CHECKPOINT, END */
+    gi_jrec r;
+    gi_jrec_init(&r, GI_JREC_RETRY, 7);
+    r.when = 1.7e9;
+    gi_jrec_encode(&r, &b);
+    seen s;
+    memset(&s, 0, sizeof s);
+    size_t valid;
+    gi_error err;
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 0);
+    GI_CHECK(s.n == 4 && s.types[3] == GI_JREC_RETRY && s.ids[3] == 7 && valid == b.len);
+    b.data[4] = 2; /* this build's version */
+    memset(&s, 0, sizeof s);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 0 && s.n == 4);
+    b.data[4] = 3; /* a later build's */
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "version 3 is not supported") != NULL, "%s", err.msg);
+    gi_buf_free(&b);
+}

@@ -1,0 +1,67 @@
+# `gi retry`: a failed or a cancelled farm job runs again from its last
+# checkpoint and ends with the image an uninterrupted render gives.
+# 1. A job whose output cannot be written (a directory in the way of
+#    img.exr, as a full disk would be) fails at its end; after a restart of
+#    gi-farmd (the journal keeps its checkpoint), and once the way is clear,
+#    `gi retry --wait` resumes it (tasks merged before the checkpoint are not
+#    run again) and fetches the image.
+# 2. A job cancelled halfway, retried: the same.
+# 3. Refusals: a job that is done (409), one that does not exist (404).
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+cornell_job "$TMP/job.json" 31 96 72 384
+OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+
+# 1. Failed on its output.
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
+mkdir -p "$TMP/state/jobs/$id/out/img.exr"
+wait_state "$id" failed 120
+api "/api/v1/jobs/$id" | grep -q 'img.exr: rename' || { api "/api/v1/jobs/$id"; fail "no reason"; }
+seen=$(jckpt "$id" merged)
+[ "${seen:-0}" -gt 0 ] || fail "the failed job had no checkpoint"
+stop_farmd "$TMP/farmd.log"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
+[ "$(jstate "$id")" = failed ] || fail "the job is not remembered as failed"
+[ "$(jckpt "$id" merged)" = "$seen" ] || fail "the restart forgot the failed job's checkpoint"
+rmdir "$TMP/state/jobs/$id/out/img.exr"
+"$GI" retry "$id" --wait --out "$TMP/failed" --progress none >"$TMP/retry1.log" 2>&1 ||
+    { cat "$TMP/retry1.log"; fail "gi retry --wait of the failed job"; }
+grep -q "job $id runs again" "$TMP/retry1.log" || fail "gi retry did not say so"
+resumed=$(jnum "$id" resumed_merged)
+results=$(jnum "$id" results_this_run)
+total=$(jnum "$id" total)
+[ "$resumed" -ge "$seen" ] || fail "the retry resumed at $resumed, the checkpoint had $seen"
+[ "$results" -eq $((total - resumed)) ] || fail "the retry ran $results tasks, not $((total - resumed))"
+api "/api/v1/jobs/$id" | grep -q "retried after it failed (.*img.exr: rename" || fail "no retry in the job's log"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/failed/img.exr" || fail "the retried job's image differs"
+
+# 2. Cancelled halfway.
+id2=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit2.log") || { cat "$TMP/submit2.log"; fail "submit 2"; }
+wait_merged "$id2" 3 checkpoint
+seen2=$merged
+"$GI" cancel "$id2" >/dev/null || fail "cancel"
+wait_state "$id2" cancelled 10
+"$GI" retry "$id2" --wait --out "$TMP/cancelled" --progress none >"$TMP/retry2.log" 2>&1 ||
+    { cat "$TMP/retry2.log"; fail "gi retry --wait of the cancelled job"; }
+[ "$(jnum "$id2" resumed_merged)" -ge "$seen2" ] || fail "the cancelled job did not resume"
+api "/api/v1/jobs/$id2" | grep -q "retried after it was cancelled" || fail "no retry in job 2's log"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/cancelled/img.exr" || fail "the retried cancelled job differs"
+
+# 3. Refusals.
+st=0
+"$GI" retry "$id" >"$TMP/retry3.log" 2>&1 || st=$?
+[ $st -eq 1 ] && grep -q "is done: only a failed or cancelled job is retried (HTTP 409)" "$TMP/retry3.log" ||
+    { cat "$TMP/retry3.log"; fail "retrying a done job: exit $st"; }
+st=0
+"$GI" retry 999 >"$TMP/retry4.log" 2>&1 || st=$?
+[ $st -eq 1 ] && grep -q "no job 999 (HTTP 404)" "$TMP/retry4.log" ||
+    { cat "$TMP/retry4.log"; fail "retrying a missing job: exit $st"; }
+[ "$(api "/api/v1/jobs/$id/retry" -o /dev/null -w '%{http_code}')" = 405 ] || fail "GET .../retry"
+stop_farmd "$TMP/farmd.log"
+echo "failed job retried after a restart from $resumed of $total tasks, cancelled one from $seen2: identical"
