@@ -28,7 +28,7 @@ const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
     "       gi status ID [--json] | gi jobs [--json] | gi workers [--json]\n"
     "       gi wait ID [--out DIR] [--progress MODE] | gi cancel ID | gi fetch ID [--out DIR]\n"
-    "       gi retry ID [--wait] [--out DIR]  (a failed or cancelled job, from its checkpoint)\n"
+    "       gi retry ID [--wait] [--out DIR] [--progress MODE]  (a failed or cancelled job)\n"
     "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070) and\n"
     "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN)\n";
 
