@@ -5,7 +5,9 @@
  * (/var/tmp when TMPDIR is unset: batches can be large and /tmp is often
  * in memory), created before the pool starts and removed when the render
  * ends, unless it was stopped from outside with work to resume (below).
- * Affinity keys are ignored here: one host, one disk.
+ * A render touches its batch root every minute; roots of this user's
+ * renders left untouched for GI_BATCH_DIR_MAX_AGE_S are removed when the
+ * next one starts. Affinity keys are ignored here: one host, one disk.
  *
  * Checkpoints (gi_local_checkpoint.h) are written every few seconds and
  * when the render is stopped, so that `gi render --resume` continues it.
@@ -79,6 +81,12 @@ static int batch_root_make(local_run *lr, gi_error *err)
     const char *tmp = getenv("TMPDIR");
     if (!tmp || !tmp[0])
         tmp = "/var/tmp";
+    /* Roots of renders killed or never resumed: a live render touches its
+     * own every minute, and a stopped one's is kept this long for --resume. */
+    int swept = gi_batch_dir_sweep_where(tmp, GI_BATCH_DIR_MAX_AGE_S, gi_local_batch_root_ours);
+    if (swept)
+        gi_info("removed %d batch directories of renders stopped over 3 days ago from %s", swept,
+                tmp);
     size_t n = strlen(tmp) + 32;
     lr->batch_root = gi_xmalloc(n);
     snprintf(lr->batch_root, n, "%s/gi-render-XXXXXX", tmp);
@@ -127,6 +135,7 @@ static int dir_has_entries(const char *dir)
 static void batch_root_end(local_run *lr, int keep)
 {
     if (keep && lr->batch_root && dir_has_entries(lr->batch_root)) {
+        gi_batch_dir_touch(lr->batch_root); /* kept GI_BATCH_DIR_MAX_AGE_S from now */
         free(lr->batch_root);
         lr->batch_root = NULL;
         return;
@@ -283,7 +292,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
     gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
     int rc = 0;
-    double last_ckpt = gi_now();
+    double last_ckpt = gi_now(), last_touch = last_ckpt;
     uint64_t ckpt_merged = lr.jr.merge_next;
     while (!gi_jobrun_done(&lr.jr)) {
         if (gi_local_interrupted) {
@@ -327,6 +336,10 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
                 lr.ckpt_ours = 1;
             last_ckpt = now;
             ckpt_merged = lr.jr.merge_next;
+        }
+        if (now - last_touch >= 60.0) { /* alive: not for the sweep */
+            gi_batch_dir_touch(lr.batch_root);
+            last_touch = now;
         }
         gi_progress_at at;
         gi_jobrun_progress(&lr.jr, now, &at);

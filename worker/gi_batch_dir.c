@@ -62,7 +62,10 @@ static int is_job_dir_name(const char *name)
     return strspn(p, "0123456789abcdef") == 16;
 }
 
-int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *keep)
+/* Removes the directories under root that accept(name, path, ctx) takes,
+ * not modified for max_age_s seconds and not in keep. */
+static int sweep(const char *root, double max_age_s, const char *const *keep,
+                 int (*accept)(const char *name, const char *path, void *ctx), void *ctx)
 {
     DIR *d = opendir(root);
     if (!d)
@@ -71,10 +74,10 @@ int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *ke
     int removed = 0;
     struct dirent *e;
     while ((e = readdir(d))) {
-        if (!is_job_dir_name(e->d_name))
-            continue; /* not ours: never removed */
         char p[4400];
         snprintf(p, sizeof p, "%s/%s", root, e->d_name);
+        if (!accept(e->d_name, p, ctx))
+            continue; /* not ours: never removed */
         struct stat st;
         if (lstat(p, &st) != 0 || !S_ISDIR(st.st_mode))
             continue;
@@ -93,4 +96,32 @@ int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *ke
     }
     closedir(d);
     return removed;
+}
+
+static int job_dir(const char *name, const char *path, void *ctx)
+{
+    (void)path;
+    (void)ctx;
+    return is_job_dir_name(name);
+}
+
+int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *keep)
+{
+    return sweep(root, max_age_s, keep, job_dir, NULL);
+}
+
+typedef struct path_test {
+    int (*accept)(const char *path);
+} path_test;
+
+static int accepted_path(const char *name, const char *path, void *ctx)
+{
+    (void)name;
+    return ((const path_test *)ctx)->accept(path);
+}
+
+int gi_batch_dir_sweep_where(const char *root, double max_age_s, int (*accept)(const char *path))
+{
+    path_test t = {accept};
+    return sweep(root, max_age_s, NULL, accepted_path, &t);
 }

@@ -31,5 +31,8 @@ void gi_batch_dir_touch(const char *dir);
  * seconds, except `keep` (NULL-terminated list of paths, may be NULL).
  * Returns how many were removed. */
 int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *keep);
+/* The same for the directories under root whose path accept() takes (gi
+ * render's batch roots in $TMPDIR). */
+int gi_batch_dir_sweep_where(const char *root, double max_age_s, int (*accept)(const char *path));
 
 #endif

@@ -7,11 +7,20 @@
 # directory) keeps its last checkpoint and batches and resumes once the way
 # is clear. A checkpoint of an edited job is refused; a finished render
 # leaves no checkpoint behind; a render that starts over in place of a
-# stopped one removes the batches that one kept. Then a pt still,
+# stopped one removes the batches that one kept, and a render removes the
+# batch roots of renders stopped over 3 days ago. Then a pt still,
 # interrupted and resumed the same way.
 . "$(dirname "$0")/lib.sh"
 mkdir -p "$TMP/tmp"
 export TMPDIR="$TMP/tmp"
+# Batch roots of older renders: one untouched for 4 days (swept by the next
+# render), a fresh one (kept: it may be resumed), an old one others may
+# enter and an old plain directory (not a render's own: never touched).
+for d in gi-render-old4dy gi-render-fresh0 gi-render-opened other-dir; do
+    mkdir -p "$TMPDIR/$d/1-0123456789abcdef" && chmod 700 "$TMPDIR/$d"
+done
+chmod 755 "$TMPDIR/gi-render-opened"
+for d in gi-render-old4dy gi-render-opened other-dir; do touch -d '4 days ago' "$TMPDIR/$d"; done
 write_job "$TMP/job.json" <<JOB
 {"scene": "$SRC/scenes/cornell-box/scene-mobile.json", "method": "detp", "seed": 5,
  "image": {"width": 48, "height": 36},
@@ -24,6 +33,11 @@ JOB
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/ref" --progress none \
     >"$TMP/ref.log" 2>&1 || { cat "$TMP/ref.log"; fail "reference render"; }
 [ ! -e "$TMP/ref/.job.checkpoint" ] || fail "a finished render left its checkpoint"
+[ ! -e "$TMPDIR/gi-render-old4dy" ] || fail "a batch root untouched for 4 days was not swept"
+for d in gi-render-fresh0 gi-render-opened other-dir; do
+    [ -d "$TMPDIR/$d/1-0123456789abcdef" ] || fail "the sweep removed $d"
+    rm -rf "${TMPDIR:?}/$d"
+done
 
 same_as_ref() { # same_as_ref DIR WHAT
     n=0
