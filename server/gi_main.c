@@ -38,8 +38,9 @@ static void usage(FILE *out)
             "render    renders a job on this machine with a pool of N worker processes\n"
             "          (default: one per core) and writes its outputs into DIR (default: out)\n"
             "          MODE: auto (a bar on a terminal, lines otherwise), bar, lines, json, none\n"
-            "          A checkpoint, DIR/.NAME.checkpoint, is written every S seconds (30;\n"
-            "          0: never) and when interrupted; --resume continues from it\n"
+            "          A checkpoint, DIR/.NAME.checkpoint, is written when the render is\n"
+            "          stopped and every S seconds (30; 0: only then); --resume continues it\n"
+            "          (an animation's photon batches are kept under $TMPDIR for it)\n"
             "validate  checks a job and its scene without rendering\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
             "          (in DIR): PLY and report per emission set; --images renders the camera\n"
@@ -47,6 +48,7 @@ static void usage(FILE *out)
             "\n"
             "submit    uploads a job's files to a farm and queues it; --wait follows it and\n"
             "          downloads the outputs (docs/farm.md)\n"
+            "retry     runs a failed or cancelled farm job again from its last checkpoint\n"
             "\n"
             "Job format: docs/job-format.md; scene format: docs/scene-format.md.\n",
             gi_client_usage);
