@@ -165,7 +165,8 @@ static int default_workers(void)
 /* The end of a render (its pool stopped, if it had one): a finished job's
  * checkpoint removed; one stopped from outside (interrupted, its pool
  * failing) checkpointed so that --resume continues it, its batch root kept
- * for it if that holds anything. Frees the run and ckpt. */
+ * for it if that holds anything; one failed on a write left with its last
+ * checkpoint and the batch root that names. Frees the run and ckpt. */
 static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
                      gi_local_summary *summary, int rc, gi_error *err)
 {
