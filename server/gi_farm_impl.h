@@ -92,7 +92,8 @@ typedef struct gi_farm_job {
     uint64_t affinity_moves; /* keys that changed owner */
     uint64_t ckpt_seq, ckpt_merged;
     double ckpt_done_cost;
-    double ckpt_last; /* monotonic */
+    double ckpt_last;   /* monotonic */
+    double ckpt_cost_s; /* how long the last checkpoint took to write */
 
     char *log[GI_FJ_LOG_KEEP];
     int log_start, log_count;

@@ -789,7 +789,11 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 {
     if (j->state != GI_FJ_RUNNING)
         return;
-    if (!force && now - j->ckpt_last < f->cfg.checkpoint_s)
+    /* The loop waits while a checkpoint is written: on a slow disk, space
+     * them so that writing takes at most a twentieth of the time. */
+    double every = f->cfg.checkpoint_s > 20.0 * j->ckpt_cost_s ? f->cfg.checkpoint_s
+                                                                : 20.0 * j->ckpt_cost_s;
+    if (!force && now - j->ckpt_last < every)
         return;
     j->ckpt_last = now;
     if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
@@ -798,6 +802,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
     if (checkpoint(f, j, &err))
         gi_warn("job %llu: checkpoint failed (the job goes on): %s", (unsigned long long)j->id,
                 err.msg);
+    j->ckpt_cost_s = gi_now() - now;
 }
 
 void gi_farm_jobs_tick(gi_farm *f)

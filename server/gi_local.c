@@ -293,7 +293,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
     gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
     int rc = 0;
-    double last_ckpt = gi_now(), last_touch = last_ckpt;
+    double last_ckpt = gi_now(), last_touch = last_ckpt, ckpt_cost = 0.0;
     uint64_t ckpt_merged = lr.jr.merge_next;
     while (!gi_jobrun_done(&lr.jr)) {
         if (gi_local_interrupted) {
@@ -328,7 +328,12 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         }
         gi_pool_poll(&lr.pool, 200, &ev);
         double now = gi_now();
-        if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= opts->checkpoint_s &&
+        /* Results wait while a checkpoint is written: on a slow disk,
+         * checkpoints are spaced so that writing takes at most a twentieth
+         * of the time. */
+        double every = opts->checkpoint_s > 20.0 * ckpt_cost ? opts->checkpoint_s
+                                                             : 20.0 * ckpt_cost;
+        if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= every &&
             lr.jr.merge_next != ckpt_merged && !gi_jobrun_done(&lr.jr) && job->method->save) {
             gi_error cerr;
             if (gi_local_checkpoint_write(&lr.jr, lr.batch_root, ckpt, &cerr))
@@ -336,6 +341,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             else
                 lr.ckpt_ours = 1;
             last_ckpt = now;
+            ckpt_cost = gi_now() - now;
             ckpt_merged = lr.jr.merge_next;
         }
         if (now - last_touch >= 60.0) { /* alive: not for the sweep */
