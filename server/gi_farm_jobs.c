@@ -789,10 +789,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 {
     if (j->state != GI_FJ_RUNNING)
         return;
-    /* The loop waits while a checkpoint is written: on a slow disk, space
-     * them so that writing takes at most a twentieth of the time. */
-    double every = f->cfg.checkpoint_s > 20.0 * j->ckpt_cost_s ? f->cfg.checkpoint_s
-                                                                : 20.0 * j->ckpt_cost_s;
+    double every = gi_jobrun_checkpoint_interval(f->cfg.checkpoint_s, j->ckpt_cost_s);
     if (!force && now - j->ckpt_last < every)
         return;
     j->ckpt_last = now;

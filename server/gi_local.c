@@ -328,11 +328,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         }
         gi_pool_poll(&lr.pool, 200, &ev);
         double now = gi_now();
-        /* Results wait while a checkpoint is written: on a slow disk,
-         * checkpoints are spaced so that writing takes at most a twentieth
-         * of the time. */
-        double every = opts->checkpoint_s > 20.0 * ckpt_cost ? opts->checkpoint_s
-                                                             : 20.0 * ckpt_cost;
+        double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, ckpt_cost);
         if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= every &&
             lr.jr.merge_next != ckpt_merged && !gi_jobrun_done(&lr.jr) && job->method->save) {
             gi_error cerr;

@@ -437,3 +437,14 @@ GI_TEST(test_jobrun_holds_only_the_tasks_not_yet_merged)
     gi_jobrun_free(&jr);
     gi_job_free(&job);
 }
+
+GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
+{
+    /* Quick writes keep the asked interval, even a short one (the tests'). */
+    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 0.0) == 30.0);
+    GI_CHECK(gi_jobrun_checkpoint_interval(0.2, 0.2) == 0.2);
+    /* A second to write: at least 20 s apart; a long interval stays. */
+    GI_CHECK(gi_jobrun_checkpoint_interval(1.0, 1.0) == 20.0);
+    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 1.0) == 30.0);
+    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 5.0) == 100.0);
+}
