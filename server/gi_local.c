@@ -83,7 +83,11 @@ static int batch_root_make(local_run *lr, gi_error *err)
         tmp = "/var/tmp";
     /* Roots of renders killed or never resumed: a live render touches its
      * own every minute, and a stopped one's is kept this long for --resume. */
-    int swept = gi_batch_dir_sweep_where(tmp, GI_BATCH_DIR_MAX_AGE_S, gi_local_batch_root_ours);
+    char *abs_tmp = realpath(tmp, NULL); /* roots are named by absolute paths */
+    int swept = abs_tmp ? gi_batch_dir_sweep_where(abs_tmp, GI_BATCH_DIR_MAX_AGE_S,
+                                                   gi_local_batch_root_ours)
+                        : 0;
+    free(abs_tmp);
     if (swept)
         gi_info("removed %d batch directories of renders stopped over 3 days ago from %s", swept,
                 tmp);
