@@ -161,7 +161,7 @@ typedef struct gi_farm_conn {
 /* ---- counters (GET /metrics) ------------------------------------------- */
 
 typedef struct gi_farm_metrics {
-    uint64_t jobs_submitted, jobs_done, jobs_failed, jobs_cancelled;
+    uint64_t jobs_submitted, jobs_done, jobs_failed, jobs_cancelled, jobs_retried;
     uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
     uint64_t requeued;
     uint64_t result_bytes, merged_bytes;

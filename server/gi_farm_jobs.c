@@ -589,6 +589,7 @@ int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err)
                     j->state == GI_FJ_FAILED ? "failed" : "was cancelled", j->error.msg,
                     has_ckpt ? "resuming from its last checkpoint" : "starting over");
     reopen(j);
+    f->m.jobs_retried++;
     start_checkers(f);
     return 0;
 }

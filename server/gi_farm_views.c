@@ -281,6 +281,8 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_jobs_done_total", "Jobs finished.", (double)m->jobs_done);
     counter(&b, "gi_farm_jobs_failed_total", "Jobs failed.", (double)m->jobs_failed);
     counter(&b, "gi_farm_jobs_cancelled_total", "Jobs cancelled.", (double)m->jobs_cancelled);
+    counter(&b, "gi_farm_jobs_retried_total", "Failed or cancelled jobs run again (gi retry).",
+            (double)m->jobs_retried);
     counter(&b, "gi_farm_task_leases_total", "Tasks handed to workers.", (double)m->tasks_leased);
     counter(&b, "gi_farm_task_results_total", "Task results accepted and merged in order.",
             (double)m->task_results);

@@ -63,5 +63,6 @@ st=0
 [ $st -eq 1 ] && grep -q "no job 999 (HTTP 404)" "$TMP/retry4.log" ||
     { cat "$TMP/retry4.log"; fail "retrying a missing job: exit $st"; }
 [ "$(api "/api/v1/jobs/$id/retry" -o /dev/null -w '%{http_code}')" = 405 ] || fail "GET .../retry"
+[ "$(metric gi_farm_jobs_retried_total)" = 2 ] || fail "retries counted: $(metric gi_farm_jobs_retried_total)"
 stop_farmd "$TMP/farmd.log"
 echo "failed job retried after a restart from $resumed of $total tasks, cancelled one from $seen2: identical"
