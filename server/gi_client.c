@@ -226,14 +226,27 @@ static double poll_wait(const cJSON *job, double last)
     return next < POLL_MIN_S ? POLL_MIN_S : next > POLL_S ? POLL_S : next;
 }
 
-/* Exit status for a job that ended without success. */
+/* Exit status for a job that ended without success (the message says how
+ * to run it again, unless its input was refused). */
 static int job_failed(uint64_t id, const cJSON *job)
 {
     const char *state = str(job, "state");
     const cJSON *e = cJSON_GetObjectItemCaseSensitive(job, "error");
     int status = (int)num(e, "exit_status", 1);
-    return fail_msg(status == 2 ? 2 : 1, "job %llu %s: %s", (unsigned long long)id, state,
-                    str(e, "message"));
+    if (status == 2)
+        return fail_msg(2, "job %llu %s: %s", (unsigned long long)id, state, str(e, "message"));
+    const cJSON *ck = cJSON_GetObjectItemCaseSensitive(job, "checkpoint");
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
+    double merged = num(ck, "merged", 0);
+    char again[128];
+    if (merged > 0)
+        snprintf(again, sizeof again, "from its last checkpoint (%.0f of %.0f tasks merged)",
+                 merged, num(t, "total", 0));
+    else
+        snprintf(again, sizeof again, "from the start");
+    return fail_msg(1, "job %llu %s: %s; `gi retry %llu` runs it again %s",
+                    (unsigned long long)id, state, str(e, "message"), (unsigned long long)id,
+                    again);
 }
 
 static void print_summary(uint64_t id, const cJSON *job)

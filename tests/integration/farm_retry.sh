@@ -24,6 +24,10 @@ wait_state "$id" failed 120
 api "/api/v1/jobs/$id" | grep -q 'img.exr: rename' || { api "/api/v1/jobs/$id"; fail "no reason"; }
 seen=$(jckpt "$id" merged)
 [ "${seen:-0}" -gt 0 ] || fail "the failed job had no checkpoint"
+st=0
+"$GI" wait "$id" --out "$TMP/none" --progress none >"$TMP/wait1.log" 2>&1 || st=$?
+[ $st -eq 1 ] && grep -q "job $id failed: .*img.exr: rename.*gi retry $id. runs it again from its last checkpoint ($seen of [0-9]* tasks merged)" "$TMP/wait1.log" ||
+    { cat "$TMP/wait1.log"; fail "gi wait on the failed job: exit $st, no retry hint"; }
 stop_farmd "$TMP/farmd.log"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
