@@ -10,7 +10,7 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
-cornell_job "$TMP/job.json" 31 96 72 384
+cornell_job "$TMP/job.json" 31 128 96 512
 OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
