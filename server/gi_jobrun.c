@@ -309,12 +309,13 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
         gi_buf_put_u64(out, t->affinity);
         gi_buf_put_blob(out, t->payload.data, t->payload.len);
     }
-    gi_buf state;
-    gi_buf_init(&state);
-    int rc = job->method->save(job, &state, err);
+    /* The method's state goes straight into out as a blob, its length
+     * patched after: a big image's sums are copied once, not twice. */
+    size_t at = out->len;
+    gi_buf_put_u64(out, 0);
+    int rc = job->method->save(job, out, err);
     if (rc == 0)
-        gi_buf_put_blob(out, state.data, state.len);
-    gi_buf_free(&state);
+        gi_le_put_u64(out->data + at, (uint64_t)(out->len - at - 8));
     return rc;
 }
 
