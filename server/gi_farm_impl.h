@@ -93,7 +93,12 @@ typedef struct gi_farm_job {
     uint64_t ckpt_seq, ckpt_merged;
     double ckpt_done_cost;
     double ckpt_last;   /* monotonic */
-    double ckpt_cost_s; /* how long the last checkpoint took to write */
+    double ckpt_cost_s; /* how long the loop waited for the last one */
+    /* The checkpoint being written (gi_farm_jobs.c), and what it holds. */
+    struct gi_file_writer *ckpt_w;
+    uint64_t ckpt_w_merged;
+    double ckpt_w_done_cost;
+    size_t ckpt_w_bytes;
 
     char *log[GI_FJ_LOG_KEEP];
     int log_start, log_count;
