@@ -93,7 +93,7 @@ typedef struct gi_farm_job {
     uint64_t ckpt_seq, ckpt_merged;
     double ckpt_done_cost;
     double ckpt_last;   /* monotonic */
-    double ckpt_cost_s; /* how long the loop waited for the last one */
+    double ckpt_cost_s; /* the last one's time: serialized, then written */
     /* The checkpoint being written (gi_farm_jobs.c), and what it holds. */
     struct gi_file_writer *ckpt_w;
     uint64_t ckpt_w_merged;

@@ -87,7 +87,7 @@ static void job_free(gi_farm_job *j)
 {
     gi_farm_check_kill(j);
     if (j->ckpt_w) /* only at exit, after gi_farm_jobs_checkpoint_all */
-        gi_file_writer_finish(j->ckpt_w, NULL);
+        gi_file_writer_finish(j->ckpt_w, NULL, NULL);
     run_free(j);
     free(j->file);
     free(j->text);
@@ -795,8 +795,10 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
     if (!wait && !gi_file_writer_done(j->ckpt_w))
         return 0;
     gi_error err;
-    int rc = gi_file_writer_finish(j->ckpt_w, &err);
+    double seconds;
+    int rc = gi_file_writer_finish(j->ckpt_w, &seconds, &err);
     j->ckpt_w = NULL;
+    j->ckpt_cost_s += seconds; /* the disk's time too (gi_jobrun_checkpoint_interval) */
     if (rc == 0) {
         char *ap = affinity_path(j);
         gi_farm_affinity_save(j, ap);
@@ -835,7 +837,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
     if (checkpoint_start(f, j, &err))
         gi_warn("job %llu: checkpoint failed (the job goes on): %s", (unsigned long long)j->id,
                 err.msg);
-    j->ckpt_cost_s = gi_now() - now; /* what the loop waited */
+    j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
     if (force)
         checkpoint_finish(f, j, 1);
 }

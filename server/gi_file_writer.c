@@ -5,6 +5,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 
+#include "gi_clock.h"
 #include "gi_fs.h"
 
 struct gi_file_writer {
@@ -13,6 +14,7 @@ struct gi_file_writer {
     char *path;
     gi_buf data;
     int rc;
+    double seconds;
     gi_error err;
     atomic_int done;
 };
@@ -20,7 +22,9 @@ struct gi_file_writer {
 static void *write_main(void *arg)
 {
     gi_file_writer *w = arg;
+    double t0 = gi_now();
     w->rc = gi_write_file_atomic(w->path, w->data.data, w->data.len, &w->err);
+    w->seconds = gi_now() - t0;
     atomic_store(&w->done, 1);
     return NULL;
 }
@@ -40,11 +44,13 @@ gi_file_writer *gi_file_writer_start(const char *path, gi_buf *data)
 
 int gi_file_writer_done(gi_file_writer *w) { return atomic_load(&w->done); }
 
-int gi_file_writer_finish(gi_file_writer *w, gi_error *err)
+int gi_file_writer_finish(gi_file_writer *w, double *seconds, gi_error *err)
 {
     if (w->threaded)
         pthread_join(w->thread, NULL);
     int rc = w->rc;
+    if (seconds)
+        *seconds = w->seconds;
     if (rc && err)
         *err = w->err;
     gi_buf_free(&w->data);

@@ -15,7 +15,7 @@ gi_file_writer *gi_file_writer_start(const char *path, gi_buf *data);
 /* 1 once the write has ended (gi_file_writer_finish then does not wait). */
 int gi_file_writer_done(gi_file_writer *w);
 /* Waits for the write to end and frees w: 0 if the file is in place, else -1
- * with err. */
-int gi_file_writer_finish(gi_file_writer *w, gi_error *err);
+ * with err. *seconds (may be NULL): how long the write took. */
+int gi_file_writer_finish(gi_file_writer *w, double *seconds, gi_error *err);
 
 #endif

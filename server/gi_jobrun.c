@@ -280,10 +280,10 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 #define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
 #define CHECKPOINT_VERSION 2u /* 2: tasks carry their affinity; 1 is still read */
 
-double gi_jobrun_checkpoint_interval(double every_s, double last_write_s)
+double gi_jobrun_checkpoint_interval(double every_s, double last_s)
 {
-    double spaced = 20.0 * last_write_s;
-    return last_write_s >= 0.25 && spaced > every_s ? spaced : every_s;
+    double spaced = 20.0 * last_s;
+    return last_s >= 0.25 && spaced > every_s ? spaced : every_s;
 }
 
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)

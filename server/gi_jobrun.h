@@ -101,10 +101,10 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
  * assets) from a checkpoint, in place of gi_jobrun_start. */
 int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err);
 /* Seconds between periodic checkpoints: every_s, or 20 times as long as the
- * last one took to write if that took a quarter second or more. The
- * coordinator's loop waits while one is written (a big image's sums on a
- * slow disk), so that keeps writing to a twentieth of the time; shorter
- * writes never matter. */
-double gi_jobrun_checkpoint_interval(double every_s, double last_write_s);
+ * last one took (serialized by the loop, then written by a thread) if that
+ * was a quarter second or more. A big image's sums on a slow disk thus take
+ * the loop and the disk at most a twentieth of the time; shorter
+ * checkpoints never matter. */
+double gi_jobrun_checkpoint_interval(double every_s, double last_s);
 
 #endif

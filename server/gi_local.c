@@ -9,8 +9,9 @@
  * renders left untouched for GI_BATCH_DIR_MAX_AGE_S are removed when the
  * next one starts. Affinity keys are ignored here: one host, one disk.
  *
- * Checkpoints (gi_local_checkpoint.h) are written every few seconds and
- * when the render is stopped, so that `gi render --resume` continues it.
+ * Checkpoints (gi_local_checkpoint.h) are written every few seconds (on a
+ * thread of their own: the loop only encodes them) and when the render is
+ * stopped, so that `gi render --resume` continues it.
  * Each names the batch root; a render stopped by a signal keeps it (when it
  * holds anything), and so does a killed one, so that the resumed render
  * reads an animation's photon batches as stored instead of tracing them
@@ -27,6 +28,7 @@
 #include <unistd.h>
 
 #include "gi_batch_dir.h"
+#include "gi_file_writer.h"
 #include "gi_local_checkpoint.h"
 #include "gi_log.h"
 #include "gi_pool.h"
@@ -43,6 +45,8 @@ typedef struct local_run {
     uint64_t crashes;
     unsigned respawn_budget;
     int ckpt_ours; /* the checkpoint file holds this run's work (resumed or written) */
+    gi_file_writer *ckpt_w; /* a periodic checkpoint being written */
+    double ckpt_cost;       /* the last one's time: encoded, then written */
 } local_run;
 
 static void on_result(void *user, int child, gi_msg_result *r)
@@ -158,6 +162,27 @@ static void remove_kept_batch_root(const char *ckpt)
             gi_warn("%s", err.msg);
     }
     free(root);
+}
+
+/* The periodic checkpoint being written (on a thread of its own, so that
+ * results are merged meanwhile), if any, completed, waiting for it if
+ * wait: 1 when none is left, 0 while it is still being written. */
+static int periodic_finish(local_run *lr, int wait)
+{
+    if (!lr->ckpt_w)
+        return 1;
+    if (!wait && !gi_file_writer_done(lr->ckpt_w))
+        return 0;
+    gi_error e;
+    double seconds;
+    int rc = gi_file_writer_finish(lr->ckpt_w, &seconds, &e);
+    lr->ckpt_cost += seconds; /* the disk's time too (gi_jobrun_checkpoint_interval) */
+    if (rc)
+        gi_warn("checkpoint not written: %s", e.msg);
+    else
+        lr->ckpt_ours = 1;
+    lr->ckpt_w = NULL;
+    return 1;
 }
 
 static int default_workers(void)
@@ -297,7 +322,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
     gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
     int rc = 0;
-    double last_ckpt = gi_now(), last_touch = last_ckpt, ckpt_cost = 0.0;
+    double last_ckpt = gi_now(), last_touch = last_ckpt;
     uint64_t ckpt_merged = lr.jr.merge_next;
     while (!gi_jobrun_done(&lr.jr)) {
         if (gi_local_interrupted) {
@@ -332,16 +357,20 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         }
         gi_pool_poll(&lr.pool, 200, &ev);
         double now = gi_now();
-        double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, ckpt_cost);
-        if (checkpoints && opts->checkpoint_s > 0 && now - last_ckpt >= every &&
-            lr.jr.merge_next != ckpt_merged && !gi_jobrun_done(&lr.jr) && job->method->save) {
+        double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, lr.ckpt_cost);
+        if (periodic_finish(&lr, 0) && checkpoints && opts->checkpoint_s > 0 &&
+            now - last_ckpt >= every && lr.jr.merge_next != ckpt_merged &&
+            !gi_jobrun_done(&lr.jr) && job->method->save) {
+            gi_buf b;
+            gi_buf_init(&b);
             gi_error cerr;
-            if (gi_local_checkpoint_write(&lr.jr, lr.batch_root, ckpt, &cerr))
-                gi_warn("%s", cerr.msg);
+            if (gi_local_checkpoint_encode(&lr.jr, lr.batch_root, &b, &cerr))
+                gi_warn("checkpoint %s: %s", ckpt, cerr.msg);
             else
-                lr.ckpt_ours = 1;
+                lr.ckpt_w = gi_file_writer_start(ckpt, &b);
+            gi_buf_free(&b);
             last_ckpt = now;
-            ckpt_cost = gi_now() - now;
+            lr.ckpt_cost = gi_now() - now;
             ckpt_merged = lr.jr.merge_next;
         }
         if (now - last_touch >= 60.0) { /* alive: not for the sweep */
@@ -352,6 +381,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         gi_jobrun_progress(&lr.jr, now, &at);
         gi_progress_update(&prog, &at, 0);
     }
+    periodic_finish(&lr, 1); /* in place (or failed) before the end decides */
     if (rc == 0 && lr.jr.failed) {
         if (err)
             *err = lr.jr.error;

@@ -39,18 +39,24 @@ static void identity(const gi_job *job, char out[GI_HASH_HEX])
     gi_buf_free(&b);
 }
 
-int gi_local_checkpoint_write(const gi_jobrun *jr, const char *batch_root, const char *path,
-                              gi_error *err)
+int gi_local_checkpoint_encode(const gi_jobrun *jr, const char *batch_root, gi_buf *out,
+                               gi_error *err)
 {
     char id[GI_HASH_HEX];
     identity(jr->job, id);
+    gi_buf_put_u32(out, LOCAL_CHECKPOINT_MAGIC);
+    gi_buf_put_u32(out, LOCAL_CHECKPOINT_VERSION);
+    gi_buf_put_str(out, id);
+    gi_buf_put_str(out, batch_root ? batch_root : "");
+    return gi_jobrun_checkpoint(jr, out, err);
+}
+
+int gi_local_checkpoint_write(const gi_jobrun *jr, const char *batch_root, const char *path,
+                              gi_error *err)
+{
     gi_buf b;
     gi_buf_init(&b);
-    gi_buf_put_u32(&b, LOCAL_CHECKPOINT_MAGIC);
-    gi_buf_put_u32(&b, LOCAL_CHECKPOINT_VERSION);
-    gi_buf_put_str(&b, id);
-    gi_buf_put_str(&b, batch_root ? batch_root : "");
-    int rc = gi_jobrun_checkpoint(jr, &b, err);
+    int rc = gi_local_checkpoint_encode(jr, batch_root, &b, err);
     if (rc == 0)
         rc = gi_write_file_atomic(path, b.data, b.len, err);
     gi_buf_free(&b);

@@ -22,7 +22,10 @@
 
 /* OUT/.NAME.checkpoint (malloc'ed). */
 char *gi_local_checkpoint_path(const gi_job *job);
-/* batch_root may be NULL. */
+/* The checkpoint's bytes, appended to out (batch_root may be NULL). */
+int gi_local_checkpoint_encode(const gi_jobrun *jr, const char *batch_root, gi_buf *out,
+                               gi_error *err);
+/* Encodes and writes it to path, atomically. */
 int gi_local_checkpoint_write(const gi_jobrun *jr, const char *batch_root, const char *path,
                               gi_error *err);
 /* Restores jr from path in place of gi_jobrun_start: 1 restored, 0 no file,

@@ -23,7 +23,9 @@ GI_TEST(test_file_writer_writes_in_the_background)
     while (!gi_file_writer_done(w))
         usleep(1000);
     gi_error err;
-    GI_CHECK_OK(gi_file_writer_finish(w, &err));
+    double seconds = -1.0;
+    GI_CHECK_OK(gi_file_writer_finish(w, &seconds, &err));
+    GI_CHECK(seconds >= 0.0);
     gi_buf got;
     gi_buf_init(&got);
     GI_CHECK_OK(gi_read_file(path, 1 << 30, &got, &err));
@@ -35,7 +37,7 @@ GI_TEST(test_file_writer_writes_in_the_background)
     snprintf(path, sizeof path, "%s/no-such-dir/file", gi_test_tmpdir());
     gi_buf_put_u32(&b, 7);
     w = gi_file_writer_start(path, &b);
-    GI_CHECK(gi_file_writer_finish(w, &err) == -1);
+    GI_CHECK(gi_file_writer_finish(w, NULL, &err) == -1);
     GI_CHECK_MSG(strstr(err.msg, "no-such-dir") != NULL, "%s", err.msg);
     GI_CHECK(access(path, F_OK) != 0);
 }
