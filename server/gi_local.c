@@ -357,8 +357,9 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         }
         gi_pool_poll(&lr.pool, 200, &ev);
         double now = gi_now();
+        int writer_idle = periodic_finish(&lr, 0); /* first: it adds the write's time */
         double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, lr.ckpt_cost);
-        if (periodic_finish(&lr, 0) && checkpoints && opts->checkpoint_s > 0 &&
+        if (writer_idle && checkpoints && opts->checkpoint_s > 0 &&
             now - last_ckpt >= every && lr.jr.merge_next != ckpt_merged &&
             !gi_jobrun_done(&lr.jr) && job->method->save) {
             gi_buf b;
