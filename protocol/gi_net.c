@@ -1,6 +1,5 @@
 /* gi_net: TCP listen / connect / peer names. */
 #include "gi_net.h"
-#include "gi_clock.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -14,6 +13,8 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <unistd.h>
+
+#include "gi_clock.h"
 
 int gi_net_split(const char *addr, char **host, char **port, gi_error *err)
 {

@@ -138,11 +138,11 @@ static int dir_has_entries(const char *dir)
     return any;
 }
 
-/* Lets go of the batch root: kept on disk if asked and it holds anything,
- * removed otherwise. */
+/* Lets go of the batch root: kept on disk if asked (the callers ask only
+ * for one that holds something), removed otherwise. */
 static void batch_root_end(local_run *lr, int keep)
 {
-    if (keep && lr->batch_root && dir_has_entries(lr->batch_root)) {
+    if (keep && lr->batch_root) {
         gi_batch_dir_touch(lr->batch_root); /* kept GI_BATCH_DIR_MAX_AGE_S from now */
         free(lr->batch_root);
         lr->batch_root = NULL;
@@ -232,7 +232,8 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
          * checkpoint, taken with every output before it on disk, still
          * holds the work up to it, and with it the batches it names. */
         char *named = gi_local_checkpoint_batch_root(ckpt);
-        keep_batches = named && lr->batch_root && strcmp(named, lr->batch_root) == 0;
+        keep_batches = named && lr->batch_root && strcmp(named, lr->batch_root) == 0 &&
+                       dir_has_entries(lr->batch_root);
         free(named);
         if (err) {
             gi_error e = *err;
@@ -309,7 +310,8 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         return -1;
     }
     if (gi_pool_start(&lr.pool, workers, lr.batch_root, err)) {
-        batch_root_end(&lr, resumed > 0); /* the checkpoint may name it still */
+        /* The checkpoint may name it still. */
+        batch_root_end(&lr, resumed > 0 && dir_has_entries(lr.batch_root));
         gi_jobrun_free(&lr.jr);
         free(ckpt);
         return -1;

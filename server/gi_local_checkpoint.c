@@ -63,12 +63,13 @@ int gi_local_checkpoint_write(const gi_jobrun *jr, const char *batch_root, const
     return rc ? gi_error_prefix(err, "checkpoint %s", path) : 0;
 }
 
-/* The header of the checkpoint in b: 0 and *id, *root (malloc'ed; *root
+/* The header of the checkpoint in data: 0 and *id, *root (malloc'ed; *root
  * NULL if none), the reader left at gi_jobrun_checkpoint's bytes; -1 if it
  * is not a checkpoint. */
-static int read_header(const gi_buf *b, const char *path, gi_reader *r, char **id, char **root)
+static int read_header(const void *data, size_t len, const char *path, gi_reader *r, char **id,
+                       char **root)
 {
-    gi_reader_init(r, b->data, b->len, path);
+    gi_reader_init(r, data, len, path);
     uint32_t magic = gi_get_u32(r), version = gi_get_u32(r);
     *id = gi_get_str(r, GI_HASH_HEX);
     *root = NULL;
@@ -108,7 +109,7 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
     char want[GI_HASH_HEX];
     identity(job, want);
     int rc = 0;
-    if (read_header(&b, path, &r, &id, &root))
+    if (read_header(b.data, b.len, path, &r, &id, &root))
         rc = gi_fail(err, GI_EINVAL, "%s: not a gi render checkpoint (remove it to start over)",
                      path);
     else if (strcmp(id, want) != 0)
@@ -118,14 +119,13 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
                      path, job->file);
     free(id);
     if (rc == 0) {
-        gi_buf rest;
-        gi_buf_init(&rest);
-        gi_buf_put(&rest, r.p, r.left);
+        /* The run's bytes, read in place (a view of b's tail: not freed), not
+         * copied: a big image's checkpoint is hundreds of MB. */
+        const gi_buf rest = {b.data + (b.len - r.left), r.left, 0};
         gi_error e;
         if (gi_jobrun_restore(jr, job, &rest, &e))
             rc = gi_fail(err, e.code == GI_EPROTO ? GI_EINVAL : e.code,
                          "%s: %s; remove it to start over", path, e.msg);
-        gi_buf_free(&rest);
     }
     gi_buf_free(&b);
     if (rc) {
@@ -142,17 +142,13 @@ char *gi_local_checkpoint_batch_root(const char *path)
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
-    gi_buf b;
-    gi_buf_init(&b);
     char head[16 + GI_HASH_HEX + LOCAL_BATCH_ROOT_MAX];
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);
-    gi_buf_put(&b, head, n);
     gi_reader r;
     char *id, *root;
-    if (read_header(&b, path, &r, &id, &root) == 0)
+    if (read_header(head, n, path, &r, &id, &root) == 0)
         free(id);
-    gi_buf_free(&b);
     return root;
 }
 
