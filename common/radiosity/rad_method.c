@@ -72,6 +72,25 @@ double gi_rad_patch_area(const gi_scene *s, uint32_t patches)
 /* ------------------------------------------------------------------------ */
 /* Parameters */
 
+/* Several emission sets put their names into the files of the ply, exr
+ * and png outputs (output_path): none may land on another output's file. */
+static int check_output_names(const gi_job *job, gi_jv *v)
+{
+    const gi_rad_params *p = job->params;
+    static const char *const kinds[] = {"factorization", "ply", "exr", "png", "report"};
+    gi_rad_output_file outs[5];
+    int n = 0;
+    for (int k = 0; k < 5; k++) {
+        const char *file = gi_job_output(job, kinds[k]);
+        if (file)
+            outs[n++] = (gi_rad_output_file){kinds[k], file, NULL, k >= 1 && k <= 3};
+    }
+    char msg[512];
+    if (gi_rad_outputs_distinct(outs, n, &p->emissions, msg, sizeof msg))
+        return gi_jv_fail(v, "outputs", "%s", msg);
+    return 0;
+}
+
 static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
     gi_rad_params *p = gi_xcalloc(1, sizeof *p);
@@ -159,7 +178,9 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
         return -1;
     if (emissions) {
         p->has_emissions = 1;
-        return gi_rad_emissions_parse_json(v, emissions, "radiosity.emissions", &p->emissions);
+        if (gi_rad_emissions_parse_json(v, emissions, "radiosity.emissions", &p->emissions))
+            return -1;
+        return check_output_names(job, v);
     }
     gi_rad_emissions_scene(&p->emissions);
     return 0;

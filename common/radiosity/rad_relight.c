@@ -145,6 +145,60 @@ char *gi_rad_output_name(const char *file, const char *emission)
     return out;
 }
 
+typedef struct written_name {
+    char *file;
+    const char *kind, *set; /* set: NULL for a file written once */
+} written_name;
+
+static int by_file(const void *a, const void *b)
+{
+    return strcmp(((const written_name *)a)->file, ((const written_name *)b)->file);
+}
+
+static void describe(const written_name *w, char *out, size_t len)
+{
+    if (w->set)
+        snprintf(out, len, "set %s's %s output", w->set, w->kind);
+    else
+        snprintf(out, len, "the %s output", w->kind);
+}
+
+int gi_rad_outputs_distinct(const gi_rad_output_file *outs, int count, const gi_rad_emissions *em,
+                            char *msg, size_t msg_len)
+{
+    size_t n = 0, cap = 0;
+    for (int i = 0; i < count; i++)
+        cap += outs[i].per_set ? em->count : 1;
+    written_name *w = gi_xcalloc(cap ? cap : 1, sizeof *w);
+    for (int i = 0; i < count; i++) {
+        if (!outs[i].per_set) {
+            w[n].file = outs[i].as ? gi_rad_output_name(outs[i].file, outs[i].as)
+                                   : gi_xstrdup(outs[i].file);
+            w[n++].kind = outs[i].kind;
+            continue;
+        }
+        for (uint32_t k = 0; k < em->count; k++, n++) {
+            w[n].file = gi_rad_output_name(outs[i].file, em->items[k].name);
+            w[n].kind = outs[i].kind;
+            w[n].set = em->items[k].name;
+        }
+    }
+    qsort(w, n, sizeof *w, by_file);
+    int rc = 0;
+    for (size_t i = 1; i < n && !rc; i++)
+        if (strcmp(w[i - 1].file, w[i].file) == 0) {
+            char a[160], b[160];
+            describe(&w[i - 1], a, sizeof a);
+            describe(&w[i], b, sizeof b);
+            snprintf(msg, msg_len, "\"%s\" is both %s and %s", w[i].file, a, b);
+            rc = -1;
+        }
+    for (size_t i = 0; i < n; i++)
+        free(w[i].file);
+    free(w);
+    return rc;
+}
+
 int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
                          double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
                          const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
@@ -152,6 +206,15 @@ int gi_rad_relight_write(const char *dir, const char *ply, const char *report, c
                          void (*note)(void *user, const char *kind, const char *path), void *user,
                          gi_error *err)
 {
+    gi_rad_output_file outs[2];
+    int count = 0;
+    if (ply)
+        outs[count++] = (gi_rad_output_file){"ply", ply, NULL, 1};
+    if (report)
+        outs[count++] = (gi_rad_output_file){"report", report, "relight", 0};
+    char msg[512];
+    if (gi_rad_outputs_distinct(outs, count, em, msg, sizeof msg))
+        return gi_fail(err, GI_EINVAL, "%s: %s", dir, msg);
     size_t n3 = 3 * (size_t)f->n;
     for (uint32_t i = 0; ply && i < em->count; i++) {
         char *name = gi_rad_output_name(ply, em->items[i].name);

@@ -78,4 +78,18 @@ int gi_rad_relight_write(const char *dir, const char *ply, const char *report, c
 /* "<stem>-<emission><ext>" for "<stem><ext>" (malloc'ed). */
 char *gi_rad_output_name(const char *file, const char *emission);
 
+/* One output of a radiosity run: written as `file`, or once per emission
+ * set under gi_rad_output_name(file, set) (per_set), or under
+ * gi_rad_output_name(file, as) when `as` is given (a relight's report). */
+typedef struct gi_rad_output_file {
+    const char *kind, *file, *as;
+    int per_set;
+} gi_rad_output_file;
+
+/* 0 if the outputs' files all differ; otherwise -1 with the first two
+ * that would land on one file in msg ("\"a-b.ply\" is both set b's ply
+ * output and the report output"). */
+int gi_rad_outputs_distinct(const gi_rad_output_file *outs, int count, const gi_rad_emissions *em,
+                            char *msg, size_t msg_len);
+
 #endif

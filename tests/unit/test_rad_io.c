@@ -9,6 +9,7 @@
 #include "radiosity/rad_ff.h"
 #include "radiosity/rad_file.h"
 #include "radiosity/rad_patches.h"
+#include "radiosity/rad_relight.h"
 
 /* A small model and factor by hand: 2 materials, 2 objects, n = 6, k = 2. */
 static void small(gi_rad_model *md, gi_rad_factor *f, gi_error *err)
@@ -240,6 +241,40 @@ GI_TEST(test_rad_emissions_refuse_bad_input)
                      "case %zu: rc %d: %s", i, rc, err.msg);
         gi_rad_emissions_free(&em);
     }
+}
+
+GI_TEST(test_rad_output_names_of_several_sets_must_not_meet)
+{
+    gi_error err;
+    gi_rad_emissions em;
+    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"a\"}, {\"name\": \"relight\"}]}", &em,
+                        &err));
+    char msg[512];
+    gi_rad_output_file ok[] = {{"ply", "r.ply", NULL, 1},
+                               {"exr", "r.exr", NULL, 1},
+                               {"report", "r.json", NULL, 0},
+                               {"factorization", "r-a.fact", NULL, 0}};
+    GI_CHECK(gi_rad_outputs_distinct(ok, 4, &em, msg, sizeof msg) == 0);
+    /* A fixed name that a set's file takes. */
+    gi_rad_output_file fixed[] = {{"ply", "r.ply", NULL, 1}, {"report", "r-a.ply", NULL, 0}};
+    GI_CHECK(gi_rad_outputs_distinct(fixed, 2, &em, msg, sizeof msg) == -1);
+    GI_CHECK_MSG(strstr(msg, "\"r-a.ply\"") && strstr(msg, "set a's ply output") &&
+                     strstr(msg, "the report output"),
+                 "%s", msg);
+    /* Two per-set outputs: set b's ply and set a-b's png are both x-a-b.ply. */
+    gi_rad_output_file sets[] = {{"ply", "x-a.ply", NULL, 1}, {"png", "x.ply", NULL, 1}};
+    gi_rad_emissions_free(&em);
+    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"a-b\"}, {\"name\": \"b\"}]}", &em,
+                        &err));
+    GI_CHECK(gi_rad_outputs_distinct(sets, 2, &em, msg, sizeof msg) == -1 &&
+             strstr(msg, "\"x-a-b.ply\""));
+    /* A relight's report, named after "relight", against a set of that name. */
+    gi_rad_emissions_free(&em);
+    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"relight\"}]}", &em, &err));
+    gi_rad_output_file relit[] = {{"ply", "r.json", NULL, 1}, {"report", "r.json", "relight", 0}};
+    GI_CHECK(gi_rad_outputs_distinct(relit, 2, &em, msg, sizeof msg) == -1 &&
+             strstr(msg, "r-relight.json"));
+    gi_rad_emissions_free(&em);
 }
 
 static void nothing(void *user, uint32_t e, uint32_t node, uint32_t hits) {}
