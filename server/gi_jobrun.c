@@ -278,7 +278,9 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 }
 
 #define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
-#define CHECKPOINT_VERSION 2u /* 2: tasks carry their affinity; 1 is still read */
+/* 2: tasks carry their affinity; 3: the current frame's start (its
+ * progress survives a restart). Older versions are still read. */
+#define CHECKPOINT_VERSION 3u
 
 double gi_jobrun_checkpoint_interval(double every_s, double last_s)
 {
@@ -301,6 +303,7 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     gi_buf_put_u64(out, jr->stats.samples);
     gi_buf_put_f64(out, jr->stats.seconds);
     gi_buf_put_f64(out, jr->cost_total);
+    gi_buf_put_f64(out, jr->clock.frame_base);
     for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
         const gi_task *t = &gi_jobrun_task_at(jr, i)->task;
         gi_buf_put_u32(out, t->kind);
@@ -344,6 +347,9 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     jr->stats.samples = gi_get_u64(&r);
     jr->stats.seconds = gi_get_f64(&r);
     jr->cost_total = gi_get_f64(&r);
+    jr->clock.restored_base = version >= 3 ? gi_get_f64(&r) : -1;
+    if (!(jr->clock.restored_base <= jr->cost_total)) /* NaN too */
+        jr->clock.restored_base = -1;
     if (r.failed || merged > count || count - merged > r.left / 24)
         return gi_fail(err, GI_EPROTO, "%s: checkpoint: bad task counts", job->file);
     /* Only the tasks not merged are held; the count check above keeps them

@@ -65,9 +65,15 @@ void gi_progress_clock_note(gi_progress_clock *c, const gi_job_progress *at, dou
         }
         /* A frame is seen whole when none of its work was done before: at
          * a fresh start, or when the frame before it finished. A restored
-         * job's frame counts from the work left in it. */
+         * job's frame starts where its checkpoint says, or (an older
+         * checkpoint, past frame 0) from the work left in it. */
         c->frame_seen_whole = c->noted || cost_done == 0;
-        c->frame_base = c->noted ? cost_total : cost_done;
+        if (c->noted)
+            c->frame_base = cost_total;
+        else if (c->restored_base >= 0 && c->restored_base <= cost_done)
+            c->frame_base = c->restored_base;
+        else
+            c->frame_base = at->frame == 0 ? 0 : cost_done;
         c->t_frame = now;
         c->done_at_t = cost_done;
         c->noted = 1;

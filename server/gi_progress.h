@@ -37,6 +37,9 @@ typedef struct gi_progress_clock {
     gi_job_progress at;
     int noted;
     double frame_base;   /* planned work of the frames before this one */
+    /* Set before the first note by a job restored from a checkpoint that
+     * kept its frame_base (< 0: not kept; frame 0's is 0 all the same). */
+    double restored_base;
     double t_frame;      /* when this process saw this frame (or itself) start */
     double done_at_t;    /* work done then */
     int frame_seen_whole; /* this process saw this frame start */

@@ -233,6 +233,8 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
         /* One task leased but not answered: it must run again after restore. */
         const gi_task *lost = gi_jobrun_lease(&jr);
         uint64_t merged_before = jr.merge_next;
+        gi_progress_at before, after;
+        gi_jobrun_progress(&jr, 0.0, &before);
         gi_buf ck;
         gi_buf_init(&ck);
         GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
@@ -244,6 +246,10 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
         job.method = &fake_method;
         GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
         GI_CHECK(jr.merge_next == merged_before);
+        /* It says as much done as before it stopped, not 0%. */
+        gi_jobrun_progress(&jr, 0.0, &after);
+        GI_CHECK_MSG(fabs(after.fraction - before.fraction) < 1e-12, "stop %d: %.6f then %.6f",
+                     stops[k], before.fraction, after.fraction);
         drive(&jr, 1000);
         GI_CHECK_MSG(jr.finished, "stop %d: not finished", stops[k]);
         fake_state *st = job.state;
@@ -340,14 +346,22 @@ GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
     GI_CHECK_MSG(fabs(at.eta_s - 2.0) < 1e-9, "eta %.9f", at.eta_s); /* nothing done yet */
 
     /* A still restored with 300 of 400 units done: its rate counts from
-     * the restart, and its fraction from the work left. */
+     * the restart, its fraction from the start of the job. */
     gi_progress_clock r;
     memset(&r, 0, sizeof r);
+    r.restored_base = -1; /* a checkpoint that did not keep it: frame 0 starts at 0 */
     gi_job_progress still = {0, 1, 0};
     gi_progress_clock_note(&r, &still, 400, 300, 50.0);
     gi_progress_clock_read(&r, 400, 350, 52.0, &at);
-    GI_CHECK(fabs(at.fraction - 0.5) < 1e-12 && fabs(at.eta_s - 2.0) < 1e-9);
+    GI_CHECK(fabs(at.fraction - 0.875) < 1e-12 && fabs(at.eta_s - 2.0) < 1e-9);
     GI_CHECK(at.frames == 1 && at.done == 350 && at.total == 400);
+    /* Frame 2 of 4 restored, its start (400) kept: a quarter of its 200. */
+    memset(&r, 0, sizeof r);
+    r.restored_base = 400;
+    gi_job_progress f2 = {2, 4, 0};
+    gi_progress_clock_note(&r, &f2, 600, 450, 50.0);
+    gi_progress_clock_read(&r, 600, 450, 50.0, &at);
+    GI_CHECK(fabs(at.fraction - 2.25 / 4) < 1e-12 && at.eta_s < 0);
 }
 
 /* A job of many frames: each finish plans 300 more tasks, 40 times. */
@@ -436,6 +450,70 @@ GI_TEST(test_jobrun_holds_only_the_tasks_not_yet_merged)
     GI_CHECK(gi_jobrun_task_at(&jr, 5) == NULL && jr.task_base > 0);
     gi_jobrun_free(&jr);
     gi_job_free(&job);
+}
+
+static int frames_save(const gi_job *job, gi_buf *out, gi_error *err)
+{
+    (void)err;
+    const fake_state *st = job->state;
+    gi_buf_put_u32(out, (uint32_t)st->merged);
+    gi_buf_put_u32(out, (uint32_t)st->finish_calls);
+    gi_buf_put_f64(out, st->sum);
+    return 0;
+}
+
+static int frames_load(gi_job *job, gi_reader *in, gi_error *err)
+{
+    (void)err;
+    fake_state *st = gi_xcalloc(1, sizeof *st);
+    job->state = st;
+    st->merged = (int)gi_get_u32(in);
+    st->finish_calls = (int)gi_get_u32(in);
+    st->sum = gi_get_f64(in);
+    return 0;
+}
+
+static void frames_progress(const gi_job *job, gi_job_progress *out)
+{
+    const fake_state *st = job->state;
+    out->frame = (uint32_t)st->finish_calls;
+    out->frames = 40;
+    out->cost_unplanned = 0;
+}
+
+GI_TEST(test_jobrun_restored_mid_frame_keeps_its_progress)
+{
+    gi_method m = fake_method;
+    m.plan = frames_plan;
+    m.merge = frames_merge;
+    m.finish = frames_finish;
+    m.save = frames_save;
+    m.load = frames_load;
+    m.progress = frames_progress;
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(start(&m, &job, &jr, &err));
+    drive(&jr, 7 * 300 + 120); /* 40% into frame 7 */
+    gi_progress_at before, after;
+    gi_jobrun_progress(&jr, 0.0, &before);
+    GI_CHECK_MSG(fabs(before.fraction - 7.4 / 40) < 1e-12, "%.6f", before.fraction);
+    gi_buf ck;
+    gi_buf_init(&ck);
+    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    memset(&job, 0, sizeof job);
+    job.method = &m;
+    GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+    gi_jobrun_progress(&jr, 0.0, &after);
+    GI_CHECK_MSG(fabs(after.fraction - before.fraction) < 1e-12 && after.frame == 7,
+                 "%.6f then %.6f (frame %u)", before.fraction, after.fraction, after.frame);
+    drive(&jr, 100000);
+    GI_CHECK(jr.finished);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_buf_free(&ck);
 }
 
 GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
