@@ -272,6 +272,9 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             gi_jobrun_progress(&lr.jr, gi_now(), &at);
             fprintf(stderr, "gi: %s: resuming from %s (%.0f%% done", job->name, ckpt,
                     100.0 * at.fraction);
+            summary->resumed = 1;
+            summary->fraction_before = at.fraction;
+            summary->stats_before = lr.jr.stats;
             if (at.frames > 1)
                 fprintf(stderr, ", at frame %u of %u", at.frame, at.frames);
             fprintf(stderr, ")\n");
@@ -300,9 +303,9 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     }
     if (lr.jr.finished) /* resumed from a checkpoint taken at the very end */
         return local_end(&lr, ckpt, checkpoints, t0, summary, 0, err);
+    /* Not capped by the tasks planned so far: a method's later phases (a detp
+     * job's image after one photon batch) plan many more. */
     int workers = opts->workers > 0 ? opts->workers : default_workers();
-    if ((uint64_t)workers > lr.jr.task_count)
-        workers = (int)lr.jr.task_count;
     summary->workers = workers;
     if (!lr.batch_root && batch_root_make(&lr, err)) {
         gi_jobrun_free(&lr.jr);

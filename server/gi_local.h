@@ -20,10 +20,14 @@ typedef struct gi_local_opts {
 } gi_local_opts;
 
 typedef struct gi_local_summary {
-    double seconds;
+    double seconds; /* this run's */
     uint64_t tasks, retries, crashes;
-    gi_task_stats stats;
+    gi_task_stats stats; /* the whole job's */
     int workers;
+    /* A resumed render: what its checkpoint held (rates count this run's). */
+    int resumed;
+    double fraction_before;
+    gi_task_stats stats_before;
 } gi_local_summary;
 
 /* Renders a loaded job (gi_job_load) into job->out_dir. */

@@ -73,16 +73,25 @@ static int arg_value(int argc, char **argv, int *i, const char *name, const char
 static void print_summary(const gi_job *job, const gi_local_summary *s)
 {
     char a[32], b[32], c[32], d[32], e[32];
+    /* Rates are this run's: a resumed render's checkpoint brought the rest. */
     double secs = s->seconds > 0 ? s->seconds : 1e-9;
-    double worker_secs = s->stats.seconds > 0 ? s->stats.seconds : 1e-9;
-    printf("%s: %s done in %s with %d worker%s\n", job->name, job->method->name,
+    double samples = (double)(s->stats.samples - s->stats_before.samples);
+    double rays = (double)(s->stats.rays - s->stats_before.rays);
+    double worker_secs = s->stats.seconds - s->stats_before.seconds;
+    if (worker_secs <= 0)
+        worker_secs = 1e-9;
+    printf("%s: %s done in %s with %d worker%s", job->name, job->method->name,
            gi_duration(s->seconds, a, sizeof a), s->workers, s->workers == 1 ? "" : "s");
-    printf("  %s%s (%s%s/s), %srays (%srays/s, %srays/s per worker)\n",
-           gi_si((double)s->stats.samples, a, sizeof a), job->method->unit,
-           gi_si((double)s->stats.samples / secs, b, sizeof b), job->method->unit,
-           gi_si((double)s->stats.rays, c, sizeof c), gi_si((double)s->stats.rays / secs, d, sizeof d),
-           gi_si((double)s->stats.rays / worker_secs, e, sizeof e));
-    printf("  %llu tasks", (unsigned long long)s->tasks);
+    if (s->resumed)
+        printf(" (resumed at %.0f%%; the rates are this run's)", 100.0 * s->fraction_before);
+    printf("\n");
+    printf("  ");
+    if (s->stats.samples != s->stats.rays || strcmp(job->method->unit, "rays") != 0)
+        printf("%s%s (%s%s/s), ", gi_si((double)s->stats.samples, a, sizeof a), job->method->unit,
+               gi_si(samples / secs, b, sizeof b), job->method->unit);
+    printf("%srays (%srays/s, %srays/s per worker)\n", gi_si((double)s->stats.rays, c, sizeof c),
+           gi_si(rays / secs, d, sizeof d), gi_si(rays / worker_secs, e, sizeof e));
+    printf("  %llu task%s", (unsigned long long)s->tasks, s->tasks == 1 ? "" : "s");
     if (s->retries)
         printf(", %llu retried (%llu worker crashes)", (unsigned long long)s->retries,
                (unsigned long long)s->crashes);
