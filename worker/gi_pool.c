@@ -60,7 +60,10 @@ int gi_pool_spawn(gi_pool *p, int i, gi_error *err)
                 close(p->kids[j].fd);
         for (int j = 0; j < p->extra_fd_count; j++)
             close(p->extra_fds[j]);
-        signal(SIGINT, SIG_DFL);
+        /* A terminal's Ctrl-C reaches the whole process group: the parent
+         * decides what stops (it kills children itself), so a child does
+         * not die of it mid-task. */
+        signal(SIGINT, SIG_IGN);
         signal(SIGTERM, SIG_DFL);
         _exit(gi_child_main(sv[1], p->batch_root));
     }
