@@ -6,10 +6,43 @@
 #include <stdio.h>
 #include <string.h>
 
+/* Line and column (from 1) of text[off]. */
+static void line_col(const char *text, size_t off, int *line, int *col)
+{
+    *line = 1;
+    *col = 1;
+    for (size_t i = 0; i < off; i++) {
+        if (text[i] == '\n') {
+            (*line)++;
+            *col = 1;
+        } else {
+            (*col)++;
+        }
+    }
+}
+
+/* The offset of a NUL that a string of the document would hold (raw, or
+ * written \u0000), or len if none: cJSON's C strings would end there, and
+ * a name checked after it would not be the name given. */
+static size_t string_nul(const char *text, size_t len)
+{
+    for (size_t i = 0; i < len; i++) {
+        if (text[i] == '\0')
+            return i;
+        if (text[i] != '\\' || i + 1 >= len)
+            continue;
+        if (text[i + 1] == 'u' && i + 5 < len && memcmp(text + i + 2, "0000", 4) == 0)
+            return i;
+        i++; /* the escaped character */
+    }
+    return len;
+}
+
 int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
                   gi_error *err)
 {
     *out = NULL;
+    int line, col;
     if (len == 0)
         return gi_fail(err, GI_EINVAL, "%s: empty file, expected a JSON object", file);
     const char *end = NULL;
@@ -18,20 +51,14 @@ int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
         size_t off = end && end >= text ? (size_t)(end - text) : 0;
         if (off > len)
             off = len;
-        int line = 1, col = 1;
-        for (size_t i = 0; i < off; i++) {
-            if (text[i] == '\n') {
-                line++;
-                col = 1;
-            } else {
-                col++;
-            }
-        }
+        line_col(text, off, &line, &col);
         return gi_fail(err, GI_EINVAL, "%s:%d:%d: invalid JSON", file, line, col);
     }
     /* Trailing garbage after the root value is an error too. */
+    size_t used = len;
     if (end) {
         size_t off = (size_t)(end - text);
+        used = off;
         while (off < len && (text[off] == ' ' || text[off] == '\n' || text[off] == '\r' ||
                              text[off] == '\t'))
             off++;
@@ -40,6 +67,13 @@ int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
             return gi_fail(err, GI_EINVAL, "%s: unexpected text after the JSON document",
                            file);
         }
+    }
+    size_t nul = string_nul(text, used);
+    if (nul < used) {
+        cJSON_Delete(root);
+        line_col(text, nul, &line, &col);
+        return gi_fail(err, GI_EINVAL, "%s:%d:%d: a string holds a NUL character (\\u0000)",
+                       file, line, col);
     }
     if (!cJSON_IsObject(root)) {
         cJSON_Delete(root);

@@ -183,6 +183,14 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK(parse_doc("[1]", &doc, &err) == -1);
     GI_CHECK(parse_doc("{} x", &doc, &err) == -1);
     GI_CHECK(parse_doc("", &doc, &err) == -1);
+    /* A NUL in a string would cut it short where a name is checked. */
+    GI_CHECK(parse_doc("{\"name\": \"a\\u0000/../x\"}", &doc, &err) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json:1:12: a string holds a NUL") != NULL, "%s", err.msg);
+    GI_CHECK(parse_doc("{\"name\":\n \"\\\\u0000\", \"k\\u0000\": 1}", &doc, &err) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json:2:15:") != NULL, "%s", err.msg); /* the key's, not "\\u0000" */
+    GI_REQUIRE_OK(parse_doc("{\"name\": \"\\\\u0000 \\u0041\"}", &doc, &err));
+    GI_CHECK(strcmp(cJSON_GetObjectItem(doc, "name")->valuestring, "\\u0000 A") == 0);
+    cJSON_Delete(doc);
 
     GI_REQUIRE_OK(parse_doc("{\"n\": 1.5, \"i\": 3, \"s\": \"x\", \"big\": 1e999, "
                             "\"v\": [1, 2], \"o\": {\"k\": true}, \"dup\": 1, \"dup\": 2}",
