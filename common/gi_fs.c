@@ -185,6 +185,30 @@ int gi_mkdirs(const char *dir, gi_error *err)
     return rc;
 }
 
+int gi_output_dir_ready(const char *dir, gi_error *err)
+{
+    if (!*dir)
+        return gi_fail(err, GI_EINVAL, "an empty directory name (use . for this one)");
+    if (gi_mkdirs(dir, err))
+        return -1;
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return gi_fail(err, GI_EIO, "%s: %s", dir, strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return gi_fail(err, GI_EINVAL, "%s: not a directory", dir);
+    char *probe = gi_path_join(dir, ".gi-write-test.XXXXXX");
+    int fd = mkstemp(probe);
+    int rc = 0;
+    if (fd < 0) {
+        rc = gi_fail(err, GI_EIO, "%s: cannot write there: %s", dir, strerror(errno));
+    } else {
+        close(fd);
+        unlink(probe);
+    }
+    free(probe);
+    return rc;
+}
+
 char *gi_dirname(const char *path)
 {
     const char *slash = strrchr(path, '/');

@@ -34,6 +34,10 @@ void gi_fs_walk_fanout(const char *dir,
 
 /* mkdir -p. */
 int gi_mkdirs(const char *dir, gi_error *err);
+/* An output directory made (mkdir -p) and proved writable by creating and
+ * removing a file in it, so that a render finds out before it runs, not
+ * after: an empty name, a file in the way or no permission fail. */
+int gi_output_dir_ready(const char *dir, gi_error *err);
 /* Directory part of a path ("." if none), malloc'ed. */
 char *gi_dirname(const char *path);
 /* dir + "/" + name, unless name is absolute or dir is "" or "."; malloc'ed. */

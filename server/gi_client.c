@@ -180,7 +180,7 @@ static int parse_id(const char *s, uint64_t *id)
 static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
 {
     gi_error err;
-    if (gi_mkdirs(c->out_dir, &err))
+    if (gi_output_dir_ready(c->out_dir, &err))
         return fail_msg(1, "--out: %s", err.msg);
     const cJSON *outs = cJSON_GetObjectItemCaseSensitive(job, "outputs");
     int n = 0;
@@ -607,6 +607,12 @@ int gi_client_main(int argc, char **argv)
     if (needs_arg && strcmp(cmd, "submit") != 0 && parse_id(c.arg, &id))
         return fail_msg(2, "%s: \"%s\" is not a job id", cmd, c.arg);
     gi_error err;
+    /* Outputs are fetched at the end: an --out they cannot go to is said now,
+     * not after the job has run. */
+    int fetches = strcmp(cmd, "wait") == 0 || strcmp(cmd, "fetch") == 0 ||
+                  ((strcmp(cmd, "submit") == 0 || strcmp(cmd, "retry") == 0) && c.wait);
+    if (fetches && gi_output_dir_ready(c.out_dir, &err))
+        return fail_msg(gi_error_exit_status(&err), "--out: %s", err.msg);
     if (gi_http_url_parse(farm, &c.url, &err))
         return fail_msg(2, "%s", err.msg);
     gi_buf tok;

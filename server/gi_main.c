@@ -166,10 +166,10 @@ static int cmd_render(int argc, char **argv)
         gi_job_free(&job);
         return gi_error_exit_status(&err);
     }
-    if (gi_mkdirs(out_dir, &err)) {
+    if (gi_output_dir_ready(out_dir, &err)) {
         fprintf(stderr, "gi: --out: %s\n", err.msg);
         gi_job_free(&job);
-        return 1;
+        return gi_error_exit_status(&err);
     }
     job.out_dir = gi_xstrdup(out_dir);
     signal(SIGINT, on_signal);

@@ -161,7 +161,7 @@ static int relight(const relight_args *a, gi_error *err)
         p->relight_emissions = &em;
         /* No checkpoint: relighting is fast, and its state lives in memory. */
         gi_local_opts opts = {a->workers, a->progress, -1.0, 0};
-        if (gi_mkdirs(a->out, err))
+        if (gi_output_dir_ready(a->out, err))
             goto done;
         job.out_dir = gi_xstrdup(a->out);
         gi_local_summary sum;
@@ -197,7 +197,7 @@ static int relight(const relight_args *a, gi_error *err)
            "per set (slowest %.2f ms, %d thread%s); factorization loaded in %.1f ms\n",
            job.name, em.count, em.count == 1 ? "" : "s", f.n, f.k, total, total / em.count, worst,
            a->threads, a->threads == 1 ? "" : "s", t_load);
-    if (gi_mkdirs(a->out, err))
+    if (gi_output_dir_ready(a->out, err))
         goto done;
     rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
                               job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,

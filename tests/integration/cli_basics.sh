@@ -36,6 +36,17 @@ awk '/^mean/ { exit !($2 > 0.01 && $2 > $3 && $3 > $4) }' "$TMP/stats.txt" ||
     { cat "$TMP/stats.txt"; fail "the OBJ scene renders dark or with the wrong colours"; }
 ls "$TMP/out" | grep -q tmp && fail "temporary files left in the output directory"
 
+# An --out that cannot take the outputs is refused before anything runs.
+: >"$TMP/afile"
+for case in "$TMP/afile|not a directory" "|an empty directory name"; do
+    set +e
+    "$GI" render "$TMP/obj.json" --out "${case%%|*}" --progress none >/dev/null 2>"$TMP/out.err"
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] && grep -q "^gi: --out: .*${case#*|}" "$TMP/out.err" ||
+        { cat "$TMP/out.err"; fail "--out '${case%%|*}' exited $rc"; }
+done
+
 # SIGINT mid-render: exit 130, no output.
 write_job "$TMP/long.json" <<JOB
 {"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "image": {"width": 128, "height": 128},
