@@ -345,7 +345,7 @@ int gi_scene_load_json(const gi_asset_source *src, const char *name, const char 
     int rc = gi_jv_keys(&v, root, "", keys);
     if (rc == 0)
         rc = gi_jv_member_object(&v, root, "", "camera", 0, &cam) ||
-             gi_jv_member_object(&v, root, "", "materials", 1, &mats) ||
+             gi_jv_member_object(&v, root, "", "materials", 0, &mats) ||
              gi_jv_member_array(&v, root, "", "objects", 1, &objs) ||
              gi_jv_string(&v, root, "", "units", 0, &units) ||
              gi_jv_string(&v, root, "", "description", 0, &desc);
@@ -353,7 +353,7 @@ int gi_scene_load_json(const gi_asset_source *src, const char *name, const char 
         rc = gi_camera_parse(&v, cam, "camera", &out->camera);
         out->has_camera = rc == 0;
     }
-    if (rc == 0)
+    if (rc == 0 && mats) /* none: every object's mesh brings its own */
         rc = parse_materials(&v, &b, mats);
     if (rc == 0 && cJSON_GetArraySize(objs) == 0)
         rc = gi_jv_fail(&v, "objects", "the scene has no objects");

@@ -205,13 +205,13 @@ char *gi_farm_view_workers(gi_farm *f)
         cJSON_AddNumberToObject(o, "result_bytes", (double)c->result_bytes);
         cJSON_AddNumberToObject(o, "connected_seconds", floor(now - c->connected));
         cJSON_AddNumberToObject(o, "last_heard_seconds", floor((now - c->last_heard) * 10) / 10);
-        if (c->host) {
-            cJSON_AddNumberToObject(o, "consecutive_failures", c->host->consecutive_failures);
-            if (gi_farm_host_blocked(c->host, now))
-                cJSON_AddNumberToObject(o, "blocklisted_seconds", floor(c->host->blocked_until - now));
-            if (c->host->last_error[0])
-                cJSON_AddStringToObject(o, "last_error", c->host->last_error);
-        }
+        /* Every field always (0 and "" for none), as docs/farm.md lists them. */
+        const gi_farm_host *h = c->host;
+        int blocked = h && gi_farm_host_blocked(h, now);
+        cJSON_AddNumberToObject(o, "consecutive_failures", h ? h->consecutive_failures : 0);
+        cJSON_AddNumberToObject(o, "blocklisted_seconds",
+                                blocked ? floor(h->blocked_until - now) : 0);
+        cJSON_AddStringToObject(o, "last_error", h ? h->last_error : "");
         cJSON_AddItemToArray(a, o);
     }
     cJSON *o = cJSON_CreateObject();
@@ -265,15 +265,22 @@ char *gi_farm_view_metrics(gi_farm *f)
     mprintf(&b, "# HELP gi_farm_jobs Jobs by state.\n# TYPE gi_farm_jobs gauge\n");
     for (int s = 0; s < 5; s++)
         mprintf(&b, "gi_farm_jobs{state=\"%s\"} %zu\n", gi_fj_state_name((gi_fj_state)s), by_state[s]);
-    size_t active = 0, draining = 0, leased = 0;
+    /* The states of GET /api/v1/workers, for the workers it lists. */
+    static const char *const wstates[] = {"active", "silent", "draining", "blocklisted"};
+    size_t by_wstate[4] = {0}, leased = 0;
+    double now = gi_now();
     for (size_t i = 0; i < f->conn_count; i++) {
-        active += f->conns[i]->state == GI_FC_ACTIVE;
-        draining += f->conns[i]->state == GI_FC_DRAINING;
-        leased += f->conns[i]->lease_count;
+        const gi_farm_conn *c = f->conns[i];
+        leased += c->lease_count;
+        if (!c->have_hello || c->state == GI_FC_HELLO || c->state == GI_FC_AUTH)
+            continue;
+        const char *st = conn_state(f, c, now);
+        for (int k = 0; k < 4; k++)
+            by_wstate[k] += strcmp(st, wstates[k]) == 0;
     }
     mprintf(&b, "# HELP gi_farm_workers Worker connections by state.\n# TYPE gi_farm_workers gauge\n");
-    mprintf(&b, "gi_farm_workers{state=\"active\"} %zu\ngi_farm_workers{state=\"draining\"} %zu\n",
-            active, draining);
+    for (int k = 0; k < 4; k++)
+        mprintf(&b, "gi_farm_workers{state=\"%s\"} %zu\n", wstates[k], by_wstate[k]);
     gauge(&b, "gi_farm_tasks_leased", "Tasks leased to workers now.", (double)leased);
     gauge(&b, "gi_farm_asset_store_bytes", "Bytes in the asset store.", (double)f->store_bytes);
     gauge(&b, "gi_farm_uptime_seconds", "Seconds since gi-farmd started.", gi_now() - f->started);

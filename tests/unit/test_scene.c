@@ -84,6 +84,19 @@ GI_TEST(test_scene_shapes_transforms_and_mobile)
     gi_scene_free(&s);
 }
 
+GI_TEST(test_scene_of_meshes_needs_no_materials_block)
+{
+    gi_error err;
+    gi_scene s;
+    char text[1200];
+    snprintf(text, sizeof text,
+             "{\"objects\": [{\"name\": \"m\", \"mesh\": \"%s/tests/data/meshes/two_materials.obj\"}]}",
+             gi_test_srcdir());
+    GI_REQUIRE_OK(gi_test_load_scene_text("meshes.json", text, &s, &err));
+    GI_CHECK(s.object_count == 1 && s.material_count == 2 && s.total_power > 0);
+    gi_scene_free(&s);
+}
+
 typedef struct bad_case {
     const char *text, *expect;
 } bad_case;
