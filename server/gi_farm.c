@@ -223,16 +223,7 @@ void gi_farm_close(gi_farm *f)
     /* Jobs first: the connections' leases then belong to no job, and
      * hanging up fails no task (the checkpoints already hold the state). */
     gi_farm_jobs_free(f);
-    for (size_t i = 0; i < f->conn_count; i++) {
-        gi_farm_conn *c = f->conns[i];
-        if (c->fd >= 0) {
-            /* Flush what is queued (best effort), then hang up. */
-            gi_farm_conn_writable(f, c);
-            if (c->fd >= 0)
-                close(c->fd);
-            c->fd = -1;
-        }
-    }
+    gi_farm_conns_goodbye(f, 1.0);
     gi_farm_conns_reap(f);
     free(f->conns);
     for (size_t i = 0; i < f->host_count; i++)

@@ -14,6 +14,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <poll.h>
 #include <string.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -485,4 +486,45 @@ void gi_farm_conns_reap(gi_farm *f)
         free(c);
     }
     f->conn_count = k;
+}
+
+void gi_farm_conns_goodbye(gi_farm *f, double wait_s)
+{
+    struct pollfd *fds = gi_xcalloc(f->conn_count ? f->conn_count : 1, sizeof *fds);
+    size_t n = 0;
+    for (size_t i = 0; i < f->conn_count; i++) {
+        gi_farm_conn *c = f->conns[i];
+        if (c->fd < 0)
+            continue;
+        if (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING)
+            gi_outq_push(&c->out, GI_MSG_BYE, NULL, 0);
+        gi_outq_flush(&c->out, c->fd);
+        shutdown(c->fd, SHUT_WR);
+        fds[n++] = (struct pollfd){.fd = c->fd, .events = POLLIN};
+        c->fd = -1;
+    }
+    /* Closing with their frames unread would reset the connections: read
+     * and drop until each worker hangs up. */
+    double end = gi_now() + wait_s;
+    size_t open_count = n;
+    while (open_count > 0) {
+        double left = end - gi_now();
+        if (left <= 0 || poll(fds, n, (int)(left * 1000) + 1) <= 0)
+            break;
+        for (size_t i = 0; i < n; i++) {
+            if (fds[i].fd < 0 || !fds[i].revents)
+                continue;
+            char sink[4096];
+            ssize_t got = recv(fds[i].fd, sink, sizeof sink, MSG_DONTWAIT);
+            if (got > 0 || (got < 0 && (errno == EINTR || errno == EAGAIN)))
+                continue;
+            close(fds[i].fd);
+            fds[i].fd = -1;
+            open_count--;
+        }
+    }
+    for (size_t i = 0; i < n; i++)
+        if (fds[i].fd >= 0)
+            close(fds[i].fd);
+    free(fds);
 }

@@ -285,6 +285,10 @@ void gi_farm_conn_close(gi_farm *f, gi_farm_conn *c, gi_errcode code, const char
 void gi_farm_conns_tick(gi_farm *f);
 /* Removes connections marked closed (after the loop dispatched events). */
 void gi_farm_conns_reap(gi_farm *f);
+/* A stopping coordinator's goodbye: BYE to every worker and what was
+ * queued flushed (best effort), then up to wait_s for them to hang up,
+ * so that they hear it rather than a reset connection. Closes them all. */
+void gi_farm_conns_goodbye(gi_farm *f, double wait_s);
 int gi_farm_conn_wants_write(const gi_farm_conn *c);
 /* Sends the job's JOB frame once per connection. */
 void gi_farm_conn_send_job(gi_farm_conn *c, const gi_farm_job *j);

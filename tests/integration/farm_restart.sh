@@ -30,6 +30,8 @@ resumed=$(jnum "$id" resumed_merged)
 wait_merged "$id" 2 checkpoint
 stop_farmd "$TMP/farmd.log"
 grep -q "stopping: checkpointing running jobs" "$TMP/farmd.log" || fail "no checkpoint on SIGTERM"
+# The worker was told goodbye, not reset.
+wait_log "$TMP/worker.log" "the coordinator said goodbye"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
 wait_state "$id" done 120
