@@ -110,12 +110,12 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
     identity(job, want);
     int rc = 0;
     if (read_header(b.data, b.len, path, &r, &id, &root))
-        rc = gi_fail(err, GI_EINVAL, "%s: not a gi render checkpoint (remove it to start over)",
-                     path);
+        rc = gi_fail(err, GI_EINVAL,
+                     "%s: not a gi render checkpoint (run without --resume to start over)", path);
     else if (strcmp(id, want) != 0)
         rc = gi_fail(err, GI_EINVAL,
                      "%s: a checkpoint of another run (%s or its scene's files changed since); "
-                     "remove it to start over",
+                     "run without --resume to start over",
                      path, job->file);
     free(id);
     if (rc == 0) {
@@ -125,7 +125,7 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
         gi_error e;
         if (gi_jobrun_restore(jr, job, &rest, &e))
             rc = gi_fail(err, e.code == GI_EPROTO ? GI_EINVAL : e.code,
-                         "%s: %s; remove it to start over", path, e.msg);
+                         "%s: %s; run without --resume to start over", path, e.msg);
     }
     gi_buf_free(&b);
     if (rc) {
