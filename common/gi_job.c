@@ -255,6 +255,8 @@ char *gi_job_output_path(const gi_job *job, const char *file)
 
 void gi_job_note_output(gi_job *job, const char *kind, const char *path)
 {
+    if (job->on_output)
+        job->on_output(job->on_output_ctx, kind, path);
     if (job->written_count + 2 > (int)GI_ARRAY_LEN(job->written)) {
         job->written_more++;
         return;

@@ -55,6 +55,10 @@ struct gi_job {
     char *written[GI_JOB_MAX_OUTPUTS * 2];
     int written_count;
     int written_more; /* outputs written but not listed (an animation's frames) */
+    /* Optional: hears of every output as it is written (gi render's JSON
+     * progress lists them all, an animation's frames too). */
+    void (*on_output)(void *ctx, const char *kind, const char *path);
+    void *on_output_ctx;
 };
 
 /* Parses and validates a job document. `file` names it in messages. Does not

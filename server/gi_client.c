@@ -196,8 +196,11 @@ static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
         gi_buf b;
         gi_buf_init(&b);
         int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, dest);
+        const char *kind = strrchr(name, '.') ? strrchr(name, '.') + 1 : "";
         if (rc == 0)
-            printf("  %-4s %s\n", strrchr(name, '.') ? strrchr(name, '.') + 1 : "", dest);
+            printf("  %-4s %s\n", kind, dest);
+        if (rc == 0 && strcmp(c->progress, "json") == 0)
+            gi_progress_json_output(stderr, str(job, "name"), kind, dest);
         gi_buf_free(&b);
         free(dest);
         if (rc)
@@ -276,7 +279,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     sa.sa_handler = on_sigint;
     sigaction(SIGINT, &sa, &old);
     int rc;
-    double wait = POLL_MIN_S;
+    double wait = POLL_MIN_S, t_start = gi_now();
     for (;;) {
         cJSON *job = NULL;
         if ((rc = get_job(c, id, &job)) != 0)
@@ -315,6 +318,16 @@ static int wait_job(client *c, uint64_t id, int fetch)
             } else {
                 print_summary(id, job);
                 rc = fetch ? fetch_outputs(c, id, job) : 0;
+            }
+            if (mode == GI_PROGRESS_JSON) {
+                /* A done job whose outputs could not be fetched ends failed here. */
+                int done = strcmp(state, "done") == 0;
+                const cJSON *e = cJSON_GetObjectItemCaseSensitive(job, "error");
+                gi_progress_json_end(stderr, str(job, "name"), done && rc ? "failed" : state,
+                                     gi_now() - t_start,
+                                     !done ? str(e, "message")
+                                     : rc  ? "the outputs could not be fetched"
+                                           : NULL);
             }
             cJSON_Delete(job);
             break;

@@ -103,6 +103,11 @@ static void print_summary(const gi_job *job, const gi_local_summary *s)
         printf("  ... and %d more in %s\n", job->written_more, job->out_dir ? job->out_dir : ".");
 }
 
+static void json_output(void *ctx, const char *kind, const char *path)
+{
+    gi_progress_json_output(stderr, ((const gi_job *)ctx)->name, kind, path);
+}
+
 static int cmd_render(int argc, char **argv)
 {
     const char *job_path = NULL, *out_dir = "out", *progress = "auto", *workers_s = NULL;
@@ -175,7 +180,13 @@ static int cmd_render(int argc, char **argv)
     job.out_dir = gi_xstrdup(out_dir);
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
+    int json = opts.progress == GI_PROGRESS_JSON;
+    if (json) {
+        job.on_output = json_output;
+        job.on_output_ctx = &job;
+    }
     gi_local_summary summary;
+    double t0 = gi_now();
     int rc = gi_render_local(&job, &opts, &summary, &err);
     int status = 0;
     if (rc) {
@@ -184,6 +195,10 @@ static int cmd_render(int argc, char **argv)
     } else {
         print_summary(&job, &summary);
     }
+    if (json)
+        gi_progress_json_end(stderr, job.name,
+                             rc == 0 ? "done" : err.code == GI_ECANCEL ? "interrupted" : "failed",
+                             gi_now() - t0, rc ? err.msg : NULL);
     gi_job_free(&job);
     return status;
 }

@@ -5,6 +5,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 const char *gi_si(double v, char *buf, size_t n)
 {
     static const char *suffix[] = {" ", " k", " M", " G", " T"}; /* a unit follows */
@@ -182,4 +184,37 @@ void gi_progress_end(gi_progress *p)
         fflush(p->out);
         p->bar_drawn = 0;
     }
+}
+
+static void print_event(FILE *out, cJSON *o)
+{
+    char *text = cJSON_PrintUnformatted(o);
+    if (text)
+        fprintf(out, "%s\n", text);
+    fflush(out);
+    cJSON_free(text);
+    cJSON_Delete(o);
+}
+
+void gi_progress_json_output(FILE *out, const char *job, const char *kind, const char *path)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "event", "output");
+    cJSON_AddStringToObject(o, "job", job);
+    cJSON_AddStringToObject(o, "kind", kind);
+    cJSON_AddStringToObject(o, "path", path);
+    print_event(out, o);
+}
+
+void gi_progress_json_end(FILE *out, const char *job, const char *state, double elapsed_s,
+                          const char *error)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "event", "end");
+    cJSON_AddStringToObject(o, "job", job);
+    cJSON_AddStringToObject(o, "state", state);
+    cJSON_AddNumberToObject(o, "elapsed_s", floor(elapsed_s * 1000.0 + 0.5) / 1000.0);
+    if (error)
+        cJSON_AddStringToObject(o, "error", error);
+    print_event(out, o);
 }

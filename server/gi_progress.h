@@ -75,6 +75,15 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force);
 /* Clears the bar line (before other output). */
 void gi_progress_end(gi_progress *p);
 
+/* JSON mode's other events, one line each on out (for programs that follow
+ * a render to its end; paths and messages escaped):
+ *   {"event":"output","job":J,"kind":K,"path":P}   a file written or fetched
+ *   {"event":"end","job":J,"state":S,"elapsed_s":T[,"error":E]}  the last line;
+ *     S is done, failed, cancelled or interrupted, E says why when not done. */
+void gi_progress_json_output(FILE *out, const char *job, const char *kind, const char *path);
+void gi_progress_json_end(FILE *out, const char *job, const char *state, double elapsed_s,
+                          const char *error);
+
 /* "1.23 M" / "500 " style formatting of a number into buf, for a unit to
  * follow. */
 const char *gi_si(double v, char *buf, size_t n);

@@ -19,13 +19,18 @@ done
 
 "$GI" render "$TMP/obj.json" --workers 2 --out "$TMP/out" --progress json >"$TMP/summary.txt" 2>"$TMP/progress.txt" ||
     { cat "$TMP/progress.txt"; fail "render"; }
-# Every progress line is a JSON object with the fields a program needs.
+# Every progress line is a JSON object with the fields a program needs; every
+# output written has its event, and the last line says how the render ended.
 while read -r line; do
     case "$line" in
     '{"event":"progress","job":"obj",'*'"fraction":'*'"eta_s":'*) ;;
+    '{"event":"output","job":"obj","kind":"'*'","path":"'*) ;;
+    '{"event":"end","job":"obj","state":"done","elapsed_s":'*'}') ;;
     *) fail "not a JSON progress line: $line" ;;
     esac
 done <"$TMP/progress.txt"
+[ "$(grep -c '"event":"output"' "$TMP/progress.txt")" -eq 2 ] || fail "not one output event per file"
+tail -n 1 "$TMP/progress.txt" | grep -q '"event":"end"' || fail "the last JSON line is not the end"
 grep -q '"fraction":1.000000' "$TMP/progress.txt" || fail "no final progress line"
 grep -q "^obj: pt done in" "$TMP/summary.txt" || fail "no summary"
 grep -q "samples/s" "$TMP/summary.txt" || fail "summary has no rate"
