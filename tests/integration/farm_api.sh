@@ -80,6 +80,16 @@ set +e
 rc=$?
 set -e
 [ $rc -eq 1 ] && grep -q "cancelled" "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "gi wait on a cancelled job: $rc"; }
+# JSON progress: outputs fetched and the end, or the state it ended in.
+"$GI" wait "$hi" --out "$TMP/fetched2" --progress json >/dev/null 2>"$TMP/wait.json" || fail "gi wait done job"
+grep -q '^{"event":"output","job":"high","kind":"exr","path":"'"$TMP"'/fetched2/high.exr"}$' "$TMP/wait.json" &&
+    tail -n 1 "$TMP/wait.json" | grep -q '^{"event":"end","job":"high","state":"done","elapsed_s":[0-9.]*}$' ||
+    { cat "$TMP/wait.json"; fail "gi wait --progress json of a done job"; }
+set +e
+"$GI" wait "$id" --progress json >/dev/null 2>"$TMP/wait.json"
+set -e
+tail -n 1 "$TMP/wait.json" | grep -q '^{"event":"end","job":"long","state":"cancelled",.*"error":' ||
+    { cat "$TMP/wait.json"; fail "gi wait --progress json of a cancelled job"; }
 "$GI" cancel "$lo" | grep -q "removed" || fail "DELETE of an ended job removes it"
 [ "$(api "/api/v1/jobs/$lo" -o /dev/null -w '%{http_code}')" = 404 ] || fail "removed job still listed"
 
