@@ -1,7 +1,7 @@
 /* rad_relight: from a factorization and emission sets to radiosity and its
  * outputs, without the scene, the form factors or Embree. This is the
- * interactive use the thesis is about: `gi relight`, the end of a
- * radiosity job, and the farm's relight API all go through here.
+ * interactive use the thesis is about: `gi relight` and the end of a
+ * radiosity job go through here.
  *
  * Radiosity is kept in radiance units (W sr^-1 m^-2, like the scene's
  * emission and the path tracer's images): for diffuse surfaces radiosity is
@@ -66,8 +66,8 @@ int gi_rad_write_json(const char *path, const cJSON *doc, gi_error *err);
 /* The outputs of a relight, into `dir`: per set, "<ply stem>-<set>.ply"
  * (when ply is not NULL), and one report "<report stem>-relight.json"
  * (when report is not NULL; `job` names the job in it). note() (may be
- * NULL) hears of every file written. For `gi relight` and the farm's
- * relight API. */
+ * NULL) hears of every file written. For `gi relight`. Refuses (GI_EINVAL,
+ * nothing written) names that land on one file (gi_rad_outputs_distinct). */
 int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
                          double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
                          const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
