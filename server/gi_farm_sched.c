@@ -555,22 +555,20 @@ void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
 {
     for (size_t ci = 0; ci < f->conn_count; ci++) {
         gi_farm_conn *c = f->conns[ci];
-        int had = 0;
         for (size_t i = 0; i < c->lease_count;) {
-            if (c->leases[i].job_id == j->id) {
+            if (c->leases[i].job_id == j->id)
                 lease_take(c, i);
-                had = 1;
-            } else {
+            else
                 i++;
-            }
         }
         for (size_t i = 0; i < c->jobs_sent_count; i++)
             if (c->jobs_sent[i] == j->id) {
                 c->jobs_sent[i] = c->jobs_sent[--c->jobs_sent_count];
-                had = 1;
                 break;
             }
-        if (had && c->fd >= 0 && c->state != GI_FC_CLOSING) {
+        /* Every worker hears of it, not only those it was sent to: one that
+         * restarted since it held the job's batches removes them. */
+        if (c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING)) {
             gi_msg_cancel m = {j->id, GI_MSG_ALL_TASKS};
             gi_buf b;
             gi_buf_init(&b);

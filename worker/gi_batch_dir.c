@@ -125,3 +125,16 @@ int gi_batch_dir_sweep_where(const char *root, double max_age_s, int (*accept)(c
     path_test t = {accept};
     return sweep(root, max_age_s, NULL, accepted_path, &t);
 }
+
+static int of_job(const char *name, const char *path, void *ctx)
+{
+    (void)path;
+    char prefix[32];
+    int n = snprintf(prefix, sizeof prefix, "%llu-", (unsigned long long)*(const uint64_t *)ctx);
+    return is_job_dir_name(name) && strncmp(name, prefix, (size_t)n) == 0;
+}
+
+int gi_batch_dir_remove_job(const char *root, uint64_t job_id)
+{
+    return sweep(root, -1e300, NULL, of_job, &job_id);
+}

@@ -34,5 +34,9 @@ int gi_batch_dir_sweep(const char *root, double max_age_s, const char *const *ke
 /* The same for the directories under root whose path accept() takes (gi
  * render's batch roots in $TMPDIR). */
 int gi_batch_dir_sweep_where(const char *root, double max_age_s, int (*accept)(const char *path));
+/* Removes every directory of job job_id under root, whatever its job text
+ * (for a job that is over, which this process never loaded: a worker that
+ * restarted since it wrote them). Returns how many were removed. */
+int gi_batch_dir_remove_job(const char *root, uint64_t job_id);
 
 #endif

@@ -470,16 +470,19 @@ static void on_cancel(worker *w, const gi_frame *fr)
         }
     }
     if (all) {
-        /* The job is over on the coordinator: its batch files are useless. */
-        const job_def *d = def_find(w, m.job_id);
-        if (d) {
-            char *dir = def_batch_dir(w, d);
-            gi_error derr;
-            if (gi_batch_dir_remove(dir, &derr))
-                gi_warn("%s", derr.msg);
-            free(dir);
-        }
+        /* The job is over on the coordinator, which tells every worker: its
+         * batch files are useless, this run's and any an earlier run of this
+         * worker kept (it restarted since; its directory bears the id). */
+        int had = def_find(w, m.job_id) != NULL;
+        int removed = gi_batch_dir_remove_job(w->batch_root, m.job_id);
         def_drop(w, m.job_id);
+        if (!had && !queued && !running) {
+            if (removed)
+                gi_info("job %llu is over: removed the batch files an earlier run of this "
+                        "worker kept",
+                        (unsigned long long)m.job_id);
+            return; /* not this run's job */
+        }
     }
     gi_info("job %llu %s: %u queued and %u running tasks dropped", (unsigned long long)m.job_id,
             all ? "is over" : "task cancelled", queued, running);

@@ -72,9 +72,15 @@ id=$("$GI" submit "$TMP/long.json" 2>/dev/null) || fail "submit long"
 wait_state "$id" running 30
 n=0
 while [ "$(jnum "$id" merged)" -lt 4 ]; do n=$((n + 1)); [ $n -lt 300 ] || fail "no progress"; sleep 0.05; done
+# Batch files of this job id left by an earlier run of the worker (another
+# job text, hence another hash) go with it too.
+mkdir -p "$TMP/cache1/batches/$id-0123456789abcdef" "$TMP/cache1/batches/${id}0-0123456789abcdef"
+: >"$TMP/cache1/batches/$id-0123456789abcdef/b0.f0"
 "$GI" cancel "$id" | grep -q "job $id cancelled" || fail "gi cancel"
 [ "$(jstate "$id")" = cancelled ] || fail "not cancelled"
 wait_log "$TMP/w1.log" "job $id is over"
+[ ! -e "$TMP/cache1/batches/$id-0123456789abcdef" ] || fail "an earlier run's batch files of job $id stay"
+[ -d "$TMP/cache1/batches/${id}0-0123456789abcdef" ] || fail "job ${id}0's batch directory was removed"
 set +e
 "$GI" wait "$id" --progress none >/dev/null 2>"$TMP/wait.log"
 rc=$?

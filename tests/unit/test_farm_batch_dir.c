@@ -98,6 +98,21 @@ GI_TEST(test_farm_batch_dir_lifetime)
     gi_batch_dir_touch(d);
     GI_CHECK(gi_batch_dir_sweep(root, GI_BATCH_DIR_MAX_AGE_S, NULL) == 0);
     GI_CHECK(access(d, F_OK) == 0);
+
+    /* A job that is over: all its directories, whatever their text and age,
+     * and no other job's (12 is not 1 or 120). */
+    char *e = gi_batch_dir_path(root, 1, "e"), *g = gi_batch_dir_path(root, 120, "g");
+    GI_REQUIRE_OK(gi_mkdirs(a, &err));
+    GI_REQUIRE_OK(gi_mkdirs(e, &err));
+    GI_REQUIRE_OK(gi_mkdirs(g, &err));
+    put_file(a, "batch-0.gids");
+    GI_CHECK(gi_batch_dir_remove_job(root, 12) == 2);
+    GI_CHECK(access(a, F_OK) != 0 && access(b, F_OK) != 0);
+    GI_CHECK(access(e, F_OK) == 0 && access(g, F_OK) == 0 && access(d, F_OK) == 0 &&
+             access(other, F_OK) == 0);
+    GI_CHECK(gi_batch_dir_remove_job(root, 12) == 0);
+    free(e);
+    free(g);
     free(a);
     free(a2);
     free(b);
