@@ -25,6 +25,10 @@ start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
 wait_state "$id" running 60
 resumed=$(jnum "$id" resumed_merged)
 [ "$resumed" -ge "$seen" ] || fail "resumed with $resumed merged, the checkpoint had $seen"
+# Its progress counts what the checkpoint brought, not from 0.
+progress=$(api "/api/v1/jobs/$id" | grep -o '"progress":[0-9.e-]*' | cut -d: -f2)
+awk -v p="$progress" -v r="$resumed" -v t="$total" 'BEGIN { exit !(p > 0.5 * r / t) }' ||
+    fail "restored at $resumed of $total tasks, the job says $progress done"
 
 # 2. A clean stop later on: SIGTERM checkpoints everything merged so far.
 wait_merged "$id" 2 checkpoint
