@@ -132,7 +132,7 @@ int main(int argc, char **argv)
     gi_detp_anim_update_in in = {s0.v, s0.count, &tr, s.objects[m].first_triangle,
                                  s.objects[m].triangle_count, old_pose,
                                  gi_detp_object_sphere(&s, m), alone, GI_DETP_AC_SECOND_HIT, eps,
-                                 1};
+                                 1, 0};
     gi_detp_update_stats st = {0};
     t0 = gi_bench_now();
     if (!alone || gi_detp_anim_update(&in, &next, &o, &n, &st, &err)) {

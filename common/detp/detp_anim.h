@@ -109,6 +109,8 @@ typedef struct gi_detp_anim_update_in {
     /* Time tests and retraces apart (the stats' seconds_*): two clock
      * reads per retrace, about 1% of a small mobile's frame. */
     int timed;
+    /* The mobile did not move (gi_detp_anim_still): every segment stays. */
+    int still;
 } gi_detp_anim_update_in;
 
 typedef struct gi_detp_update_stats {

@@ -11,9 +11,9 @@ const char *const gi_detp_anim_update_names[] = {"incremental", "full", NULL};
 
 #define ANIM_PATH "detp.animation"
 
-/* Unit quaternion of a rotation by `degrees` about `axis` (not zero):
- * (cos(h), sin(h) * axis / |axis|), h = degrees / 2, with w >= 0 so that
- * every rotation has one representative. */
+/* Unit quaternion of a rotation by `degrees` about `axis` (not zero), as
+ * written: (cos(h), sin(h) * axis / |axis|), h = degrees / 2 (w < 0 past
+ * 180 degrees: 270 and -90 are one rotation but two spins). */
 static void axis_angle_quat(const double axis[3], double degrees, double q[4])
 {
     if (degrees == 0.0) {
@@ -27,12 +27,37 @@ static void axis_angle_quat(const double axis[3], double degrees, double q[4])
     q[1] = axis[0] * s;
     q[2] = axis[1] * s;
     q[3] = axis[2] * s;
-    if (q[0] < 0.0)
-        for (int i = 0; i < 4; i++)
-            q[i] = -q[i];
 }
 
-static int parse_rotate(gi_detp_anim_key *k, const cJSON *obj, const char *path, gi_jv *v)
+/* The key's rotation from the quaternion as written, with w >= 0 so that
+ * every rotation has one representative. */
+static void set_rotation(gi_detp_anim_key *k, const double written[4])
+{
+    double sign = written[0] < 0.0 ? -1.0 : 1.0;
+    for (int i = 0; i < 4; i++)
+        k->rotation[i] = sign * written[i];
+}
+
+/* Two consecutive keys' rotations, as written, must be at most 180 degrees
+ * apart: slerp takes the short way, so a 270-degree turn would play as 90
+ * degrees the other way, and 0 to 360 as no turn at all. */
+static int check_turn(const double prev[4], const double cur[4], int i, gi_jv *v)
+{
+    double d = prev[0] * cur[0] + prev[1] * cur[1] + prev[2] * cur[2] + prev[3] * cur[3];
+    if (d >= 0.0)
+        return 0;
+    double apart = 360.0 / GI_PI * acos(d < -1.0 ? -1.0 : d);
+    char path[96], rpath[128];
+    gi_json_index_path(path, sizeof path, ANIM_PATH ".keyframes", i);
+    return gi_jv_fail(v, gi_json_path(rpath, sizeof rpath, path, "rotate"),
+                      "%.1f degrees from keyframes[%d]'s rotation as written: the pose turns "
+                      "the short way between keys, so it would turn %.1f degrees the other way; "
+                      "add keys in between (at most 180 degrees apart)",
+                      apart, i - 1, 360.0 - apart);
+}
+
+static int parse_rotate(gi_detp_anim_key *k, double written[4], const cJSON *obj,
+                        const char *path, gi_jv *v)
 {
     static const char *const keys[] = {"axis", "degrees", NULL};
     const cJSON *rot;
@@ -51,11 +76,14 @@ static int parse_rotate(gi_detp_anim_key *k, const cJSON *obj, const char *path,
     if (!(n2 > 0.0) || !isfinite(n2))
         return gi_jv_fail(v, gi_json_path(apath, sizeof apath, rpath, "axis"),
                           "the axis is zero (or its length is not finite)");
-    axis_angle_quat(axis, degrees, k->rotation);
+    axis_angle_quat(axis, degrees, written);
+    set_rotation(k, written);
     return 0;
 }
 
-static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, gi_jv *v)
+/* Key i; written: its rotation as written (the identity without one). */
+static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, double written[4],
+                     gi_jv *v)
 {
     static const char *const keys[] = {"frame", "translate", "rotate", "scale", NULL};
     gi_detp_anim_key *k = &a->keys[i];
@@ -64,6 +92,8 @@ static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, gi_jv *v)
     gi_json_path(fpath, sizeof fpath, path, "frame");
     memset(k, 0, sizeof *k);
     k->rotation[0] = 1.0;
+    written[0] = 1.0;
+    written[1] = written[2] = written[3] = 0.0;
     k->scale = 1.0;
     int64_t frame = 0;
     if (gi_jv_object(v, obj, path) || gi_jv_keys(v, obj, path, keys) ||
@@ -81,7 +111,7 @@ static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, gi_jv *v)
     char spath[128];
     gi_json_path(spath, sizeof spath, path, "scale");
     if (gi_jv_vec3d(v, obj, path, "translate", 0, -1e15, 1e15, k->translate) ||
-        parse_rotate(k, obj, path, v) ||
+        parse_rotate(k, written, obj, path, v) ||
         gi_jv_number(v, obj, path, "scale", 0, -INFINITY, 1e6, &k->scale))
         return -1;
     if (!(k->scale > 0.0))
@@ -128,10 +158,12 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
                           GI_DETP_ANIM_MAX_KEYS);
     int i = 0;
     const cJSON *it;
+    double prev[4] = {1.0, 0.0, 0.0, 0.0}, cur[4];
     cJSON_ArrayForEach(it, arr)
     {
-        if (parse_key(a, i, it, v))
+        if (parse_key(a, i, it, cur, v) || (i > 0 && check_turn(prev, cur, i, v)))
             return -1;
+        memcpy(prev, cur, sizeof prev);
         i++;
     }
     a->key_count = (uint32_t)n;
@@ -225,6 +257,14 @@ static void slerp(const double a[4], const double b[4], double t, double out[4])
         out[i] *= inv;
 }
 
+/* (1 - t) a + t b, not a + t (b - a): exact at both ends; and a itself
+ * when a == b, so that a pose held between equal keys is the very same
+ * pose (a frame that does not move changes nothing, gi_detp_anim_still). */
+static double mix(double a, double b, double t)
+{
+    return a == b ? a : (1.0 - t) * a + t * b;
+}
+
 static gi_mat4 key_matrix(const gi_detp_anim_params *a, const gi_detp_anim_key *k)
 {
     return gi_detp_anim_matrix(a->pivot, k->translate, k->rotation, k->scale);
@@ -262,10 +302,17 @@ void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *ou
     const gi_detp_anim_key *k0 = &k[lo], *k1 = &k[hi];
     double t = (double)(frame - k0->frame) / (double)(k1->frame - k0->frame);
     double tr[3], q[4];
-    /* (1 - t) a + t b, not a + t (b - a): exact at both ends. */
     for (int i = 0; i < 3; i++)
-        tr[i] = (1.0 - t) * k0->translate[i] + t * k1->translate[i];
-    double s = (1.0 - t) * k0->scale + t * k1->scale;
+        tr[i] = mix(k0->translate[i], k1->translate[i], t);
+    double s = mix(k0->scale, k1->scale, t);
     slerp(k0->rotation, k1->rotation, t, q);
     *out = gi_detp_anim_matrix(a->pivot, tr, q, s);
+}
+
+int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame)
+{
+    gi_mat4 before, now;
+    gi_detp_anim_pose(a, frame - 1, &before);
+    gi_detp_anim_pose(a, frame, &now);
+    return frame > 0 && memcmp(&before, &now, sizeof now) == 0;
 }

@@ -77,6 +77,10 @@ int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *
  * vertices). At a key's frame it is exactly that key's pose; an all-default
  * pose is exactly the identity. Frames past the last key hold it. */
 void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *out);
+/* 1 if the mobile does not move into `frame` (>= 1): its pose is the very
+ * same as at frame - 1 (a held shot, frames before the first key or after
+ * the last, equal keys), so nothing of the frame before changes. */
+int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame);
 
 /* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
  * and scale about `pivot` (what gi_detp_anim_pose builds; for tests). */

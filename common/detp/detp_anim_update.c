@@ -130,6 +130,15 @@ int gi_detp_anim_update_path(const gi_detp_anim_update_in *in, const gi_detp_seg
     uint32_t m0 = in->mobile_first_tri, mn = in->mobile_tri_count;
     int changed = 0;
     st->paths++;
+    if (in->still) {
+        /* The scene is the one the path was traced in: no hit can differ
+         * (and retracing a hit on the mobile would only draw new random
+         * numbers: a held shot would flicker). */
+        st->segments += n;
+        if (keep_unchanged)
+            append(out, path, n);
+        return 0;
+    }
     for (size_t k = 0; k < n; k++) {
         const gi_detp_segment *g = &path[k];
         st->segments++;

@@ -477,6 +477,7 @@ static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
     in->mobile_scene = gi_rt_object_scene(&ctx->rt, a->object, err);
     in->artifact = p->artifact;
     in->eps = p->extent_eps;
+    in->still = gi_detp_anim_still(&p->anim, f);
     return in->mobile_scene ? 0 : -1;
 }
 

@@ -83,6 +83,23 @@ for f in 0001 0002 0003 0004 0005; do
         fail "open scene, frame $f: incremental differs from the full recompute"
 done
 
+# Held poses (before the first key, between equal keys, after the last):
+# nothing is retraced and the frames are the same bits, no flicker.
+sed -e 's/"frames": 6,/"frames": 7,/' \
+    -e 's/{"frame": 0, "translate": \[0, 0, 0\]}/{"frame": 1, "translate": [0, 0, 0]}, {"frame": 3, "translate": [0, 0, 0]}/' \
+    -e 's/{"frame": 5, "translate": \[1.2, 0, 0.2\]}/{"frame": 5, "translate": [1.2, 0, 0.2]}/' \
+    -e 's/"outputs": {"bin": "v.bin"}/"outputs": {"bin": "v.bin", "exr": "i.exr", "json": "r.json"}/' \
+    "$TMP/open-job.json" >"$TMP/held.json"
+grep -q '"frame": 3' "$TMP/held.json" || fail "held job not made"
+render "$TMP/held.json" "$TMP/held" 2
+for pair in 0000:0001 0001:0002 0002:0003 0005:0006; do
+    a=${pair%:*} b=${pair#*:}
+    cmp "$TMP/held/v.$a.bin" "$TMP/held/v.$b.bin" && cmp "$TMP/held/i.$a.exr" "$TMP/held/i.$b.exr" ||
+        fail "held frames $a and $b differ"
+    grep -q '"paths_retraced":[[:space:]]*0,' "$TMP/held/r.$b.json" || fail "held frame $b retraced paths"
+done
+if cmp -s "$TMP/held/v.0003.bin" "$TMP/held/v.0004.bin"; then fail "moving frames 3 and 4 are the same"; fi
+
 # The frames differ (the sphere moves), and later frames retraced a part.
 if cmp -s "$TMP/w1/v.0000.bin" "$TMP/w1/v.0005.bin"; then fail "frames 0 and 5 are the same"; fi
 for f in 0001 0003 0005; do

@@ -186,7 +186,7 @@ static int update(anim *a, uint32_t f, gi_detp_mobile_pose old_pose,
                                  o->triangle_count, old_pose,
                                  gi_detp_object_sphere(&a->s, a->mob),
                                  gi_rt_object_scene(&a->rt, a->mob, err),
-                                 GI_DETP_AC_SECOND_HIT, a->eps, 0};
+                                 GI_DETP_AC_SECOND_HIT, a->eps, 0, 0};
     if (!in.mobile_scene)
         return -1;
     return gi_detp_anim_update(&in, next, old_list, new_list, st, err);

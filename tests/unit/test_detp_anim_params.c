@@ -123,6 +123,18 @@ GI_TEST(test_detp_anim_parse_bad)
         {ANIM("\"keyframes\": [{\"frame\": 0}], \"mobile_estimator\": \"octree\""),
          "detp.animation.mobile_estimator: \"octree\" is not one of"},
         {"{\"animation\": 3}", "detp.animation: expected an object"},
+        /* Rotations as written more than 180 degrees apart: the pose would
+         * turn the short way, not as written. */
+        {ANIM("\"keyframes\": [{\"frame\": 0}, {\"frame\": 2, \"rotate\": {\"axis\": [0, 1, 0],"
+              " \"degrees\": 270}}]"),
+         "detp.animation.keyframes[1].rotate: 270.0 degrees from keyframes[0]'s rotation as "
+         "written: the pose turns the short way between keys, so it would turn 90.0 degrees"},
+        {ANIM("\"keyframes\": [{\"frame\": 0, \"rotate\": {\"axis\": [0, 0, 1], \"degrees\": -10}},"
+              " {\"frame\": 5, \"rotate\": {\"axis\": [0, 0, 1], \"degrees\": 350}}]"),
+         "keyframes[1].rotate: 360.0 degrees from keyframes[0]'s"},
+        {ANIM("\"keyframes\": [{\"frame\": 0}, {\"frame\": 1, \"rotate\": {\"axis\": [0, 1, 0],"
+              " \"degrees\": 90}}, {\"frame\": 2, \"rotate\": {\"axis\": [0, -1, 0], \"degrees\": 100}}]"),
+         "keyframes[2].rotate: 190.0 degrees from keyframes[1]'s"},
         /* Combinations the incremental update refuses. */
         {"{\"estimator\": \"photon_map\", \"animation\": {\"object\": \"ball\", \"frames\": 2,"
          " \"keyframes\": [{\"frame\": 0}]}}",
@@ -180,7 +192,7 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
         " {\"frame\": 14, \"translate\": [30, 4, -2], \"scale\": 2,"
         "  \"rotate\": {\"axis\": [0, 1, 0], \"degrees\": 90}},"
         " {\"frame\": 20, \"rotate\": {\"axis\": [0, 1, 0], \"degrees\": 170}},"
-        " {\"frame\": 24, \"rotate\": {\"axis\": [0, -3, 0], \"degrees\": 170}}]}}",
+        " {\"frame\": 24, \"rotate\": {\"axis\": [0, 3, 0], \"degrees\": 190}}]}}",
         p, &err));
     gi_detp_anim_params *a = &p->anim;
     a->pivot[0] = 100.0, a->pivot[1] = 50.0, a->pivot[2] = -20.0;
@@ -216,8 +228,9 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
     want = expected_pose(a->pivot, 14, 0.8, -0.4, 0, 1, 0, 18, 1.2);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
 
-    /* 170 degrees to -170 degrees about y (the second axis is -y, so +170
-     * about -y): the short way passes through 180, not back through 0. */
+    /* 170 degrees to 190 (-170) about y: through 180, not back through 0
+     * (written as 170 about -y, the keys would be 340 degrees apart as
+     * written: refused, see test_detp_anim_parse_bad). */
     gi_detp_anim_pose(a, 22, &m);
     want = expected_pose(a->pivot, 0, 0, 0, 0, 1, 0, 180, 1);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
@@ -259,6 +272,21 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
         gi_detp_anim_pose(a, f, &m);
         GI_CHECK_MSG(memcmp(&m, &id, sizeof m) == 0, "frame %u is not the identity", f);
     }
+
+    /* Still frames: held before the first key, between equal keys (the
+     * translation mixed exactly) and after the last; moving between them. */
+    GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 2, \"translate\": [0.1, 0.2, 0.3]},"
+                                  " {\"frame\": 9, \"translate\": [0.1, 0.2, 0.3], \"scale\": 1.1},"
+                                  " {\"frame\": 12, \"translate\": [0.1, 0.2, 0.3], \"scale\": 1.1},"
+                                  " {\"frame\": 15, \"translate\": [0.7, 0.2, 0.3], \"scale\": 1.1}]"),
+                             p, &err));
+    a->pivot[0] = 1.0 / 3.0, a->pivot[1] = 0.7, a->pivot[2] = -0.1;
+    for (uint32_t f = 1; f < 24; f++) {
+        int want_still = f <= 2 || (f > 9 && f <= 12) || f > 15;
+        GI_CHECK_MSG(gi_detp_anim_still(a, f) == want_still, "frame %u: still %d", f,
+                     gi_detp_anim_still(a, f));
+    }
+    GI_CHECK(!gi_detp_anim_still(a, 0));
     free(p);
 }
 
