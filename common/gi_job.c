@@ -245,9 +245,12 @@ char *gi_job_output_path(const gi_job *job, const char *file)
     /* NAME.EXT -> NAME.0003.EXT (a name without extension gets .0003). */
     const char *dot = strrchr(file, '.');
     size_t stem = dot && dot != file ? (size_t)(dot - file) : strlen(file);
+    int width = 4;
+    for (uint32_t last = job->frame_count ? job->frame_count - 1 : 0; last >= 10000; last /= 10)
+        width++;
     size_t n = strlen(file) + 16;
     char *framed = gi_xmalloc(n);
-    snprintf(framed, n, "%.*s.%04u%s", (int)stem, file, job->frame, file + stem);
+    snprintf(framed, n, "%.*s.%0*u%s", (int)stem, file, width, job->frame, file + stem);
     char *path = gi_path_join(dir, framed);
     free(framed);
     return path;

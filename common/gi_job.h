@@ -40,9 +40,10 @@ struct gi_job {
     void *params; /* method parameters (method->parse) */
     /* Animations write one set of outputs per frame: while in_frame is
      * set, output paths get the frame number before the extension
-     * (NAME.0003.exr). */
+     * (NAME.0003.exr), zero-padded to 4 digits or as many as the last of
+     * frame_count frames has, so that the names sort in frame order. */
     int in_frame;
-    uint32_t frame;
+    uint32_t frame, frame_count;
 
     /* Coordinator side. */
     char *out_dir;

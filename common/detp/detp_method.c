@@ -304,6 +304,7 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
             return -1;
         job->in_frame = 1;
         job->frame = detp_anim_frame(st);
+        job->frame_count = p->anim.frames;
     }
     detp_vertex_data v;
     if (detp_vertex_data_compute(job, st, &v, err))
@@ -448,6 +449,7 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
         if (rc == 0) {
             job->in_frame = 1;
             job->frame = detp_anim_frame(st);
+            job->frame_count = p->anim.frames;
         }
     }
     if (rc == 0 && hash) {

@@ -108,3 +108,38 @@ GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
     for (int i = 0; i < job.written_count; i++)
         free(job.written[i]);
 }
+
+/* An animation's output names: the frame before the extension, padded to
+ * four digits or as many as its last frame has, so they sort in order. */
+GI_TEST(test_frame_output_names_sort_in_frame_order)
+{
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.out_dir = "o";
+    char *p = gi_job_output_path(&job, "a.exr");
+    GI_CHECK(strcmp(p, "o/a.exr") == 0);
+    free(p);
+    job.in_frame = 1;
+    job.frame = 3;
+    job.frame_count = 24;
+    p = gi_job_output_path(&job, "a.exr");
+    GI_CHECK_MSG(strcmp(p, "o/a.0003.exr") == 0, "%s", p);
+    free(p);
+    job.frame_count = 10000; /* frames 0 to 9999 */
+    p = gi_job_output_path(&job, "noext");
+    GI_CHECK_MSG(strcmp(p, "o/noext.0003") == 0, "%s", p);
+    free(p);
+    job.frame_count = 10002;
+    p = gi_job_output_path(&job, "a.exr");
+    GI_CHECK_MSG(strcmp(p, "o/a.00003.exr") == 0, "%s", p);
+    free(p);
+    job.frame = 10001;
+    p = gi_job_output_path(&job, "a.exr");
+    GI_CHECK_MSG(strcmp(p, "o/a.10001.exr") == 0, "%s", p);
+    free(p);
+    job.frame_count = 100000;
+    job.frame = 7;
+    p = gi_job_output_path(&job, "a.b.png");
+    GI_CHECK_MSG(strcmp(p, "o/a.b.00007.png") == 0, "%s", p);
+    free(p);
+}
