@@ -5,9 +5,10 @@
  * (/var/tmp when TMPDIR is unset: batches can be large and /tmp is often
  * in memory), created before the pool starts and removed when the render
  * ends, unless it was stopped from outside with work to resume (below).
- * A render touches its batch root every minute; roots of this user's
- * renders left untouched for GI_BATCH_DIR_MAX_AGE_S are removed when the
- * next one starts. Affinity keys are ignored here: one host, one disk.
+ * A render touches its batch root every minute; when the next one starts
+ * it removes this user's roots that cannot be resumed and those left
+ * untouched for GI_BATCH_DIR_MAX_AGE_S (gi_batch_root.h). Affinity keys are
+ * ignored here: one host, one disk.
  *
  * Checkpoints (gi_local_checkpoint.h) are written every few seconds (on a
  * thread of their own: the loop only encodes them) and when the render is
@@ -28,6 +29,7 @@
 #include <unistd.h>
 
 #include "gi_batch_dir.h"
+#include "gi_batch_root.h"
 #include "gi_file_writer.h"
 #include "gi_local_checkpoint.h"
 #include "gi_log.h"
@@ -79,38 +81,19 @@ static const gi_buf *on_asset(void *user, const char *hash)
 }
 
 /* Creates the render's private batch root (an absolute path: a checkpoint
- * names it, and --resume may run from another directory). */
-static int batch_root_make(local_run *lr, gi_error *err)
+ * names it, and --resume may run from another directory), after removing
+ * the roots of earlier renders that are of no use (gi_batch_root.h). */
+static int batch_root_make(local_run *lr, const char *ckpt, gi_error *err)
 {
     const char *tmp = getenv("TMPDIR");
     if (!tmp || !tmp[0])
         tmp = "/var/tmp";
-    /* Roots of renders killed or never resumed: a live render touches its
-     * own every minute, and a stopped one's is kept this long for --resume. */
-    char *abs_tmp = realpath(tmp, NULL); /* roots are named by absolute paths */
-    int swept = abs_tmp ? gi_batch_dir_sweep_where(abs_tmp, GI_BATCH_DIR_MAX_AGE_S,
-                                                   gi_local_batch_root_ours)
-                        : 0;
-    free(abs_tmp);
+    int swept = gi_batch_root_sweep(tmp, GI_BATCH_DIR_MAX_AGE_S);
     if (swept)
-        gi_info("removed %d batch directories of renders stopped over 3 days ago from %s", swept,
-                tmp);
-    size_t n = strlen(tmp) + 32;
-    lr->batch_root = gi_xmalloc(n);
-    snprintf(lr->batch_root, n, "%s/gi-render-XXXXXX", tmp);
-    if (!mkdtemp(lr->batch_root)) {
-        gi_fail(err, GI_EIO, "%s: cannot create a temporary directory for batch files: %s "
-                "(set TMPDIR to a writable directory)", lr->batch_root, strerror(errno));
-        free(lr->batch_root);
-        lr->batch_root = NULL;
-        return -1;
-    }
-    char *abs = realpath(lr->batch_root, NULL);
-    if (abs) {
-        free(lr->batch_root);
-        lr->batch_root = abs;
-    }
-    return 0;
+        gi_info("removed %d batch director%s of earlier renders that cannot be resumed from %s",
+                swept, swept == 1 ? "y" : "ies", tmp);
+    lr->batch_root = gi_batch_root_make(tmp, ckpt, err);
+    return lr->batch_root ? 0 : -1;
 }
 
 static void batch_root_remove(local_run *lr)
@@ -281,6 +264,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             if (root && gi_local_batch_root_ours(root)) {
                 lr.batch_root = root; /* the stopped render's batches, read again */
                 root = NULL;
+                gi_batch_root_claim(lr.batch_root, ckpt);
                 if (dir_has_entries(lr.batch_root))
                     fprintf(stderr, "gi: %s: reading the photon batches kept in %s\n",
                             job->name, lr.batch_root);
@@ -307,7 +291,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
      * job's image after one photon batch) plan many more. */
     int workers = opts->workers > 0 ? opts->workers : default_workers();
     summary->workers = workers;
-    if (!lr.batch_root && batch_root_make(&lr, err)) {
+    if (!lr.batch_root && batch_root_make(&lr, checkpoints ? ckpt : NULL, err)) {
         gi_jobrun_free(&lr.jr);
         free(ckpt);
         return -1;

@@ -178,8 +178,11 @@ static int cmd_render(int argc, char **argv)
         return gi_error_exit_status(&err);
     }
     job.out_dir = gi_xstrdup(out_dir);
+    /* Stopped, not killed: a checkpoint is written and the batches kept for
+     * --resume. SIGHUP too: the terminal or ssh session went away. */
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
+    signal(SIGHUP, on_signal);
     int json = opts.progress == GI_PROGRESS_JSON;
     if (json) {
         job.on_output = json_output;

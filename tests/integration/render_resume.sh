@@ -8,8 +8,9 @@
 # is clear. A checkpoint of an edited job is refused; a finished render
 # leaves no checkpoint behind; a render that starts over in place of a
 # stopped one removes the batches that one kept, and a render removes the
-# batch roots of renders stopped over 3 days ago. Then a pt still,
-# interrupted and resumed the same way.
+# batch roots of renders stopped over 3 days ago, and at once those of
+# renders killed before any checkpoint. SIGHUP stops a render as SIGINT
+# does. Then a pt still, interrupted and resumed the same way.
 . "$(dirname "$0")/lib.sh"
 mkdir -p "$TMP/tmp"
 export TMPDIR="$TMP/tmp"
@@ -129,6 +130,35 @@ start_and_stop "$TMP/over" INT
 grep -q "this run starts over" "$TMP/over-again.log" || fail "starting over did not warn"
 same_as_ref "$TMP/over" "started over"
 [ "$(batch_roots)" -eq 0 ] || fail "starting over left the stopped render's batch root"
+
+# SIGHUP (the terminal went away) stops a render like SIGINT: resumable.
+start_and_stop "$TMP/hup" HUP
+[ "$(batch_roots)" -eq 1 ] || fail "no batch root kept after SIGHUP"
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/hup" --progress none --resume \
+    >"$TMP/hup-resume.log" 2>&1 || { cat "$TMP/hup-resume.log"; fail "resume after SIGHUP"; }
+grep -q "reading the photon batches kept in" "$TMP/hup-resume.log" || fail "SIGHUP's batches not read"
+same_as_ref "$TMP/hup" "resumed after SIGHUP"
+
+# Killed before its first checkpoint: nothing can resume its batches, so
+# the next render (of anything, anywhere) removes them at once.
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/early" --progress none \
+    --checkpoint 0 >"$TMP/early.log" 2>&1 &
+pid=$!
+n=0
+until ls "$TMPDIR"/gi-render-*/*/b* >/dev/null 2>&1; do
+    n=$((n + 1))
+    [ $n -lt 600 ] || { cat "$TMP/early.log"; fail "the early render wrote no batch"; }
+    sleep 0.05
+done
+kill -KILL $pid
+wait $pid 2>/dev/null || true
+[ ! -e "$TMP/early/.job.checkpoint" ] || fail "a checkpoint was written with --checkpoint 0"
+[ "$(batch_roots)" -eq 1 ] || fail "the killed render left $(batch_roots) batch roots, not 1"
+GI_LOG=info "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/after" --progress none \
+    >"$TMP/after.log" 2>&1 || { cat "$TMP/after.log"; fail "render after an early kill"; }
+grep -q "removed 1 batch directory of earlier renders that cannot be resumed" "$TMP/after.log" ||
+    { cat "$TMP/after.log"; fail "the orphaned batch root was not reported removed"; }
+[ "$(batch_roots)" -eq 0 ] || fail "the batch root of a render killed before its first checkpoint stays"
 
 # A still: pt, interrupted among its passes.
 write_job "$TMP/pt.json" <<JOB

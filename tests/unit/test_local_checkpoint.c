@@ -5,8 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include "gi_batch_dir.h"
+#include "gi_batch_root.h"
 #include "gi_buf.h"
 #include "gi_fs.h"
 #include "gi_local_checkpoint.h"
@@ -80,4 +83,59 @@ GI_TEST(test_local_batch_root_ours)
     rmdir(other);
     rmdir(open_dir);
     unlink(link);
+}
+
+/* Makes root's owner record name a process that is gone (a child that
+ * exited) and the checkpoint ckpt ("" for none). */
+static void dead_owner(const char *root, const char *ckpt)
+{
+    pid_t pid = fork();
+    if (pid == 0)
+        _exit(0);
+    waitpid(pid, NULL, 0);
+    char rec[1200], path[700];
+    snprintf(rec, sizeof rec, "gi-render-owner 1\n%ld 12345\n%s\n", (long)pid, ckpt);
+    snprintf(path, sizeof path, "%s/.owner", root);
+    gi_error err;
+    GI_CHECK_OK(gi_write_file_atomic(path, rec, strlen(rec), &err));
+}
+
+/* The sweep a render starts with: roots whose render is alive stay; those
+ * whose render is gone go, unless a checkpoint names them; those without
+ * an owner record (an older gi's) wait for the age rule. */
+GI_TEST(test_batch_root_sweep_removes_what_cannot_be_resumed)
+{
+    char base[512], tmp[600], ckpt[700];
+    GI_REQUIRE(realpath(gi_test_tmpdir(), base) != NULL);
+    snprintf(tmp, sizeof tmp, "%s/roots", base);
+    snprintf(ckpt, sizeof ckpt, "%s/.job.checkpoint", base);
+    GI_REQUIRE(mkdir(tmp, 0700) == 0);
+    gi_error err;
+    char *live = gi_batch_root_make(tmp, NULL, &err), *named = gi_batch_root_make(tmp, ckpt, &err);
+    char *orphan = gi_batch_root_make(tmp, NULL, &err), *bare = gi_batch_root_make(tmp, NULL, &err);
+    GI_REQUIRE(live && named && orphan && bare);
+    GI_CHECK(strncmp(live, tmp, strlen(tmp)) == 0 && gi_local_batch_root_ours(live));
+    char path[700];
+    snprintf(path, sizeof path, "%s/.owner", bare);
+    GI_CHECK(unlink(path) == 0);
+    dead_owner(named, ckpt);
+    dead_owner(orphan, "");
+    put_checkpoint(ckpt, 2, named, 0);
+    GI_CHECK(gi_batch_root_sweep(tmp, GI_BATCH_DIR_MAX_AGE_S) == 1);
+    GI_CHECK(access(orphan, F_OK) != 0);
+    GI_CHECK(access(live, F_OK) == 0 && access(named, F_OK) == 0 && access(bare, F_OK) == 0);
+    /* The checkpoint replaced by one of another render's: nothing can
+     * resume that root any more. */
+    put_checkpoint(ckpt, 2, "/var/tmp/gi-render-other", 0);
+    GI_CHECK(gi_batch_root_sweep(tmp, GI_BATCH_DIR_MAX_AGE_S) == 1);
+    GI_CHECK(access(named, F_OK) != 0 && access(live, F_OK) == 0 && access(bare, F_OK) == 0);
+    /* A resumed render claims the root it reads: alive again, it stays. */
+    dead_owner(live, "");
+    gi_batch_root_claim(live, ckpt);
+    GI_CHECK(gi_batch_root_sweep(tmp, GI_BATCH_DIR_MAX_AGE_S) == 0 && access(live, F_OK) == 0);
+    GI_CHECK_OK(gi_batch_dir_remove(tmp, &err));
+    free(live);
+    free(named);
+    free(orphan);
+    free(bare);
 }
