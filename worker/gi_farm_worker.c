@@ -895,7 +895,9 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
     if (gi_asset_cache_open(&w.cache, o->cache_dir, o->cache_max, err))
         return -1;
     w.batch_root = o->batch_dir ? gi_xstrdup(o->batch_dir) : gi_path_join(o->cache_dir, "batches");
-    if (gi_mkdirs(w.batch_root, err)) {
+    /* Proved writable now: found at the first task, it would fail every
+     * task sent here and get the host blocklisted with no word to a user. */
+    if (gi_output_dir_ready(w.batch_root, err)) {
         gi_error_prefix(err, "batch directory");
         gi_asset_cache_close(&w.cache);
         free(w.batch_root);

@@ -33,6 +33,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "gi_fs.h"
 #include "gi_rng.h"
 
 #define PI 3.14159265358979323846
@@ -387,6 +388,11 @@ int main(int argc, char **argv)
             seed = strtoull(argv[4], NULL, 10);
         else if (argc != 3)
             return usage();
+        gi_error err;
+        if (gi_mkdirs(argv[2], &err)) {
+            fprintf(stderr, "gi_scenegen: %s\n", err.msg);
+            return 1;
+        }
         return tree(argv[2], seed);
     }
     if (argc == 6 && strcmp(argv[1], "cornell-mobile") == 0 && strcmp(argv[4], "--radius") == 0) {

@@ -19,6 +19,14 @@ if "$WORKER" --connect "$WADDR" --procs 1 --cache "$TMP/c0" --secret-file "$TMP/
     >"$TMP/wrong.log" 2>&1; then fail "a worker with the wrong secret was accepted"; fi
 grep -q "authentication failed" "$TMP/wrong.log" || { cat "$TMP/wrong.log"; fail "the worker was not told"; }
 logged "refused .*authentication failed: the worker does not know the farm secret"
+# A batch directory it cannot write: the worker says so at start (exit 2),
+# not at its first task.
+: >"$TMP/not-a-dir"
+st=0
+"$WORKER" --connect "$WADDR" --procs 1 --cache "$TMP/c0" --secret-file "$TMP/secret" --once \
+    --batch-dir "$TMP/not-a-dir" >"$TMP/batchdir.log" 2>&1 || st=$?
+[ $st -eq 2 ] && grep -q "batch directory: .*not-a-dir: not a directory" "$TMP/batchdir.log" ||
+    { cat "$TMP/batchdir.log"; fail "a worker with a file as its batch directory: exit $st"; }
 
 # Malformed frames, before and after authenticating.
 peer() {
