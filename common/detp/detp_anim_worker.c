@@ -795,6 +795,10 @@ int detp_anim_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
         detp_batch_remove(dir, h.batch);
     }
     encode_result(w, a, &h, result);
-    ctx->stats.samples = h.photons;
+    /* Photons traced: all of them at frame 0 (or when the batch was
+     * regenerated), then only the paths retraced: the rates in a render's
+     * summary are of work done, not of photons merely tested. */
+    ctx->stats.samples =
+        h.frame == 0 || h.regenerated_frames ? h.photons + h.paths_retraced : h.paths_retraced;
     return 0;
 }
