@@ -11,10 +11,10 @@
  * metrics, answered with ERROR when the socket still works, and ends only
  * that connection. */
 #include <errno.h>
+#include <poll.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <poll.h>
 #include <string.h>
 #include <sys/socket.h>
 #include <unistd.h>
