@@ -147,6 +147,36 @@ static void remove_kept_batch_root(const char *ckpt)
     free(root);
 }
 
+/* A resumed animation writes only the frames from its checkpoint's on:
+ * says so if outputs of the frames before it are gone (deleted since the
+ * stop), since nothing will write them again. */
+static void warn_missing_frames(gi_job *job)
+{
+    if (!job->in_frame || job->frame == 0)
+        return;
+    uint32_t at = job->frame, missing = 0;
+    char *first = NULL;
+    for (uint32_t f = 0; f < at; f++) {
+        job->frame = f;
+        for (int i = 0; i < job->output_count; i++) {
+            char *path = gi_job_output_path(job, job->outputs[i].file);
+            if (access(path, F_OK) != 0 && missing++ == 0) {
+                first = path;
+                path = NULL;
+            }
+            free(path);
+        }
+    }
+    job->frame = at;
+    if (missing)
+        gi_warn("%s: %u output%s of the frames before frame %u %s missing (%s%s); they were "
+                "written before the stop and are not written again: render without --resume "
+                "to make every frame",
+                job->name, missing, missing == 1 ? "" : "s", at, missing == 1 ? "is" : "are",
+                first, missing > 1 ? ", ..." : "");
+    free(first);
+}
+
 /* The periodic checkpoint being written (on a thread of its own, so that
  * results are merged meanwhile), if any, completed, waiting for it if
  * wait: 1 when none is left, 0 while it is still being written. */
@@ -261,6 +291,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             if (at.frames > 1)
                 fprintf(stderr, ", at frame %u of %u", at.frame, at.frames);
             fprintf(stderr, ")\n");
+            warn_missing_frames(job);
             if (root && gi_local_batch_root_ours(root)) {
                 lr.batch_root = root; /* the stopped render's batches, read again */
                 root = NULL;

@@ -134,9 +134,13 @@ same_as_ref "$TMP/over" "started over"
 # SIGHUP (the terminal went away) stops a render like SIGINT: resumable.
 start_and_stop "$TMP/hup" HUP
 [ "$(batch_roots)" -eq 1 ] || fail "no batch root kept after SIGHUP"
+rm "$TMP/hup/v.0001.bin" # a frame written before the stop, deleted since: said so
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/hup" --progress none --resume \
     >"$TMP/hup-resume.log" 2>&1 || { cat "$TMP/hup-resume.log"; fail "resume after SIGHUP"; }
 grep -q "reading the photon batches kept in" "$TMP/hup-resume.log" || fail "SIGHUP's batches not read"
+grep -q "1 output of the frames before frame [0-9]* is missing (.*/hup/v.0001.bin)" "$TMP/hup-resume.log" ||
+    { cat "$TMP/hup-resume.log"; fail "a deleted frame output was not reported"; }
+cp "$TMP/ref/v.0001.bin" "$TMP/hup/"
 same_as_ref "$TMP/hup" "resumed after SIGHUP"
 
 # Killed before its first checkpoint: nothing can resume its batches, so
