@@ -70,6 +70,16 @@ start_and_stop() {
     [ -s "$1/.job.checkpoint" ] || { cat "$1.log"; fail "$1: no checkpoint after $2"; }
 }
 
+# resume_kept DIR WHAT: resumes the render stopped in DIR (by WHAT), which
+# must read the photon batches the stopped one kept; its log is DIR-resume.log.
+resume_kept() {
+    "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$1" --progress none --resume \
+        >"$1-resume.log" 2>&1 || { cat "$1-resume.log"; fail "resume after $2"; }
+    grep -q "resuming from" "$1-resume.log" || fail "the resume after $2 did not say so"
+    grep -q "reading the photon batches kept in" "$1-resume.log" ||
+        { cat "$1-resume.log"; fail "the resume after $2 did not read the kept batches"; }
+}
+
 # batch_roots: how many render batch roots TMPDIR holds.
 batch_roots() { ls "$TMPDIR" | grep -c '^gi-render-' || true; }
 
@@ -87,11 +97,7 @@ st=0
 [ $st -eq 2 ] || { cat "$TMP/edit.log"; fail "resuming an edited job: exit $st, expected 2"; }
 grep -q "a checkpoint of another run" "$TMP/edit.log" || { cat "$TMP/edit.log"; fail "edited job"; }
 cp "$TMP/job.orig" "$TMP/job.json"
-"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/int" --progress none --resume \
-    >"$TMP/int-resume.log" 2>&1 || { cat "$TMP/int-resume.log"; fail "resume after SIGINT"; }
-grep -q "resuming from" "$TMP/int-resume.log" || fail "the resume did not say so"
-grep -q "reading the photon batches kept in" "$TMP/int-resume.log" ||
-    { cat "$TMP/int-resume.log"; fail "the resume did not read the kept batches"; }
+resume_kept "$TMP/int" SIGINT
 same_as_ref "$TMP/int" "resumed after SIGINT"
 [ ! -e "$TMP/int/.job.checkpoint" ] || fail "a resumed render left its checkpoint"
 # Every frame found its batches stored: none was traced again.
@@ -135,9 +141,7 @@ same_as_ref "$TMP/over" "started over"
 start_and_stop "$TMP/hup" HUP
 [ "$(batch_roots)" -eq 1 ] || fail "no batch root kept after SIGHUP"
 rm "$TMP/hup/v.0001.bin" # a frame written before the stop, deleted since: said so
-"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/hup" --progress none --resume \
-    >"$TMP/hup-resume.log" 2>&1 || { cat "$TMP/hup-resume.log"; fail "resume after SIGHUP"; }
-grep -q "reading the photon batches kept in" "$TMP/hup-resume.log" || fail "SIGHUP's batches not read"
+resume_kept "$TMP/hup" SIGHUP
 grep -q "1 output of the frames before frame [0-9]* is missing (.*/hup/v.0001.bin)" "$TMP/hup-resume.log" ||
     { cat "$TMP/hup-resume.log"; fail "a deleted frame output was not reported"; }
 cp "$TMP/ref/v.0001.bin" "$TMP/hup/"

@@ -216,6 +216,23 @@ static void drive(gi_jobrun *jr, int stop_after)
     }
 }
 
+/* A coordinator's restart: jr checkpointed, thrown away with its job, and
+ * restored into a fresh job of method m. */
+static int reload(gi_jobrun *jr, gi_job *job, const gi_method *m, gi_error *err)
+{
+    gi_buf ck;
+    gi_buf_init(&ck);
+    int rc = gi_jobrun_checkpoint(jr, &ck, err);
+    gi_jobrun_free(jr);
+    gi_job_free(job);
+    memset(job, 0, sizeof *job);
+    job->method = m;
+    if (rc == 0)
+        rc = gi_jobrun_restore(jr, job, &ck, err);
+    gi_buf_free(&ck);
+    return rc;
+}
+
 GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
 {
     fake_state ref;
@@ -235,16 +252,8 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
         uint64_t merged_before = jr.merge_next;
         gi_progress_at before, after;
         gi_jobrun_progress(&jr, 0.0, &before);
-        gi_buf ck;
-        gi_buf_init(&ck);
-        GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
         (void)lost;
-        gi_jobrun_free(&jr);
-        gi_job_free(&job);
-
-        memset(&job, 0, sizeof job);
-        job.method = &fake_method;
-        GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+        GI_REQUIRE_OK(reload(&jr, &job, &fake_method, &err));
         GI_CHECK(jr.merge_next == merged_before);
         /* It says as much done as before it stopped, not 0%. */
         gi_jobrun_progress(&jr, 0.0, &after);
@@ -259,7 +268,6 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
             GI_CHECK(st->order[i] == (uint64_t)i);
         gi_jobrun_free(&jr);
         gi_job_free(&job);
-        gi_buf_free(&ck);
     }
     /* A damaged checkpoint is refused. */
     gi_job job;
@@ -397,12 +405,26 @@ static int frames_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return 0;
 }
 
-GI_TEST(test_jobrun_holds_only_the_tasks_not_yet_merged)
+static int frames_save(const gi_job *job, gi_buf *out, gi_error *err);
+static int frames_load(gi_job *job, gi_reader *in, gi_error *err);
+static void frames_progress(const gi_job *job, gi_job_progress *out);
+
+/* A job of 40 frames of 300 tasks each. */
+static gi_method frames_method(void)
 {
     gi_method m = fake_method;
     m.plan = frames_plan;
     m.merge = frames_merge;
     m.finish = frames_finish;
+    m.save = frames_save;
+    m.load = frames_load;
+    m.progress = frames_progress;
+    return m;
+}
+
+GI_TEST(test_jobrun_holds_only_the_tasks_not_yet_merged)
+{
+    gi_method m = frames_method();
     gi_job job;
     gi_jobrun jr;
     gi_error err;
@@ -483,13 +505,7 @@ static void frames_progress(const gi_job *job, gi_job_progress *out)
 
 GI_TEST(test_jobrun_restored_mid_frame_keeps_its_progress)
 {
-    gi_method m = fake_method;
-    m.plan = frames_plan;
-    m.merge = frames_merge;
-    m.finish = frames_finish;
-    m.save = frames_save;
-    m.load = frames_load;
-    m.progress = frames_progress;
+    gi_method m = frames_method();
     gi_job job;
     gi_jobrun jr;
     gi_error err;
@@ -498,14 +514,7 @@ GI_TEST(test_jobrun_restored_mid_frame_keeps_its_progress)
     gi_progress_at before, after;
     gi_jobrun_progress(&jr, 0.0, &before);
     GI_CHECK_MSG(fabs(before.fraction - 7.4 / 40) < 1e-12, "%.6f", before.fraction);
-    gi_buf ck;
-    gi_buf_init(&ck);
-    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
-    gi_jobrun_free(&jr);
-    gi_job_free(&job);
-    memset(&job, 0, sizeof job);
-    job.method = &m;
-    GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+    GI_REQUIRE_OK(reload(&jr, &job, &m, &err));
     gi_jobrun_progress(&jr, 0.0, &after);
     GI_CHECK_MSG(fabs(after.fraction - before.fraction) < 1e-12 && after.frame == 7,
                  "%.6f then %.6f (frame %u)", before.fraction, after.fraction, after.frame);
@@ -513,7 +522,6 @@ GI_TEST(test_jobrun_restored_mid_frame_keeps_its_progress)
     GI_CHECK(jr.finished);
     gi_jobrun_free(&jr);
     gi_job_free(&job);
-    gi_buf_free(&ck);
 }
 
 GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
