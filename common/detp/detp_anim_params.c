@@ -353,8 +353,10 @@ void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *ou
 
 int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame)
 {
+    if (frame == 0)
+        return 0;
     gi_mat4 before, now;
     gi_detp_anim_pose(a, frame - 1, &before);
     gi_detp_anim_pose(a, frame, &now);
-    return frame > 0 && memcmp(&before, &now, sizeof now) == 0;
+    return memcmp(&before, &now, sizeof now) == 0;
 }
