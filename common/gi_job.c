@@ -120,7 +120,7 @@ int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi
     if (gi_jv_string(&v, root, "", "name", 0, &name) ||
         gi_jv_string(&v, root, "", "description", 0, &desc) ||
         gi_jv_string(&v, root, "", "scene", 1, &scene) ||
-        gi_jv_int(&v, root, "", "seed", 0, 0, (int64_t)1 << 53, &seed) ||
+        gi_jv_int(&v, root, "", "seed", 0, 0, ((int64_t)1 << 53) - 1, &seed) ||
         gi_jv_member_object(&v, root, "", "image", 0, &image) ||
         gi_jv_member_object(&v, root, "", "camera", 0, &camera) ||
         gi_jv_member_object(&v, root, "", "outputs", 0, &outputs) ||

@@ -131,8 +131,8 @@ static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info
         if (!finite3(mt->rho) || !finite3(mt->emission))
             return bad(err, name, "non-finite material value");
         for (int c = 0; c < 3; c++)
-            if (mt->rho[c] < 0.0f || mt->rho[c] >= 1.0f || mt->emission[c] < 0.0f)
-                return bad(err, name, "material reflectance outside [0, 1) or negative emission");
+            if (mt->rho[c] < 0.0f || mt->rho[c] > 1.0f || mt->emission[c] < 0.0f)
+                return bad(err, name, "material reflectance outside [0, 1] or negative emission");
     }
     md->object_count = gi_get_u32(r);
     if (r->failed || md->object_count == 0 || md->object_count > MAX_NAMES ||

@@ -51,6 +51,8 @@ static void small(gi_rad_model *md, gi_rad_factor *f, gi_error *err)
 
 static const gi_rad_file_info small_info = {"2mf", 1, 2};
 
+static void expect_bad(const uint8_t *data, size_t len, const char *what, int line);
+
 GI_TEST(test_rad_factorization_file_round_trip)
 {
     gi_error err;
@@ -81,6 +83,17 @@ GI_TEST(test_rad_factorization_file_round_trip)
     GI_REQUIRE_OK(gi_rad_file_read(path, &info, &md2, &f2, &err));
     gi_rad_model_free(&md2);
     gi_rad_factor_free(&f2);
+    /* A white of albedo 1, which a scene allows, loads; above 1 does not. */
+    md.materials[0].rho[1] = 1.0f;
+    gi_buf_reset(&a);
+    gi_rad_file_encode(&small_info, &md, &f, &a);
+    GI_CHECK_OK(gi_rad_file_decode(a.data, a.len, "t.fact", &info, &md2, &f2, &err));
+    gi_rad_model_free(&md2);
+    gi_rad_factor_free(&f2);
+    md.materials[0].rho[1] = 1.001f;
+    gi_buf_reset(&a);
+    gi_rad_file_encode(&small_info, &md, &f, &a);
+    expect_bad(a.data, a.len, "reflectance outside [0, 1]", __LINE__);
     gi_buf_free(&a);
     gi_buf_free(&b);
     gi_rad_model_free(&md);
