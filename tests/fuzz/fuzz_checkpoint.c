@@ -200,7 +200,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_error_clear(&err);
     if (data[0] & 0x80) {
         memset(&jr, 0, sizeof jr); /* freed whatever the restore did, as gi_local does */
-        if (gi_write_file_atomic(local_path, data + 1, size - 1, &err))
+        /* Plainly written: gi_write_file_atomic's fsync, once an input, stalled a
+         * run past the timeout on a busy disk. */
+        FILE *f = fopen(local_path, "wb");
+        if (!f || (size > 1 && fwrite(data + 1, 1, size - 1, f) != size - 1) || fclose(f) != 0)
             abort();
         char *root = gi_local_checkpoint_batch_root(local_path), *restored_root = NULL;
         int rc = gi_local_checkpoint_restore(&jr, &job, local_path, &restored_root, &err);
