@@ -107,7 +107,8 @@ static void batch_root_remove(local_run *lr)
     lr->batch_root = NULL;
 }
 
-/* 1 if dir holds anything (a job's batch directory). */
+/* 1 if dir holds a job's batch directory (not only its owner record,
+ * .owner: nothing else there starts with a dot). */
 static int dir_has_entries(const char *dir)
 {
     DIR *d = opendir(dir);
@@ -116,7 +117,7 @@ static int dir_has_entries(const char *dir)
     struct dirent *e;
     int any = 0;
     while (!any && (e = readdir(d)) != NULL)
-        any = strcmp(e->d_name, ".") != 0 && strcmp(e->d_name, "..") != 0;
+        any = e->d_name[0] != '.';
     closedir(d);
     return any;
 }

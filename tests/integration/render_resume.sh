@@ -188,6 +188,8 @@ done
 kill -INT $pid
 wait $pid && fail "the pt render finished before its SIGINT"
 [ ! -e "$TMP/pt/pt.exr" ] || fail "an interrupted still wrote its image"
+[ "$(batch_roots)" -eq 0 ] || fail "a stopped pt render (no batches) kept a batch root"
+grep -q "photon batches" "$TMP/pt.log" && fail "a stopped pt render spoke of photon batches"
 "$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt" --progress none --resume \
     >"$TMP/pt-resume.log" 2>&1 || { cat "$TMP/pt-resume.log"; fail "pt resume"; }
 cmp "$TMP/pt-ref/pt.exr" "$TMP/pt/pt.exr" || fail "pt: the resumed image differs"
