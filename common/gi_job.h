@@ -49,6 +49,9 @@ struct gi_job {
     char *out_dir;
     gi_scene scene;
     int scene_loaded;
+    /* Loaded by a worker (gi_worker_ctx_load): what a check only tells the
+     * user (warnings) is said once, by the coordinator, not by every child. */
+    int on_worker;
     gi_manifest manifest;   /* name -> hash of every file the scene read */
     gi_asset_store *assets; /* their bytes, plus blobs methods publish */
     void *state;            /* method accumulators (method->plan .. release) */

@@ -1,7 +1,6 @@
 /* gi_batch_root: gi render's private batch roots and their owner records. */
 #include "gi_batch_root.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -132,29 +131,19 @@ static int orphaned(const char *root)
     return orphan;
 }
 
+/* A root that is ours and of no use: removed whatever its age. */
+static int ours_and_orphaned(const char *root)
+{
+    return gi_local_batch_root_ours(root) && orphaned(root);
+}
+
 int gi_batch_root_sweep(const char *tmp, double max_age_s)
 {
     char *abs_tmp = realpath(tmp, NULL); /* roots are named by absolute paths */
     if (!abs_tmp)
         return 0;
-    int removed = 0;
-    DIR *d = opendir(abs_tmp);
-    for (struct dirent *e; d && (e = readdir(d)) != NULL;) {
-        if (strncmp(e->d_name, "gi-render-", 10) != 0)
-            continue;
-        char *root = gi_path_join(abs_tmp, e->d_name);
-        gi_error err;
-        if (gi_local_batch_root_ours(root) && orphaned(root)) {
-            if (gi_batch_dir_remove(root, &err))
-                gi_warn("%s", err.msg);
-            else
-                removed++;
-        }
-        free(root);
-    }
-    if (d)
-        closedir(d);
-    removed += gi_batch_dir_sweep_where(abs_tmp, max_age_s, gi_local_batch_root_ours);
+    int removed = gi_batch_dir_sweep_where(abs_tmp, -1e300, ours_and_orphaned) +
+                  gi_batch_dir_sweep_where(abs_tmp, max_age_s, gi_local_batch_root_ours);
     free(abs_tmp);
     return removed;
 }

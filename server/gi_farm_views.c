@@ -167,6 +167,12 @@ char *gi_farm_view_jobs(gi_farm *f)
     return print(o);
 }
 
+/* A worker past its handshake: what GET /api/v1/workers and /metrics list. */
+static int listed(const gi_farm_conn *c)
+{
+    return c->have_hello && c->state != GI_FC_HELLO && c->state != GI_FC_AUTH;
+}
+
 static const char *conn_state(const gi_farm *f, const gi_farm_conn *c, double now)
 {
     if (gi_farm_host_blocked(c->host, now))
@@ -187,7 +193,7 @@ char *gi_farm_view_workers(gi_farm *f)
     cJSON *a = cJSON_CreateArray();
     for (size_t i = 0; i < f->conn_count; i++) {
         const gi_farm_conn *c = f->conns[i];
-        if (!c->have_hello || c->state == GI_FC_HELLO || c->state == GI_FC_AUTH)
+        if (!listed(c))
             continue;
         cJSON *o = cJSON_CreateObject();
         cJSON_AddNumberToObject(o, "id", (double)c->id);
@@ -272,7 +278,7 @@ char *gi_farm_view_metrics(gi_farm *f)
     for (size_t i = 0; i < f->conn_count; i++) {
         const gi_farm_conn *c = f->conns[i];
         leased += c->lease_count;
-        if (!c->have_hello || c->state == GI_FC_HELLO || c->state == GI_FC_AUTH)
+        if (!listed(c))
             continue;
         const char *st = conn_state(f, c, now);
         for (int k = 0; k < 4; k++)

@@ -151,6 +151,8 @@ static int relight(const relight_args *a, gi_error *err)
     if (rc || (rc = gi_rad_emissions_check(&em, &md, a->emissions, err)))
         goto done;
     rc = -1;
+    if (gi_output_dir_ready(a->out, err))
+        goto done;
     if (images) {
         /* The method renders the tiles (and writes every output) in relight
          * mode: it solves, publishes, and plans only image tiles. */
@@ -161,8 +163,6 @@ static int relight(const relight_args *a, gi_error *err)
         p->relight_emissions = &em;
         /* No checkpoint: relighting is fast, and its state lives in memory. */
         gi_local_opts opts = {a->workers, a->progress, -1.0, 0};
-        if (gi_output_dir_ready(a->out, err))
-            goto done;
         job.out_dir = gi_xstrdup(a->out);
         gi_local_summary sum;
         double t1 = now_ms();
@@ -197,8 +197,6 @@ static int relight(const relight_args *a, gi_error *err)
            "per set (slowest %.2f ms, %d thread%s); factorization loaded in %.1f ms\n",
            job.name, em.count, em.count == 1 ? "" : "s", f.n, f.k, total, total / em.count, worst,
            a->threads, a->threads == 1 ? "" : "s", t_load);
-    if (gi_output_dir_ready(a->out, err))
-        goto done;
     rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
                               job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,
                               NULL, err);

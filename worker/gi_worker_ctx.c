@@ -25,6 +25,7 @@ int gi_worker_ctx_load(gi_worker_ctx *ctx, uint64_t job_id, const char *file,
     ctx->source.fetch = fetch;
     ctx->source.fetch_ctx = fctx;
     gi_asset_source src = gi_manifest_source_as_source(&ctx->source);
+    ctx->job.on_worker = 1;
     if (gi_job_load_scene(&ctx->job, &src, err))
         goto fail;
     if (gi_rt_create(&ctx->rt, &ctx->job.scene, err))

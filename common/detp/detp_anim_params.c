@@ -173,45 +173,6 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
     return 0;
 }
 
-static gi_mat4 key_matrix(const gi_detp_anim_params *a, const gi_detp_anim_key *k);
-
-/* A key that puts the mobile wholly outside the box of the scene's other
- * objects is most likely a slip (a translate in the wrong units, a sign):
- * said, not refused (an object may fly over an open scene). */
-static void warn_keys_outside(const gi_detp_anim_params *a, const gi_scene *s, const char *file,
-                              gi_vec3 lo, gi_vec3 hi)
-{
-    gi_vec3 slo = {INFINITY, INFINITY, INFINITY}, shi = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint32_t o = 0; o < s->object_count; o++) {
-        if (o == a->object_index)
-            continue;
-        const gi_object *ob = &s->objects[o];
-        for (uint32_t i = ob->first_vertex; i < ob->first_vertex + ob->vertex_count; i++) {
-            slo = gi_min_v3(slo, s->positions[i]);
-            shi = gi_max_v3(shi, s->positions[i]);
-        }
-    }
-    if (!(slo.x <= shi.x))
-        return; /* nothing else in the scene */
-    for (uint32_t k = 0; k < a->key_count; k++) {
-        gi_mat4 m = key_matrix(a, &a->keys[k]);
-        gi_vec3 plo = {INFINITY, INFINITY, INFINITY}, phi = {-INFINITY, -INFINITY, -INFINITY};
-        for (int c = 0; c < 8; c++) {
-            gi_vec3 corner = {c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
-            gi_vec3 p = gi_mat4_point(&m, corner);
-            plo = gi_min_v3(plo, p);
-            phi = gi_max_v3(phi, p);
-        }
-        if (phi.x < slo.x || plo.x > shi.x || phi.y < slo.y || plo.y > shi.y || phi.z < slo.z ||
-            plo.z > shi.z) {
-            gi_warn("%s: " ANIM_PATH ".keyframes[%u]: at frame %u the mobile lies wholly "
-                    "outside the box of the scene's other objects ([%g, %g, %g] to [%g, %g, %g])",
-                    file, k, a->keys[k].frame, slo.x, slo.y, slo.z, shi.x, shi.y, shi.z);
-            return; /* one is enough to look at the keys again */
-        }
-    }
-}
-
 int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *file,
                          gi_error *err)
 {
@@ -242,7 +203,6 @@ int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *
     a->pivot[0] = 0.5 * ((double)lo.x + (double)hi.x);
     a->pivot[1] = 0.5 * ((double)lo.y + (double)hi.y);
     a->pivot[2] = 0.5 * ((double)lo.z + (double)hi.z);
-    warn_keys_outside(a, s, file, lo, hi);
     return 0;
 }
 
@@ -359,4 +319,40 @@ int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame)
     gi_detp_anim_pose(a, frame - 1, &before);
     gi_detp_anim_pose(a, frame, &now);
     return memcmp(&before, &now, sizeof now) == 0;
+}
+
+void gi_detp_anim_warn_keys(const gi_detp_anim_params *a, const gi_scene *s, const char *file)
+{
+    if (!a->enabled)
+        return;
+    const gi_object *mob = &s->objects[a->object_index];
+    gi_vec3 lo = s->positions[mob->first_vertex], hi = lo;
+    gi_vec3 slo = {INFINITY, INFINITY, INFINITY}, shi = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t o = 0; o < s->object_count; o++) {
+        const gi_object *ob = &s->objects[o];
+        for (uint32_t i = ob->first_vertex; i < ob->first_vertex + ob->vertex_count; i++) {
+            gi_vec3 *l = o == a->object_index ? &lo : &slo, *h = o == a->object_index ? &hi : &shi;
+            *l = gi_min_v3(*l, s->positions[i]);
+            *h = gi_max_v3(*h, s->positions[i]);
+        }
+    }
+    if (!(slo.x <= shi.x))
+        return; /* nothing else in the scene */
+    for (uint32_t k = 0; k < a->key_count; k++) {
+        gi_mat4 m = key_matrix(a, &a->keys[k]);
+        gi_vec3 plo = {INFINITY, INFINITY, INFINITY}, phi = {-INFINITY, -INFINITY, -INFINITY};
+        for (int c = 0; c < 8; c++) {
+            gi_vec3 corner = {c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
+            gi_vec3 p = gi_mat4_point(&m, corner);
+            plo = gi_min_v3(plo, p);
+            phi = gi_max_v3(phi, p);
+        }
+        if (phi.x < slo.x || plo.x > shi.x || phi.y < slo.y || plo.y > shi.y || phi.z < slo.z ||
+            plo.z > shi.z) {
+            gi_warn("%s: " ANIM_PATH ".keyframes[%u]: at frame %u the mobile lies wholly "
+                    "outside the box of the scene's other objects ([%g, %g, %g] to [%g, %g, %g])",
+                    file, k, a->keys[k].frame, slo.x, slo.y, slo.z, shi.x, shi.y, shi.z);
+            return; /* one is enough to look at the keys again */
+        }
+    }
 }

@@ -81,6 +81,11 @@ void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *ou
  * same as at frame - 1 (a held shot, frames before the first key or after
  * the last, equal keys), so nothing of the frame before changes. */
 int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame);
+/* Warns (gi_warn) when a key puts the mobile (resolved) wholly outside the
+ * box of the scene's other objects: most likely a slip, a translate in the
+ * wrong units or with the wrong sign; not refused, since an object may fly
+ * over an open scene. */
+void gi_detp_anim_warn_keys(const gi_detp_anim_params *a, const gi_scene *s, const char *file);
 
 /* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
  * and scale about `pivot` (what gi_detp_anim_pose builds; for tests). */

@@ -29,12 +29,14 @@ static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
 }
 
 /* Runs on the coordinator and in every worker, so both see the same
- * refined mesh and derived parameters. */
+ * refined mesh and derived parameters; warnings are the coordinator's. */
 static int detp_check_scene(gi_job *job, gi_error *err)
 {
     gi_detp_params *p = job->params;
     if (gi_detp_resolve_params(p, &job->scene, job->file, err))
         return -1;
+    if (!job->on_worker)
+        gi_detp_anim_warn_keys(&p->anim, &job->scene, job->file);
     return 0;
 }
 
