@@ -237,6 +237,36 @@ const char *gi_job_output(const gi_job *job, const char *kind)
     return NULL;
 }
 
+/* How much of `name` identifies it as written from `file` (0: not at all):
+ * the whole name, or file's stem before a '.' or '-' and more, with file's
+ * extension at the end. */
+static size_t written_from(const char *file, const char *name)
+{
+    if (strcmp(file, name) == 0)
+        return strlen(file) + 1;
+    const char *dot = strrchr(file, '.');
+    size_t stem = dot && dot != file ? (size_t)(dot - file) : strlen(file);
+    size_t ext = strlen(file + stem), len = strlen(name);
+    if (len < stem + 2 + ext || strncmp(name, file, stem) != 0 ||
+        (name[stem] != '.' && name[stem] != '-') || strcmp(name + len - ext, file + stem) != 0)
+        return 0;
+    return stem;
+}
+
+const char *gi_job_output_kind(const gi_output_spec *outs, int n, const char *name)
+{
+    const char *kind = NULL;
+    size_t best = 0;
+    for (int i = 0; i < n; i++) {
+        size_t m = written_from(outs[i].file, name);
+        if (m > best) {
+            best = m;
+            kind = outs[i].kind;
+        }
+    }
+    return kind;
+}
+
 char *gi_job_output_path(const gi_job *job, const char *file)
 {
     const char *dir = job->out_dir ? job->out_dir : ".";

@@ -86,6 +86,10 @@ const char *gi_job_output(const gi_job *job, const char *kind);
 /* Full path of an output in out_dir (malloc'ed); the current frame's file
  * while job->in_frame is set. */
 char *gi_job_output_path(const gi_job *job, const char *file);
+/* The kind of the output that `outs` (n specs) writes as file `name`: the
+ * spec's own file, a frame's NAME.0003.EXT or a set's NAME-SET.EXT
+ * (gi_job_output_path, gi_rad_output_name); NULL if none does. */
+const char *gi_job_output_kind(const gi_output_spec *outs, int n, const char *name);
 /* Records a written output for the summary. */
 void gi_job_note_output(gi_job *job, const char *kind, const char *path);
 

@@ -196,7 +196,7 @@ static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
         gi_buf b;
         gi_buf_init(&b);
         int rc = call(c, "GET", path, NULL, 0, NULL, 200, 0, &b, dest);
-        const char *kind = strrchr(name, '.') ? strrchr(name, '.') + 1 : "";
+        const char *kind = str(o, "kind");
         if (rc == 0)
             printf("  %-4s %s\n", kind, dest);
         if (rc == 0 && strcmp(c->progress, "json") == 0)

@@ -59,6 +59,8 @@ typedef struct gi_farm_job {
     char *name, *method; /* from parsing the text, for listings */
     char **outputs;      /* output file names */
     int output_count;
+    gi_output_spec *declared; /* the job's outputs block: what each kind is called */
+    int declared_count;
     char *dir; /* <state>/jobs/<id> */
     gi_error error; /* why it failed */
 

@@ -96,6 +96,11 @@ static void job_free(gi_farm_job *j)
     for (int i = 0; i < j->output_count; i++)
         free(j->outputs[i]);
     free(j->outputs);
+    for (int i = 0; i < j->declared_count; i++) {
+        free(j->declared[i].kind);
+        free(j->declared[i].file);
+    }
+    free(j->declared);
     free(j->dir);
     gi_manifest_free(&j->manifest);
     gi_buf_free(&j->check_msg);
@@ -189,8 +194,13 @@ static int describe(gi_farm_job *j, gi_job *parsed)
     j->method = gi_xstrdup(parsed->method->name);
     j->output_count = parsed->output_count;
     j->outputs = gi_xcalloc((size_t)parsed->output_count + 1, sizeof *j->outputs);
-    for (int i = 0; i < parsed->output_count; i++)
+    j->declared_count = parsed->output_count;
+    j->declared = gi_xcalloc((size_t)parsed->output_count + 1, sizeof *j->declared);
+    for (int i = 0; i < parsed->output_count; i++) {
         j->outputs[i] = gi_xstrdup(parsed->outputs[i].file);
+        j->declared[i].kind = gi_xstrdup(parsed->outputs[i].kind);
+        j->declared[i].file = gi_xstrdup(parsed->outputs[i].file);
+    }
     return 0;
 }
 

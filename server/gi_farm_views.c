@@ -136,6 +136,10 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
             snprintf(url, sizeof url, "/api/v1/jobs/%llu/outputs/%s", (unsigned long long)j->id,
                      j->outputs[i]);
             cJSON_AddStringToObject(x, "name", j->outputs[i]);
+            /* As `gi render` names it; a file no spec explains, by its extension. */
+            const char *kind = gi_job_output_kind(j->declared, j->declared_count, j->outputs[i]);
+            const char *dot = strrchr(j->outputs[i], '.');
+            cJSON_AddStringToObject(x, "kind", kind ? kind : dot ? dot + 1 : "");
             cJSON_AddStringToObject(x, "url", url);
             cJSON_AddItemToArray(outs, x);
         }

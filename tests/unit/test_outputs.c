@@ -143,3 +143,26 @@ GI_TEST(test_frame_output_names_sort_in_frame_order)
     GI_CHECK_MSG(strcmp(p, "o/a.b.00007.png") == 0, "%s", p);
     free(p);
 }
+
+GI_TEST(test_output_kind_of_a_written_name)
+{
+    gi_output_spec outs[] = {{"exr", "img.exr"},
+                             {"report", "img-report.json"},
+                             {"json", "v.json"},
+                             {"bin", "raw"}};
+    const char *k;
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "img.exr")) && strcmp(k, "exr") == 0);
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "img.0012.exr")) && strcmp(k, "exr") == 0);
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "img-red.exr")) && strcmp(k, "exr") == 0);
+    /* The longer stem wins: img-report.json is not a set of img.exr's. */
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "img-report.json")) && strcmp(k, "report") == 0);
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "img-report.0003.json")) &&
+             strcmp(k, "report") == 0);
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "v.00003.json")) && strcmp(k, "json") == 0);
+    GI_CHECK((k = gi_job_output_kind(outs, 4, "raw.0001")) && strcmp(k, "bin") == 0);
+    GI_CHECK(gi_job_output_kind(outs, 4, "img.png") == NULL);
+    GI_CHECK(gi_job_output_kind(outs, 4, "img.exr.tmp") == NULL);
+    GI_CHECK(gi_job_output_kind(outs, 4, "imgx.exr") == NULL);
+    GI_CHECK(gi_job_output_kind(outs, 4, "img..exr") == NULL); /* nothing between */
+    GI_CHECK(gi_job_output_kind(outs, 0, "img.exr") == NULL);
+}
