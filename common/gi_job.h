@@ -45,6 +45,11 @@ struct gi_job {
     int in_frame;
     uint32_t frame, frame_count;
 
+    /* Its tasks keep files in the worker host's batch directory (an
+     * animation's photon batches), which the host removes when told the
+     * job is over (gi_batch_dir.h). Set by the method's parse. */
+    int keeps_batches;
+
     /* Coordinator side. */
     char *out_dir;
     gi_scene scene;

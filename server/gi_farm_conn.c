@@ -237,6 +237,7 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     c->host = gi_farm_host_get(f, c->hello.name);
     c->next_heartbeat = gi_now() + f->cfg.heartbeat_s;
     f->m.workers_accepted++;
+    gi_farm_sched_welcome(f, c);
     gi_info("worker %s (%s) joined: %u processes, %u slots, %u cores, %.1f GiB, version %s%s",
             c->hello.name, c->peer, c->hello.procs, c->hello.slots, c->hello.cores,
             (double)c->hello.memory / (1u << 30), c->hello.version,

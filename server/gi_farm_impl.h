@@ -61,6 +61,7 @@ typedef struct gi_farm_job {
     int output_count;
     gi_output_spec *declared; /* the job's outputs block: what each kind is called */
     int declared_count;
+    int keeps_batches;        /* gi_job.keeps_batches */
     char *dir; /* <state>/jobs/<id> */
     gi_error error; /* why it failed */
 
@@ -308,6 +309,10 @@ void gi_farm_sched_expire(gi_farm *f, double now);
 /* Forgets every lease of a job (cancelled / failed / done) and tells the
  * workers holding them. */
 void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j);
+/* A worker that just joined hears of every job that kept batches on its
+ * hosts and ended within GI_BATCH_DIR_MAX_AGE_S: it may hold their
+ * directories from before it was away (or restarted) when they ended. */
+void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c);
 gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
 int gi_farm_host_blocked(const gi_farm_host *h, double now);
 /* Makes a job that just became runnable start at the current fair share. */

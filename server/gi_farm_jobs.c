@@ -194,6 +194,7 @@ static int describe(gi_farm_job *j, gi_job *parsed)
     j->method = gi_xstrdup(parsed->method->name);
     j->output_count = parsed->output_count;
     j->outputs = gi_xcalloc((size_t)parsed->output_count + 1, sizeof *j->outputs);
+    j->keeps_batches = parsed->keeps_batches;
     j->declared_count = parsed->output_count;
     j->declared = gi_xcalloc((size_t)parsed->output_count + 1, sizeof *j->declared);
     for (int i = 0; i < parsed->output_count; i++) {

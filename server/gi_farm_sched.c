@@ -34,6 +34,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "gi_batch_dir.h"
 #include "gi_farm_impl.h"
 #include "gi_fs.h"
 #include "gi_progress.h"
@@ -551,6 +552,28 @@ void gi_farm_sched_expire(gi_farm *f, double now)
     }
 }
 
+/* Tells a worker that job `id` is over: it drops the job's tasks and
+ * removes its batch directories. */
+static void send_job_over(gi_farm_conn *c, uint64_t id)
+{
+    gi_msg_cancel m = {id, GI_MSG_ALL_TASKS};
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_cancel_encode(&b, &m);
+    gi_farm_conn_send(c, GI_MSG_CANCEL, &b, 0);
+    gi_buf_free(&b);
+}
+
+void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c)
+{
+    double since = gi_farm_wallnow() - GI_BATCH_DIR_MAX_AGE_S;
+    for (size_t i = 0; i < f->job_count; i++) {
+        const gi_farm_job *j = f->jobs[i];
+        if (j->keeps_batches && j->ended > 0 && j->ended >= since)
+            send_job_over(c, j->id);
+    }
+}
+
 void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
 {
     for (size_t ci = 0; ci < f->conn_count; ci++) {
@@ -568,13 +591,7 @@ void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
             }
         /* Every worker hears of it, not only those it was sent to: one that
          * restarted since it held the job's batches removes them. */
-        if (c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING)) {
-            gi_msg_cancel m = {j->id, GI_MSG_ALL_TASKS};
-            gi_buf b;
-            gi_buf_init(&b);
-            gi_msg_cancel_encode(&b, &m);
-            gi_farm_conn_send(c, GI_MSG_CANCEL, &b, 0);
-            gi_buf_free(&b);
-        }
+        if (c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING))
+            send_job_over(c, j->id);
     }
 }

@@ -25,7 +25,10 @@ static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
     gi_detp_params *p = gi_xcalloc(1, sizeof *p);
     job->params = p;
-    return gi_detp_parse_params(p, params, v);
+    if (gi_detp_parse_params(p, params, v))
+        return -1;
+    job->keeps_batches = p->anim.enabled;
+    return 0;
 }
 
 /* Runs on the coordinator and in every worker, so both see the same

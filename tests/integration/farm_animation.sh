@@ -2,7 +2,8 @@
 # batch stores. Batches stick to the host that holds them; when one host is
 # killed in the middle of the animation its batches move to the other, which
 # regenerates them from their seeds, and every frame is byte-identical to
-# `gi render`. The same across a kill -9 and restart of the coordinator.
+# `gi render`. The same across a kill -9 and restart of the coordinator. A
+# worker away when a job ended removes its batches when it comes back.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -74,6 +75,16 @@ n=0
 while ls "$TMP"/cb/batches/*/b* >/dev/null 2>&1; do
     n=$((n + 1))
     [ $n -lt 100 ] || { ls -R "$TMP/cb/batches"; fail "worker b kept the job's batch files"; }
+    sleep 0.1
+done
+# Worker a, killed with its batch files, learns on its return that the job
+# ended while it was away, and removes them.
+ls -d "$TMP/ca/batches/$id"-* >/dev/null 2>&1 || fail "worker a's batch directory is gone already"
+start_worker "$TMP/a2.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/ca" --name a
+n=0
+while ls -d "$TMP/ca/batches/$id"-* >/dev/null 2>&1; do
+    n=$((n + 1))
+    [ $n -lt 100 ] || { ls -R "$TMP/ca/batches"; fail "worker a kept the ended job's batch files"; }
     sleep 0.1
 done
 
