@@ -29,6 +29,9 @@
 #define GI_MSG_MAX_VERSION 64    /* software version string */
 #define GI_MSG_MAX_TASKREFS 4096 /* task lists in HEARTBEAT and DRAIN */
 #define GI_MSG_ALL_TASKS UINT64_MAX /* CANCEL: every task of the job */
+/* CANCEL: every task of the job, which stopped but may be retried (it
+ * failed): the worker keeps its batch directory. */
+#define GI_MSG_JOB_STOPPED (UINT64_MAX - 1)
 
 typedef struct gi_msg_hello {
     uint32_t proto_min, proto_max;
@@ -91,7 +94,9 @@ int gi_msg_tasklist_decode(const gi_buf *in, const char *what, gi_msg_tasklist *
 void gi_msg_tasklist_free(gi_msg_tasklist *m);
 
 /* CANCEL (coordinator -> worker): drop a task, or every task of a job
- * (task_id GI_MSG_ALL_TASKS) and the job itself; running ones are killed. */
+ * and the job itself (task_id GI_MSG_ALL_TASKS: the job is over, its batch
+ * directory goes too; GI_MSG_JOB_STOPPED: the directory stays); running
+ * ones are killed. */
 typedef struct gi_msg_cancel {
     uint64_t job_id, task_id;
 } gi_msg_cancel;

@@ -306,9 +306,11 @@ void gi_farm_sched_drain(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *bac
  * lost) or go back to their queues unrun (crash = 0: it said goodbye). */
 void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *why);
 void gi_farm_sched_expire(gi_farm *f, double now);
-/* Forgets every lease of a job (cancelled / failed / done) and tells the
- * workers holding them. */
+/* Forgets every lease of a job (cancelled / failed / done) and tells every
+ * worker: the job is over, or (a failed job that kept batches) stopped. */
 void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j);
+/* Tells every worker that job `id` is over (it was purged). */
+void gi_farm_sched_job_over(gi_farm *f, uint64_t id);
 /* A worker that just joined hears of every job that kept batches on its
  * hosts and ended within GI_BATCH_DIR_MAX_AGE_S: it may hold their
  * directories from before it was away (or restarted) when they ended. */

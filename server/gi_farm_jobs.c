@@ -641,6 +641,8 @@ int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
     if (gi_journal_append(&f->journal, &r, err))
         return -1;
     remove_tree(j->dir);
+    if (j->keeps_batches)
+        gi_farm_sched_job_over(f, j->id); /* a failed one's were kept for a retry */
     for (size_t i = 0; i < f->job_count; i++)
         if (f->jobs[i] == j) {
             memmove(&f->jobs[i], &f->jobs[i + 1], (f->job_count - i - 1) * sizeof *f->jobs);

@@ -552,11 +552,12 @@ void gi_farm_sched_expire(gi_farm *f, double now)
     }
 }
 
-/* Tells a worker that job `id` is over: it drops the job's tasks and
- * removes its batch directories. */
-static void send_job_over(gi_farm_conn *c, uint64_t id)
+/* Tells a worker to drop task `task_id` of job `id`, or every task of it
+ * (GI_MSG_ALL_TASKS: the job is over, its batch directories go too;
+ * GI_MSG_JOB_STOPPED: they stay). */
+static void send_cancel(gi_farm_conn *c, uint64_t id, uint64_t task_id)
 {
-    gi_msg_cancel m = {id, GI_MSG_ALL_TASKS};
+    gi_msg_cancel m = {id, task_id};
     gi_buf b;
     gi_buf_init(&b);
     gi_msg_cancel_encode(&b, &m);
@@ -564,15 +565,39 @@ static void send_job_over(gi_farm_conn *c, uint64_t id)
     gi_buf_free(&b);
 }
 
+static int worker_conn(const gi_farm_conn *c)
+{
+    return c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING);
+}
+
+/* A failed job is likely to be retried once its cause is mended, and its
+ * batches then save the hosts tracing them again: they are kept until it is
+ * done, purged or retried no more (the hosts' 3-day sweep). */
+static int batches_kept(const gi_farm_job *j)
+{
+    return j->keeps_batches && j->state == GI_FJ_FAILED;
+}
+
 void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c)
 {
     double since = gi_farm_wallnow() - GI_BATCH_DIR_MAX_AGE_S;
     for (size_t i = 0; i < f->job_count; i++) {
         const gi_farm_job *j = f->jobs[i];
-        if (j->keeps_batches && j->ended > 0 && j->ended >= since)
-            send_job_over(c, j->id);
+        if (j->keeps_batches && j->ended > 0 && j->ended >= since && !batches_kept(j))
+            send_cancel(c, j->id, GI_MSG_ALL_TASKS);
     }
 }
+
+/* To every worker, not only those the job was sent to: one that restarted
+ * since it held the job's batches hears of it too. */
+static void broadcast_cancel(gi_farm *f, uint64_t id, uint64_t what)
+{
+    for (size_t ci = 0; ci < f->conn_count; ci++)
+        if (worker_conn(f->conns[ci]))
+            send_cancel(f->conns[ci], id, what);
+}
+
+void gi_farm_sched_job_over(gi_farm *f, uint64_t id) { broadcast_cancel(f, id, GI_MSG_ALL_TASKS); }
 
 void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
 {
@@ -589,9 +614,6 @@ void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
                 c->jobs_sent[i] = c->jobs_sent[--c->jobs_sent_count];
                 break;
             }
-        /* Every worker hears of it, not only those it was sent to: one that
-         * restarted since it held the job's batches removes them. */
-        if (c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING))
-            send_job_over(c, j->id);
     }
+    broadcast_cancel(f, j->id, batches_kept(j) ? GI_MSG_JOB_STOPPED : GI_MSG_ALL_TASKS);
 }

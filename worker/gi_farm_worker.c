@@ -450,7 +450,8 @@ static void on_cancel(worker *w, const gi_frame *fr)
         lose(w, "%s", err.msg);
         return;
     }
-    int all = m.task_id == GI_MSG_ALL_TASKS;
+    int stopped = m.task_id == GI_MSG_JOB_STOPPED;
+    int all = m.task_id == GI_MSG_ALL_TASKS || stopped;
     unsigned queued = 0, running = 0;
     for (size_t i = 0; i < w->q_count;) {
         if (w->q[i].job_id == m.job_id && (all || w->q[i].task.id == m.task_id)) {
@@ -472,9 +473,11 @@ static void on_cancel(worker *w, const gi_frame *fr)
     if (all) {
         /* The job is over on the coordinator, which tells every worker: its
          * batch files are useless, this run's and any an earlier run of this
-         * worker kept (it restarted since; its directory bears the id). */
+         * worker kept (it restarted since; its directory bears the id).
+         * Unless it only stopped: a retry will want them (the 3-day sweep
+         * bounds them). */
         int had = def_find(w, m.job_id) != NULL;
-        int removed = gi_batch_dir_remove_job(w->batch_root, m.job_id);
+        int removed = stopped ? 0 : gi_batch_dir_remove_job(w->batch_root, m.job_id);
         def_drop(w, m.job_id);
         if (!had && !queued && !running) {
             if (removed)
@@ -485,7 +488,8 @@ static void on_cancel(worker *w, const gi_frame *fr)
         }
     }
     gi_info("job %llu %s: %u queued and %u running tasks dropped", (unsigned long long)m.job_id,
-            all ? "is over" : "task cancelled", queued, running);
+            stopped ? "stopped (batch files kept)" : all ? "is over" : "task cancelled", queued,
+            running);
 }
 
 static void on_coord_frame(worker *w, const gi_frame *fr)

@@ -3,7 +3,8 @@
 # killed in the middle of the animation its batches move to the other, which
 # regenerates them from their seeds, and every frame is byte-identical to
 # `gi render`. The same across a kill -9 and restart of the coordinator. A
-# worker away when a job ended removes its batches when it comes back.
+# worker away when a job ended removes its batches when it comes back; a
+# failed job's batches are kept for its retry.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -103,5 +104,21 @@ start_farmd "$TMP/state" "$LOG" -- $OPTS $PORTS
 wait_state "$id" done 300
 "$GI" fetch "$id" --out "$TMP/restarted" >/dev/null || fail "fetch 2"
 same_as_ref "$TMP/restarted" "coordinator restarted"
+
+# A job that fails (frame 4's image cannot be written) keeps its batches on
+# the workers; `gi retry` resumes it without tracing them again.
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 3"; }
+mkdir -p "$TMP/state/jobs/$id/out/img.0004.exr"
+wait_state "$id" failed 300
+ls "$TMP"/ca/batches/"$id"-*/b* "$TMP"/cb/batches/"$id"-*/b* >/dev/null 2>&1 ||
+    { ls -R "$TMP/ca/batches" "$TMP/cb/batches"; fail "the failed job's batch files are gone"; }
+rmdir "$TMP/state/jobs/$id/out/img.0004.exr"
+"$GI" retry "$id" --wait --out "$TMP/retried" --progress none >"$TMP/retry.log" 2>&1 ||
+    { cat "$TMP/retry.log"; fail "gi retry of the failed animation"; }
+same_as_ref "$TMP/retried" "failed and retried"
+for r in "$TMP"/retried/report.000*.json; do
+    n=$(sed -n 's/.*"frames_regenerated":[^0-9]*\([0-9]*\).*/\1/p' "$r")
+    [ "$n" = 0 ] || fail "$(basename "$r"): $n frames regenerated after the retry"
+done
 stop_farmd "$LOG"
 echo "animation on the farm identical to gi render after a worker kill ($regen frames regenerated) and a coordinator restart"
