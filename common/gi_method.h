@@ -29,6 +29,12 @@ typedef struct gi_job_progress {
      * follow-up tasks (image tiles after a bake), so that its fraction
      * does not jump back when they are planned. */
     double cost_unplanned;
+    /* An animation whose frames differ in cost: the method's estimate of
+     * frame 0's work and of each later frame's, in the unit as frame 0 runs
+     * it (time-alike: a detp frame after 0 only updates). 0: frames count
+     * alike. The job's fraction weighs its frames by them, and frame 0's
+     * ETA counts the frames after it, until frames are timed. */
+    double first_frame_cost, later_frame_cost;
 } gi_job_progress;
 
 typedef struct gi_method {

@@ -36,7 +36,7 @@ static void pending_push(gi_jobrun *jr, uint64_t id, int front)
  * just planned count in cost_total. */
 static void note_progress(gi_jobrun *jr)
 {
-    gi_job_progress at = {0, 1, 0};
+    gi_job_progress at = {.frames = 1};
     if (jr->job->method->progress)
         jr->job->method->progress(jr->job, &at);
     gi_progress_clock_note(&jr->clock, &at, jr->cost_total, jr->cost_done, gi_now());

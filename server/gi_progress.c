@@ -92,7 +92,13 @@ void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, doubl
     double frame_work = planned - c->frame_base;
     double f = frame_work > 0 ? (cost_done - c->frame_base) / frame_work : 1.0;
     f = f < 0 ? 0 : f > 1 ? 1 : f;
-    out->fraction = ((double)frame + f) / frames;
+    double w0 = 1, wl = 1; /* frame 0's weight, a later frame's */
+    if (c->at.first_frame_cost > 0 && c->at.later_frame_cost > 0) {
+        w0 = c->at.first_frame_cost;
+        wl = c->at.later_frame_cost;
+    }
+    double before = frame == 0 ? 0 : w0 + (frame - 1) * wl;
+    out->fraction = (before + f * (frame == 0 ? w0 : wl)) / (w0 + (frames - 1) * wl);
     if (out->fraction > 1)
         out->fraction = 1;
     out->done = cost_done;
@@ -108,6 +114,9 @@ void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, doubl
         per_frame = c->later_seconds / c->later_count;
     else if (frame > 0 && rest >= 0)
         per_frame = dt + rest;
+    else if (frame == 0 && dd > 0 && dt > 0 && c->at.first_frame_cost > 0 &&
+             c->at.later_frame_cost > 0) /* frame 0's rate, the method's estimate */
+        per_frame = c->at.later_frame_cost / c->at.first_frame_cost * frame_work * dt / dd;
     if (rest < 0 && per_frame >= 0 && frame > 0)
         rest = per_frame > dt ? per_frame - dt : 0;
     if (rest < 0 || (after > 0 && per_frame < 0))
@@ -130,7 +139,7 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force)
     char b1[32], b2[32], b3[32], what[64];
     /* An animation shows its frames done; a still the rate in the method's unit. */
     if (at->frames > 1)
-        snprintf(what, sizeof what, "%u/%u frames", (uint32_t)(f * at->frames + 1e-9),
+        snprintf(what, sizeof what, "%u/%u frames", f >= 1 ? at->frames : at->frame,
                  at->frames);
     else
         snprintf(what, sizeof what, "%s%s/s", gi_si(rate, b2, sizeof b2), p->unit);

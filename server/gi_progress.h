@@ -28,11 +28,16 @@ typedef struct gi_progress_at {
 
 /* The clock behind a job's fraction and ETA. A frame's fraction is its
  * work done over its work planned and still to plan; the whole job's is
- * (frame + that) / frames. The ETA is the current frame's rest at the rate
- * this process has seen in it, plus the frames after it at the mean time of
- * the frames this process saw whole past frame 0 (frame 0 bakes everything,
- * the others update; before one is seen, the current frame's projected
- * time stands in for them). Monotonic seconds; not checkpointed. */
+ * the frames before it plus that fraction of it, over all frames, each
+ * frame weighed by the method's estimate of its time (frame 0 bakes
+ * everything, the others update: gi_job_progress.first_frame_cost,
+ * later_frame_cost), or alike without one. The weights depend on the job's
+ * state alone, so that a restored job's fraction goes on where it was.
+ * The ETA is the current frame's rest at the rate this process has seen in
+ * it, plus the frames after it at the mean time of the frames this process
+ * saw whole past frame 0 (before one is seen: the current frame's
+ * projected time, or in frame 0 its rate times the method's estimate).
+ * Monotonic seconds; not checkpointed. */
 typedef struct gi_progress_clock {
     gi_job_progress at;
     int noted;

@@ -24,6 +24,10 @@ typedef struct detp_anim_state {
     int64_t *hits;    /* crossings per vertex */
     detp_anim_result tot; /* this frame's batches, summed */
     gi_vec3 *base_pos, *base_nrm; /* the mobile as loaded: the PLY shows it posed */
+    /* Segments from the mobile over all segments, in the first batch of
+     * frame 0 merged: about the share a later frame replaces (< 0: not
+     * known yet, or restored from a checkpoint that did not keep it). */
+    double from_mobile_share;
     double wall_frame;    /* coordinator clock at the frame's start (not saved) */
 } detp_anim_state;
 
@@ -59,6 +63,7 @@ static int anim_new(gi_job *job, detp_state *st, gi_error *err)
            o->vertex_count * sizeof *a->base_pos);
     memcpy(a->base_nrm, &job->scene.normals[o->first_vertex],
            o->vertex_count * sizeof *a->base_nrm);
+    a->from_mobile_share = -1;
     st->anim = a;
     return 0;
 }
@@ -131,6 +136,11 @@ int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_e
     s->bv_passes += h.bv_passes;
     s->rays += h.rays;
     s->regenerated_frames += h.regenerated_frames;
+    s->segments_from_mobile += h.segments_from_mobile;
+    /* The first batch merged says it for the job, so that the weights of
+     * its frames (detp_progress) stay put: the fraction never goes back. */
+    if (frame == 0 && a->from_mobile_share < 0 && h.segments)
+        a->from_mobile_share = (double)h.segments_from_mobile / (double)h.segments;
     s->sec_build += h.sec_build;
     s->sec_load += h.sec_load;
     s->sec_regenerate += h.sec_regenerate;
@@ -221,6 +231,8 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     add_num(o, "segments_past_bounding_pretest", (double)s->bv_passes);
     add_num(o, "rays", (double)s->rays);
     add_num(o, "frames_regenerated", (double)s->regenerated_frames);
+    if (a->frame == 0)
+        add_num(o, "segments_from_mobile", (double)s->segments_from_mobile);
     cJSON *sec = cJSON_AddObjectToObject(o, "seconds");
     add_num(sec, "index_build", s->sec_build);
     add_num(sec, "store_read", s->sec_load);
@@ -232,26 +244,35 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     return o;
 }
 
+double detp_anim_from_mobile_share(const detp_state *st) { return st->anim->from_mobile_share; }
+
 void detp_anim_save(const detp_state *st, gi_buf *out)
 {
     const detp_anim_state *a = st->anim;
     gi_buf_put_u32(out, a->frame);
     detp_anim_header_put(&a->tot, out);
+    gi_buf_put_f64(out, a->from_mobile_share);
     for (size_t i = 0; i < (size_t)st->nv * 3; i++)
         gi_buf_put_u64(out, (uint64_t)a->sum[i]);
     for (uint32_t i = 0; i < st->nv; i++)
         gi_buf_put_u64(out, (uint64_t)a->hits[i]);
 }
 
-int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, gi_error *err)
+int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, uint32_t version, gi_error *err)
 {
     const gi_detp_params *p = job->params;
     if (anim_new(job, st, err))
         return -1;
     detp_anim_state *a = st->anim;
     a->frame = gi_get_u32(in);
-    if (detp_anim_header_get(in, &a->tot) || a->frame >= p->anim.frames)
+    if (detp_anim_header_get(in, &a->tot, version >= 3) || a->frame >= p->anim.frames)
         return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp animation", job->file);
+    if (version >= 3) {
+        a->from_mobile_share = gi_get_f64(in);
+        if (!(a->from_mobile_share >= -1 && a->from_mobile_share <= 1))
+            return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp animation",
+                           job->file);
+    }
     for (size_t i = 0; i < (size_t)st->nv * 3; i++)
         a->sum[i] = (int64_t)gi_get_u64(in);
     for (uint32_t i = 0; i < st->nv; i++)

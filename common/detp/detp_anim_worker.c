@@ -594,6 +594,21 @@ static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char 
     detp_batch_shelf_put(&a->shelf, &b);
 }
 
+/* Segments from each path's first hit on triangles [m0, m0 + mn) on
+ * (segs path-ordered, each path's in bounce order). */
+static uint64_t count_from_mobile(const gi_detp_segment *segs, size_t n, uint32_t m0, uint32_t mn)
+{
+    uint64_t count = 0;
+    int hit = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (i == 0 || segs[i].photon != segs[i - 1].photon)
+            hit = 0;
+        hit = hit || segs[i].hit_tri - m0 < mn;
+        count += (uint64_t)hit;
+    }
+    return count;
+}
+
 static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, const char *dir,
                       detp_anim_result *h, uint64_t p0, uint64_t p1, gi_error *err)
 {
@@ -623,6 +638,9 @@ static int run_frame0(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     h->sec_static = t3 - t2;
     h->sec_mobile = t4 - t3;
     h->segments = h->segments_new = w->segs.count;
+    const gi_object *o = &ctx->job.scene.objects[a->object];
+    h->segments_from_mobile =
+        count_from_mobile(w->segs.v, w->segs.count, o->first_triangle, o->triangle_count);
     return 0;
 }
 

@@ -64,13 +64,18 @@ typedef struct detp_anim_result {
     uint64_t bv_passes;         /* segments that passed the bounding pre-test */
     uint64_t rays;
     uint64_t regenerated_frames; /* frames replayed because the store had no file */
+    /* Frame 0: segments from each path's first hit on the mobile on, which
+     * a small move of the mobile replaces: what a later frame will cost. */
+    uint64_t segments_from_mobile;
     double sec_build, sec_load, sec_regenerate, sec_trace, sec_static, sec_mobile, sec_store;
     gi_detp_stats stats;
 } detp_anim_result;
 
 /* The fixed part alone (checkpoints keep a frame's totals in this form). */
 void detp_anim_header_put(const detp_anim_result *h, gi_buf *out);
-int detp_anim_header_get(gi_reader *r, detp_anim_result *h);
+/* with_from_mobile: the header has segments_from_mobile (results, and
+ * checkpoints from version 3 on). */
+int detp_anim_header_get(gi_reader *r, detp_anim_result *h, int with_from_mobile);
 void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
                       uint32_t nv, gi_buf *out);
 /* Adds the result's sums into sum (3 per vertex) and hits; fails on a
@@ -134,8 +139,12 @@ int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err);
 int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q);
 /* The frame's part of the report. */
 cJSON *detp_anim_report(const gi_job *job, const detp_state *st);
+/* Frame 0's segments from the mobile over all its segments, in its first
+ * batch merged; < 0 if not known. */
+double detp_anim_from_mobile_share(const detp_state *st);
 void detp_anim_save(const detp_state *st, gi_buf *out);
-int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, gi_error *err);
+/* version: detp's checkpoint state version (2 lacks frame 0's share). */
+int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, uint32_t version, gi_error *err);
 void detp_anim_free(struct detp_anim_state *a);
 uint32_t detp_anim_frame(const detp_state *st);
 

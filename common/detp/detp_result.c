@@ -167,6 +167,7 @@ void detp_anim_header_put(const detp_anim_result *h, gi_buf *out)
     gi_buf_put_u64(out, h->bv_passes);
     gi_buf_put_u64(out, h->rays);
     gi_buf_put_u64(out, h->regenerated_frames);
+    gi_buf_put_u64(out, h->segments_from_mobile);
     gi_buf_put_f64(out, h->sec_build);
     gi_buf_put_f64(out, h->sec_load);
     gi_buf_put_f64(out, h->sec_regenerate);
@@ -177,7 +178,7 @@ void detp_anim_header_put(const detp_anim_result *h, gi_buf *out)
     gi_detp_stats_encode(&h->stats, out);
 }
 
-int detp_anim_header_get(gi_reader *r, detp_anim_result *h)
+int detp_anim_header_get(gi_reader *r, detp_anim_result *h, int with_from_mobile)
 {
     memset(h, 0, sizeof *h);
     if (gi_get_u32(r) != ANIM_MAGIC)
@@ -194,6 +195,8 @@ int detp_anim_header_get(gi_reader *r, detp_anim_result *h)
     h->bv_passes = gi_get_u64(r);
     h->rays = gi_get_u64(r);
     h->regenerated_frames = gi_get_u64(r);
+    if (with_from_mobile)
+        h->segments_from_mobile = gi_get_u64(r);
     h->sec_build = gi_get_f64(r);
     h->sec_load = gi_get_f64(r);
     h->sec_regenerate = gi_get_f64(r);
@@ -236,7 +239,7 @@ static int add_checked(int64_t *into, int64_t v)
 int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
                      int64_t *hits, gi_error *err)
 {
-    if (detp_anim_header_get(r, h))
+    if (detp_anim_header_get(r, h, 1))
         return gi_fail(err, GI_EPROTO, "%s: not a detp animation result", r->what);
     uint32_t count = gi_get_u32(r), nnz = gi_get_u32(r);
     if (r->failed || count != nv || nnz > nv)

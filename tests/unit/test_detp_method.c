@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "detp/detp_method.h"
+#include "gi_clock.h"
 #include "gi_fs.h"
 #include "gi_jobrun.h"
 #include "gi_test.h"
@@ -266,6 +267,7 @@ GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
     size_t files = gi_asset_store_count(job.assets);
     GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
     size_t most_coordinator = 0, most_worker = 0;
+    double last_fraction = 0, frame1_fraction = -1;
     while (!gi_jobrun_done(&jr)) {
         const gi_task *t = gi_jobrun_lease(&jr);
         GI_REQUIRE(t);
@@ -274,11 +276,26 @@ GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
         GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &res, &err));
         gi_jobrun_complete(&jr, t->id, t->attempt, &res, &ctx.stats);
         gi_buf_free(&res);
+        /* Progress: once a batch of frame 0 is merged, the method weighs
+         * frame 0 (the bake) above the frames after it (updates), and the
+         * fraction never goes back. */
+        gi_job_progress est = {.frames = 1};
+        job.method->progress(&job, &est);
+        GI_CHECK(est.later_frame_cost > 0 && est.later_frame_cost < est.first_frame_cost);
+        gi_progress_at at;
+        gi_jobrun_progress(&jr, gi_now(), &at);
+        GI_CHECK_MSG(at.fraction >= last_fraction - 1e-12, "%.6f after %.6f", at.fraction,
+                     last_fraction);
+        last_fraction = at.fraction;
+        if (at.frame == 1 && frame1_fraction < 0)
+            frame1_fraction = at.fraction;
         size_t c = gi_asset_store_count(job.assets), w = gi_asset_store_count(worker_store);
         most_coordinator = c > most_coordinator ? c : most_coordinator;
         most_worker = w > most_worker ? w : most_worker;
     }
     GI_CHECK_MSG(jr.finished, "%s", jr.error.msg);
+    GI_CHECK_MSG(frame1_fraction > 2.0 / (GI_WORKER_BLOBS_KEPT + 4), "frame 0 is %.4f of the job",
+                 frame1_fraction);
     GI_CHECK_MSG(most_coordinator <= files + 1, "the coordinator held %zu blobs at once",
                  most_coordinator - files);
     GI_CHECK_MSG(most_worker <= files + GI_WORKER_BLOBS_KEPT, "the worker held %zu blobs",

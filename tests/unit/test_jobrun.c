@@ -328,7 +328,7 @@ GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
     gi_progress_clock c;
     memset(&c, 0, sizeof c);
     gi_progress_at at;
-    gi_job_progress bake0 = {0, 4, 100}, tiles0 = {0, 4, 0};
+    gi_job_progress bake0 = {.frames = 4, .cost_unplanned = 100}, tiles0 = {.frames = 4};
     gi_progress_clock_note(&c, &bake0, 0, 0, 100.0);
     gi_progress_clock_read(&c, 100, 50, 104.0, &at);
     GI_CHECK(fabs(at.fraction - 0.25 / 4) < 1e-12);
@@ -337,7 +337,9 @@ GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
     gi_progress_clock_read(&c, 200, 150, 109.0, &at);
     GI_CHECK(fabs(at.fraction - 0.75 / 4) < 1e-12 && at.eta_s < 0 && at.frame == 0);
 
-    gi_job_progress bake1 = {1, 4, 100}, tiles1 = {1, 4, 0}, bake2 = {2, 4, 100};
+    gi_job_progress bake1 = {.frame = 1, .frames = 4, .cost_unplanned = 100},
+                    tiles1 = {.frame = 1, .frames = 4},
+                    bake2 = {.frame = 2, .frames = 4, .cost_unplanned = 100};
     gi_progress_clock_note(&c, &bake1, 200, 200, 110.0);
     gi_progress_clock_read(&c, 300, 250, 110.25, &at);
     /* Half of frame 1's bake at 200 units/s: 150 units left in it, and two
@@ -358,7 +360,7 @@ GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
     gi_progress_clock r;
     memset(&r, 0, sizeof r);
     r.restored_base = -1; /* a checkpoint that did not keep it: frame 0 starts at 0 */
-    gi_job_progress still = {0, 1, 0};
+    gi_job_progress still = {.frames = 1};
     gi_progress_clock_note(&r, &still, 400, 300, 50.0);
     gi_progress_clock_read(&r, 400, 350, 52.0, &at);
     GI_CHECK(fabs(at.fraction - 0.875) < 1e-12 && fabs(at.eta_s - 2.0) < 1e-9);
@@ -366,10 +368,38 @@ GI_TEST(test_progress_clock_times_an_animation_by_its_frames)
     /* Frame 2 of 4 restored, its start (400) kept: a quarter of its 200. */
     memset(&r, 0, sizeof r);
     r.restored_base = 400;
-    gi_job_progress f2 = {2, 4, 0};
+    gi_job_progress f2 = {.frame = 2, .frames = 4};
     gi_progress_clock_note(&r, &f2, 600, 450, 50.0);
     gi_progress_clock_read(&r, 600, 450, 50.0, &at);
     GI_CHECK(fabs(at.fraction - 2.25 / 4) < 1e-12 && at.eta_s < 0);
+}
+
+/* Frame 0 of an animation whose method estimates its frames: 200 units of
+ * work in frame 0, 20 (as frame 0 runs them) in each of the 3 after it. */
+GI_TEST(test_progress_clock_weighs_frames_by_the_methods_estimate)
+{
+    gi_progress_clock c;
+    memset(&c, 0, sizeof c);
+    gi_progress_at at;
+    gi_job_progress bake0 = {.frames = 4, .first_frame_cost = 200, .later_frame_cost = 20};
+    gi_progress_clock_note(&c, &bake0, 200, 0, 100.0);
+    gi_progress_clock_read(&c, 200, 100, 105.0, &at);
+    GI_CHECK_MSG(fabs(at.fraction - 100.0 / 260) < 1e-12, "fraction %.9f", at.fraction);
+    /* 5 s for the rest of frame 0 at its 20 units/s, then 3 frames of 1 s. */
+    GI_CHECK_MSG(fabs(at.eta_s - 8.0) < 1e-9, "eta %.9f", at.eta_s);
+    /* Frame 1 halfway (100 units a frame, as it is planned): frame 0 and
+     * half a later frame done. */
+    gi_job_progress bake1 = {.frame = 1, .frames = 4, .first_frame_cost = 200,
+                             .later_frame_cost = 20};
+    gi_progress_clock_note(&c, &bake1, 200, 200, 110.0);
+    gi_progress_clock_read(&c, 300, 250, 110.5, &at);
+    GI_CHECK_MSG(fabs(at.fraction - 210.0 / 260) < 1e-12, "fraction %.9f", at.fraction);
+    /* Without estimates the frames count alike, and frame 0 has no ETA. */
+    memset(&c, 0, sizeof c);
+    gi_job_progress plain = {.frames = 4};
+    gi_progress_clock_note(&c, &plain, 200, 0, 100.0);
+    gi_progress_clock_read(&c, 200, 100, 105.0, &at);
+    GI_CHECK(fabs(at.fraction - 0.5 / 4) < 1e-12 && at.eta_s < 0);
 }
 
 /* A job of many frames: each finish plans 300 more tasks, 40 times. */
