@@ -583,7 +583,7 @@ void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c)
     double since = gi_farm_wallnow() - GI_BATCH_DIR_MAX_AGE_S;
     for (size_t i = 0; i < f->job_count; i++) {
         const gi_farm_job *j = f->jobs[i];
-        if (j->keeps_batches && j->ended > 0 && j->ended >= since && !batches_kept(j))
+        if (j->keeps_batches && j->ended >= since && !batches_kept(j))
             send_cancel(c, j->id, GI_MSG_ALL_TASKS);
     }
 }
