@@ -2,6 +2,7 @@
  * loading, outputs. */
 #include "gi_job.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -235,6 +236,19 @@ const char *gi_job_output(const gi_job *job, const char *kind)
         if (strcmp(job->outputs[i].kind, kind) == 0)
             return job->outputs[i].file;
     return NULL;
+}
+
+int gi_job_check_tasks(gi_jv *v, const char *field, double tasks, const char *what, ...)
+{
+    if (tasks <= GI_JOB_MAX_TASKS)
+        return 0;
+    char how[256];
+    va_list ap;
+    va_start(ap, what);
+    vsnprintf(how, sizeof how, what, ap);
+    va_end(ap);
+    return gi_jv_fail(v, field, "%s make %.4g tasks at once; a job plans at most %u", how, tasks,
+                      GI_JOB_MAX_TASKS);
 }
 
 /* How much of `name` identifies it as written from `file` (0: not at all):

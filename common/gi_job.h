@@ -17,6 +17,10 @@
 #define GI_JOB_MAX_BYTES (16u << 20)
 #define GI_JOB_MAX_SIDE 16384
 #define GI_JOB_MAX_OUTPUTS 16
+/* The most tasks a job plans at once (a still's, or one frame's): the
+ * coordinator holds each until it is merged. Methods refuse parameters
+ * that would plan more (gi_job_check_tasks) rather than run out of memory. */
+#define GI_JOB_MAX_TASKS (1u << 20)
 
 typedef struct gi_output_spec {
     char *kind; /* "exr", "png", "ply", ... */
@@ -95,6 +99,11 @@ char *gi_job_output_path(const gi_job *job, const char *file);
  * spec's own file, a frame's NAME.0003.EXT or a set's NAME-SET.EXT
  * (gi_job_output_path, gi_rad_output_name); NULL if none does. */
 const char *gi_job_output_kind(const gi_output_spec *outs, int n, const char *name);
+/* Refuses, naming `field`, parameters that make a job plan `tasks` tasks
+ * at once, more than GI_JOB_MAX_TASKS; `what` (printf) says how they come
+ * about, e.g. "4096 x 4096 pixels in tiles of 4". */
+int gi_job_check_tasks(gi_jv *v, const char *field, double tasks, const char *what, ...)
+    __attribute__((format(printf, 4, 5)));
 /* Records a written output for the summary. */
 void gi_job_note_output(gi_job *job, const char *kind, const char *path);
 

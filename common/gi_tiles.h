@@ -33,6 +33,11 @@ static inline double gi_tiles_cost(int width, int height, int spp)
 {
     return (double)width * height * spp;
 }
+/* How many tasks gi_tiles_plan adds. */
+static inline double gi_tiles_count(int width, int height, int tile)
+{
+    return (double)((width + tile - 1) / tile) * (double)((height + tile - 1) / tile);
+}
 /* Reads a tile from the front of a task payload (checks it against the
  * image size); the reader is left after it, at the method's extra bytes. */
 int gi_tile_read(gi_reader *r, int width, int height, gi_tile *out, gi_error *err);

@@ -57,6 +57,13 @@ void gi_jobrun_progress(const gi_jobrun *jr, double now, gi_progress_at *out)
 static int absorb(gi_jobrun *jr, gi_task_queue *q, gi_error *err)
 {
     note_progress(jr);
+    /* Methods refuse parameters that plan more (gi_job_check_tasks); this
+     * catches what only the scene decides. */
+    if (jr->task_count - jr->merge_next + q->count > GI_JOB_MAX_TASKS)
+        return gi_fail(err, GI_EINVAL, "%s: the job would hold %llu tasks at once; at most %u",
+                       jr->job->file,
+                       (unsigned long long)(jr->task_count - jr->merge_next + q->count),
+                       GI_JOB_MAX_TASKS);
     for (size_t i = 0; i < q->count; i++) {
         gi_task *t = &q->tasks[i];
         if (t->id != jr->task_count)
@@ -246,7 +253,6 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
     gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
     if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt)
         return 0;
-    jt->last_error = *why;
     jr->leased--;
     jt->task.attempt++;
     if (why->code == GI_EINVAL || jt->task.attempt >= jr->max_attempts) {

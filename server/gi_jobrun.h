@@ -26,7 +26,6 @@ typedef struct gi_jobrun_task {
     gi_task task;
     gi_task_state state;
     gi_buf result;
-    gi_error last_error;
 } gi_jobrun_task;
 
 typedef struct gi_jobrun {

@@ -28,7 +28,12 @@ static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
     if (gi_detp_parse_params(p, params, v))
         return -1;
     job->keeps_batches = p->anim.enabled;
-    return 0;
+    /* "auto" photons: their batches are counted once the scene says how many. */
+    double batches = p->photons > 0 ? ceil((double)p->photons / (double)p->batch) : 0;
+    return gi_job_check_tasks(v, "detp.batch", batches, "%lld photons in batches of %lld",
+                              (long long)p->photons, (long long)p->batch) ||
+           gi_job_check_tasks(v, "detp.tile", gi_tiles_count(job->width, job->height, p->tile),
+                              "%d x %d pixels in tiles of %d", job->width, job->height, p->tile);
 }
 
 /* Runs on the coordinator and in every worker, so both see the same

@@ -62,7 +62,12 @@ static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
     if (p->pass_spp > p->spp)
         return gi_jv_fail(v, "pt.pass_spp", "%d is more than spp (%d)", p->pass_spp, p->spp);
     p->strategy = (gi_pt_strategy)strategy;
-    return 0;
+    int passes = (p->spp + p->pass_spp - 1) / p->pass_spp;
+    return gi_job_check_tasks(v, "pt.tile",
+                              gi_tiles_count(job->width, job->height, p->tile) * passes,
+                              "%d x %d pixels in tiles of %d, %d passes of %d spp (raise pt.tile "
+                              "or pt.pass_spp)",
+                              job->width, job->height, p->tile, passes, p->pass_spp);
 }
 
 static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)

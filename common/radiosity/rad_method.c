@@ -146,6 +146,9 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
     p->solve.max_iterations = (int)max_it;
     p->image_spp = (int)spp;
     p->tile = (int)tile;
+    if (gi_job_check_tasks(v, "radiosity.tile", gi_tiles_count(job->width, job->height, p->tile),
+                           "%d x %d pixels in tiles of %d", job->width, job->height, p->tile))
+        return -1;
     if (!gi_rad_rays_valid(p->rays))
         return gi_jv_fail(v, "radiosity.rays",
                           "%u is not a perfect square (rays are stratified on an m x m grid: "
