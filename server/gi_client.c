@@ -29,6 +29,7 @@ const char gi_client_usage[] =
     "       gi status ID [--json] | gi jobs [--json] | gi workers [--json]\n"
     "       gi wait ID [--out DIR] [--progress MODE] | gi cancel ID | gi fetch ID [--out DIR]\n"
     "       gi retry ID [--wait] [--out DIR] [--progress MODE]  (a failed or cancelled job)\n"
+    "       gi purge ID  (an ended job: removes it, its checkpoint and its outputs)\n"
     "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070) and\n"
     "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN)\n";
 
@@ -45,13 +46,19 @@ typedef struct client {
     char token[GI_SECRET_MAX_BYTES + 1];
     /* Options. */
     const char *out_dir, *progress;
+    gi_progress_mode mode; /* progress, parsed */
     int json, wait;
     int64_t priority;
     const char *arg; /* the command's operand (job file or id) */
 } client;
 
-static const char *const commands[] = {"submit", "status", "wait",  "cancel", "retry",
-                                       "jobs",   "workers", "fetch", NULL};
+/* The options each command takes (--farm and --token-file: all). */
+enum { OPT_OUT = 1, OPT_PROGRESS = 2, OPT_PRIORITY = 4, OPT_WAIT = 8, OPT_JSON = 16 };
+static const char *const commands[] = {"submit", "status",  "wait",  "cancel", "retry",
+                                       "jobs",   "workers", "fetch", "purge",  NULL};
+static const unsigned command_options[] = {
+    OPT_PRIORITY | OPT_WAIT | OPT_OUT | OPT_PROGRESS, OPT_JSON, OPT_OUT | OPT_PROGRESS, 0,
+    OPT_WAIT | OPT_OUT | OPT_PROGRESS, OPT_JSON, OPT_JSON, OPT_OUT, 0};
 
 int gi_client_is_command(const char *cmd)
 {
@@ -199,7 +206,7 @@ static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
         const char *kind = str(o, "kind");
         if (rc == 0)
             printf("  %-4s %s\n", kind, dest);
-        if (rc == 0 && strcmp(c->progress, "json") == 0)
+        if (rc == 0 && c->mode == GI_PROGRESS_JSON)
             gi_progress_json_output(stderr, str(job, "name"), kind, dest);
         gi_buf_free(&b);
         free(dest);
@@ -269,9 +276,6 @@ static void print_summary(uint64_t id, const cJSON *job)
 /* Polls the job until it ends (showing progress), then fetches its outputs. */
 static int wait_job(client *c, uint64_t id, int fetch)
 {
-    gi_progress_mode mode;
-    if (gi_progress_mode_parse(c->progress, &mode))
-        return fail_msg(2, "--progress must be auto, bar, lines, json or none");
     gi_progress prog;
     int started = 0;
     struct sigaction sa, old;
@@ -291,7 +295,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
             static char name[256], unit[64];
             snprintf(name, sizeof name, "%s", str(job, "name"));
             snprintf(unit, sizeof unit, "%s", str(job, "unit"));
-            gi_progress_init(&prog, mode, stderr, name, unit);
+            gi_progress_init(&prog, c->mode, stderr, name, unit);
             started = 1;
         }
         int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
@@ -319,7 +323,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
                 print_summary(id, job);
                 rc = fetch ? fetch_outputs(c, id, job) : 0;
             }
-            if (mode == GI_PROGRESS_JSON) {
+            if (c->mode == GI_PROGRESS_JSON) {
                 /* A done job whose outputs could not be fetched ends failed here. */
                 int done = strcmp(state, "done") == 0;
                 const cJSON *e = cJSON_GetObjectItemCaseSensitive(job, "error");
@@ -527,15 +531,17 @@ static int cmd_workers(client *c)
     return 0;
 }
 
-static int cmd_cancel(client *c, uint64_t id)
+/* gi cancel (an unfinished job) and gi purge (an ended one). */
+static int cmd_delete(client *c, uint64_t id, int purge)
 {
     char path[64];
-    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu%s", (unsigned long long)id,
+             purge ? "?purge=1" : "");
     gi_buf b;
     gi_buf_init(&b);
     int rc = call(c, "DELETE", path, NULL, 0, NULL, 200, 0, &b, NULL);
-    if (rc == 0 && b.len && memmem(b.data, b.len, "\"purged\":true", 13))
-        printf("job %llu removed (it had ended; its outputs are deleted)\n", (unsigned long long)id);
+    if (rc == 0 && purge)
+        printf("job %llu removed, with its checkpoint and outputs\n", (unsigned long long)id);
     else if (rc == 0)
         printf("job %llu cancelled\n", (unsigned long long)id);
     gi_buf_free(&b);
@@ -581,11 +587,16 @@ int gi_client_main(int argc, char **argv)
     const char *farm = getenv("GI_FARM"), *token_file = NULL, *prio = NULL;
     if (!farm || !farm[0])
         farm = "http://127.0.0.1:7070";
+    unsigned allowed = 0, given = 0;
+    for (int i = 0; commands[i]; i++)
+        if (strcmp(cmd, commands[i]) == 0)
+            allowed = command_options[i];
     for (int i = 2; i < argc; i++) {
         const char *v;
         int rc;
         const char *names[] = {"--farm", "--token-file", "--out", "--progress", "--priority"};
         const char **dst[] = {&farm, &token_file, &c.out_dir, &c.progress, &prio};
+        const unsigned opt[] = {0, 0, OPT_OUT, OPT_PROGRESS, OPT_PRIORITY};
         size_t k;
         for (k = 0, rc = 0; k < GI_ARRAY_LEN(names); k++)
             if ((rc = gi_args_take(argc, argv, &i, names[k], &v)) != 0)
@@ -593,15 +604,22 @@ int gi_client_main(int argc, char **argv)
         if (rc < 0)
             return fail_msg(2, "%s needs a value", names[k]);
         if (rc > 0) {
+            if (opt[k] && !(allowed & opt[k]))
+                return fail_msg(2, "%s: %s is not one of its options", cmd, names[k]);
             *dst[k] = v;
+            given |= opt[k];
             continue;
         }
-        if (strcmp(argv[i], "--json") == 0)
-            c.json = 1;
-        else if (strcmp(argv[i], "--wait") == 0 &&
-                 (strcmp(cmd, "submit") == 0 || strcmp(cmd, "retry") == 0))
-            c.wait = 1;
-        else if (strncmp(argv[i], "--token", 7) == 0)
+        unsigned flag = strcmp(argv[i], "--json") == 0   ? OPT_JSON
+                        : strcmp(argv[i], "--wait") == 0 ? OPT_WAIT
+                                                         : 0;
+        if (flag && !(allowed & flag))
+            return fail_msg(2, "%s: %s is not one of its options", cmd, argv[i]);
+        if (flag) {
+            c.json |= flag == OPT_JSON;
+            c.wait |= flag == OPT_WAIT;
+            given |= flag;
+        } else if (strncmp(argv[i], "--token", 7) == 0)
             return fail_msg(2, "tokens are not taken from the command line (other users can read "
                                "it): use --token-file or GI_FARM_TOKEN");
         else if (argv[i][0] == '-' && argv[i][1])
@@ -611,6 +629,10 @@ int gi_client_main(int argc, char **argv)
         else
             c.arg = argv[i];
     }
+    if ((allowed & OPT_WAIT) && !c.wait && (given & (OPT_OUT | OPT_PROGRESS)))
+        return fail_msg(2, "%s: --out and --progress are for --wait", cmd);
+    if (gi_progress_mode_parse(c.progress, &c.mode))
+        return fail_msg(2, "--progress must be auto, bar, lines, json or none");
     if (prio && gi_args_int(prio, 1, GI_FARM_PRIORITY_MAX, &c.priority))
         return fail_msg(2, "--priority must be an integer in [1, %d]", GI_FARM_PRIORITY_MAX);
     int needs_arg = strcmp(cmd, "jobs") != 0 && strcmp(cmd, "workers") != 0;
@@ -645,7 +667,9 @@ int gi_client_main(int argc, char **argv)
     else if (strcmp(cmd, "wait") == 0)
         rc = wait_job(&c, id, 1);
     else if (strcmp(cmd, "cancel") == 0)
-        rc = cmd_cancel(&c, id);
+        rc = cmd_delete(&c, id, 0);
+    else if (strcmp(cmd, "purge") == 0)
+        rc = cmd_delete(&c, id, 1);
     else if (strcmp(cmd, "retry") == 0)
         rc = cmd_retry(&c, id);
     else if (strcmp(cmd, "jobs") == 0)

@@ -338,17 +338,34 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_workers(f));
     case R_JOB_GET:
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
-    case R_JOB_DELETE:
-        if (gi_farm_job_cancel(f, j, "requested through the API") == 0)
+    case R_JOB_DELETE: {
+        /* Cancelling twice (a reply lost, a script run again) must not
+         * remove the job and its outputs: that takes ?purge=1. */
+        const char *purge = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "purge");
+        int purging = purge && strcmp(purge, "1") == 0;
+        if (purge && !purging)
+            return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST,
+                          "purge=%.40s: expected purge=1", purge);
+        if (!purging && gi_farm_job_cancel(f, j, "requested through the API") == 0)
             return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
+        if (!purging)
+            return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
+                          "job %llu has ended (%s): DELETE /api/v1/jobs/%llu?purge=1 removes it "
+                          "and its files",
+                          (unsigned long long)j->id, gi_fj_state_name(j->state),
+                          (unsigned long long)j->id);
         {
             uint64_t id = j->id;
             if (gi_farm_job_purge(f, j, &err))
-                return refuse(f, conn, r, method, url, MHD_HTTP_INTERNAL_SERVER_ERROR, "%s", err.msg);
+                return refuse(f, conn, r, method, url,
+                              err.code == GI_EINVAL ? MHD_HTTP_CONFLICT
+                                                    : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                              "%s", err.msg);
             char body[64];
             snprintf(body, sizeof body, "{\"id\":%llu,\"purged\":true}", (unsigned long long)id);
             return send_json(conn, MHD_HTTP_OK, gi_xstrdup(body));
         }
+    }
     case R_JOB_RETRY:
         if (gi_farm_job_retry(f, j, &err))
             return refuse(f, conn, r, method, url,

@@ -28,9 +28,16 @@ while IFS='|' read -r job expect; do
 done <"$DATA/EXPECT"
 [ $n -ge 20 ] || fail "only $n cases"
 
-# Command-line mistakes are exit 2 as well.
+# Command-line mistakes are exit 2 as well, before anything is sent (the
+# farm commands' would otherwise fail to reach this farm: exit 1).
+cat >"$TMP/ok.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "pt": {"spp": 1}}
+JOB
+export GI_FARM=http://127.0.0.1:9 GI_FARM_TOKEN=not-needed-by-these-commands
 for args in "render" "render a.json b.json" "render x.json --workers 0" "render x.json --workers abc" \
-    "render x.json --progress loud" "render x.json --frobnicate" "paint x.json"; do
+    "render x.json --progress loud" "render x.json --frobnicate" "paint x.json" \
+    "submit $TMP/ok.json --wait --progress loud" "submit $TMP/ok.json --out d" "retry 1 --progress json" \
+    "cancel 1 --priority 5" "purge 1 --out d" "jobs --out d" "fetch 1 --json" "status 1 --wait"; do
     set +e
     # shellcheck disable=SC2086
     "$GI" $args >/dev/null 2>"$TMP/stderr"

@@ -96,7 +96,18 @@ set +e
 set -e
 tail -n 1 "$TMP/wait.json" | grep -q '^{"event":"end","job":"long","state":"cancelled",.*"error":' ||
     { cat "$TMP/wait.json"; fail "gi wait --progress json of a cancelled job"; }
-"$GI" cancel "$lo" | grep -q "removed" || fail "DELETE of an ended job removes it"
+# Cancelling an ended job changes nothing (a cancel run twice keeps the
+# outputs); purging removes it.
+set +e
+"$GI" cancel "$lo" >/dev/null 2>"$TMP/cancel.log"
+rc=$?
+set -e
+[ $rc -eq 1 ] && grep -q "has ended (done): DELETE /api/v1/jobs/$lo?purge=1 removes it" "$TMP/cancel.log" ||
+    { cat "$TMP/cancel.log"; fail "gi cancel of an ended job: exit $rc"; }
+[ "$(jstate "$lo")" = done ] || fail "gi cancel changed an ended job"
+[ "$(api "/api/v1/jobs/$lo?purge=yes" -X DELETE -o /dev/null -w '%{http_code}')" = 400 ] ||
+    fail "purge=yes was not refused"
+"$GI" purge "$lo" | grep -q "removed" || fail "gi purge of an ended job"
 [ "$(api "/api/v1/jobs/$lo" -o /dev/null -w '%{http_code}')" = 404 ] || fail "removed job still listed"
 
 # Drain: a second worker gets SIGTERM in the middle of a job; it hands its
