@@ -62,6 +62,26 @@ char *gi_temp_path(const char *path)
     return tmp;
 }
 
+/* Digits just before `end` in s: 1 if one or more (*start: the first). */
+static int digits_before(const char *s, const char *end, const char **start)
+{
+    const char *p = end;
+    while (p > s && p[-1] >= '0' && p[-1] <= '9')
+        p--;
+    *start = p;
+    return p < end;
+}
+
+int gi_is_temp_name(const char *name)
+{
+    const char *end = name + strlen(name), *p;
+    if (!digits_before(name, end, &p) || p == name || p[-1] != '-')
+        return 0;
+    if (!digits_before(name, p - 1, &p))
+        return 0;
+    return (size_t)(p - name) >= 5 && memcmp(p - 5, ".tmp-", 5) == 0;
+}
+
 int gi_commit_file(const char *tmp, const char *path, gi_error *err)
 {
     int fd = open(tmp, O_RDONLY | O_CLOEXEC);

@@ -15,6 +15,9 @@ int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err)
 
 /* A fresh temporary name next to `path` (malloc'ed). */
 char *gi_temp_path(const char *path);
+/* `name` is one gi_temp_path made: it ends in .tmp-<pid>-<n> (a write cut
+ * short, never an output, whatever else the name holds). */
+int gi_is_temp_name(const char *name);
 /* fsyncs `tmp` and renames it to `path`; removes tmp on failure. */
 int gi_commit_file(const char *tmp, const char *path, gi_error *err);
 /* Ends a write to a temporary file: commits it to path if rc == 0, else

@@ -225,7 +225,7 @@ static void list_written_outputs(gi_farm_job *j)
     int n = 0, cap = 0;
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
-        if (e->d_name[0] == '.' || strstr(e->d_name, ".tmp-"))
+        if (e->d_name[0] == '.' || gi_is_temp_name(e->d_name))
             continue;
         if (n == cap) {
             cap = cap ? 2 * cap : 16;

@@ -27,7 +27,7 @@ typedef struct file_list {
 static void list_one(void *ctx, const char *path, const char *name, const struct stat *st)
 {
     file_list *out = ctx;
-    if (strstr(name, ".tmp-")) { /* a write cut short */
+    if (gi_is_temp_name(name)) { /* a write cut short */
         unlink(path);
         return;
     }

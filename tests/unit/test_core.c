@@ -169,6 +169,22 @@ GI_TEST(test_atomic_write_and_read_limits)
     gi_buf_free(&b);
 }
 
+GI_TEST(test_temp_names_are_told_from_outputs)
+{
+    char *t = gi_temp_path("out/a.exr");
+    GI_CHECK_MSG(gi_is_temp_name(t), "%s", t);
+    free(t);
+    GI_CHECK(gi_is_temp_name("a.exr.tmp-12-0"));
+    /* Output names a job may give. */
+    GI_CHECK(!gi_is_temp_name("a.tmp-1.exr"));
+    GI_CHECK(!gi_is_temp_name("a.tmp-1-2.exr"));
+    GI_CHECK(!gi_is_temp_name("a.tmp-"));
+    GI_CHECK(!gi_is_temp_name("a.tmp--3"));
+    GI_CHECK(!gi_is_temp_name("a.tmp-x-3"));
+    GI_CHECK(!gi_is_temp_name("tmp-1-2"));
+    GI_CHECK(!gi_is_temp_name("12"));
+}
+
 static int parse_doc(const char *text, cJSON **out, gi_error *err)
 {
     return gi_json_parse(text, strlen(text), "t.json", out, err);
