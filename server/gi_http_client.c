@@ -120,6 +120,23 @@ int gi_http_parse_head(const char *data, size_t len, gi_http_head *out, size_t *
     return 1;
 }
 
+/* A chunk's size line [p, eol) (hex digits, then maybe ";extensions"). */
+static int chunk_size(const char *p, const char *eol, uint64_t *out, gi_error *err)
+{
+    uint64_t n = 0;
+    const char *q = p;
+    int digits = 0;
+    for (; q < eol && isxdigit((unsigned char)*q); q++, digits++) {
+        if (digits == 15)
+            return gi_fail(err, GI_EPROTO, "chunk size too large");
+        n = n * 16 + (uint64_t)(isdigit((unsigned char)*q) ? *q - '0' : (tolower(*q) - 'a' + 10));
+    }
+    if (digits == 0 || (q < eol && *q != ';'))
+        return gi_fail(err, GI_EPROTO, "malformed chunk size");
+    *out = n;
+    return 0;
+}
+
 int gi_http_dechunk(gi_buf *in, gi_error *err)
 {
     if (in->len == 0)
@@ -130,16 +147,9 @@ int gi_http_dechunk(gi_buf *in, gi_error *err)
         const char *eol = find_crlf(p, end);
         if (!eol)
             return gi_fail(err, GI_EPROTO, "truncated chunked body");
-        uint64_t n = 0;
-        const char *q = p;
-        int digits = 0;
-        for (; q < eol && isxdigit((unsigned char)*q); q++, digits++) {
-            if (digits == 15)
-                return gi_fail(err, GI_EPROTO, "chunk size too large");
-            n = n * 16 + (uint64_t)(isdigit((unsigned char)*q) ? *q - '0' : (tolower(*q) - 'a' + 10));
-        }
-        if (digits == 0 || (q < eol && *q != ';'))
-            return gi_fail(err, GI_EPROTO, "malformed chunk size");
+        uint64_t n;
+        if (chunk_size(p, eol, &n, err))
+            return -1;
         p = eol + 2;
         if (n == 0)
             break; /* trailers, if any, are ignored */
@@ -217,10 +227,12 @@ static int send_request(int fd, const gi_http_url *u, const gi_http_request *rq,
 static int body_to_fd(int fd, int out, const gi_buf *already, int64_t left, double timeout_s,
                       const char *path, gi_error *err)
 {
-    if (already->len && gi_write_all(out, already->data, already->len, err))
+    /* Bytes past the body that came with the head are not the file's. */
+    size_t have = left >= 0 && (uint64_t)left < already->len ? (size_t)left : already->len;
+    if (have && gi_write_all(out, already->data, have, err))
         return gi_error_prefix(err, "%s", path);
     if (left >= 0)
-        left -= (int64_t)already->len;
+        left -= (int64_t)have;
     uint8_t buf[65536];
     while (left != 0) {
         size_t want = left > 0 && (uint64_t)left < sizeof buf ? (size_t)left : sizeof buf;
@@ -239,6 +251,61 @@ static int body_to_fd(int fd, int out, const gi_buf *already, int64_t left, doub
             left -= r;
     }
     return 0;
+}
+
+/* Streams a chunked body into fd_out: the bytes in `pend` first, then the
+ * connection's, to the last chunk (trailers are not read). */
+static int chunked_to_fd(int fd, int out, gi_buf *pend, double timeout_s, const char *path,
+                         gi_error *err)
+{
+    enum { SIZE, DATA, DATA_END } state = SIZE;
+    uint64_t left = 0; /* of the chunk's data */
+    for (;;) {
+        size_t off = 0;
+        for (;;) {
+            const char *p = (const char *)pend->data + off, *end = (const char *)pend->data + pend->len;
+            if (state == SIZE) {
+                const char *eol = find_crlf(p, end);
+                if (!eol) {
+                    if (end - p > 4096)
+                        return gi_fail(err, GI_EPROTO, "%s: malformed chunk size", path);
+                    break;
+                }
+                if (chunk_size(p, eol, &left, err))
+                    return gi_error_prefix(err, "%s", path);
+                if (left == 0)
+                    return 0;
+                off += (size_t)(eol + 2 - p);
+                state = DATA;
+            } else if (state == DATA) {
+                size_t k = (size_t)(end - p) < left ? (size_t)(end - p) : (size_t)left;
+                if (k == 0)
+                    break;
+                if (gi_write_all(out, p, k, err))
+                    return gi_error_prefix(err, "%s", path);
+                off += k;
+                left -= k;
+                if (left == 0)
+                    state = DATA_END;
+            } else {
+                if (end - p < 2)
+                    break;
+                if (p[0] != '\r' || p[1] != '\n')
+                    return gi_fail(err, GI_EPROTO, "%s: malformed chunk", path);
+                off += 2;
+                state = SIZE;
+            }
+        }
+        memmove(pend->data, pend->data + off, pend->len - off);
+        pend->len -= off;
+        gi_buf_reserve(pend, 65536);
+        ssize_t r = read_some(fd, pend->data + pend->len, pend->cap - pend->len, timeout_s, err);
+        if (r < 0)
+            return -1;
+        if (r == 0)
+            return gi_fail(err, GI_EIO, "the connection closed before the end of %s", path);
+        pend->len += (size_t)r;
+    }
 }
 
 int gi_http_do(const gi_http_url *u, const gi_http_request *rq, gi_buf *body, uint64_t max_body,
@@ -274,11 +341,12 @@ int gi_http_do(const gi_http_url *u, const gi_http_request *rq, gi_buf *body, ui
     }
     memmove(in.data, in.data + head_len, in.len - head_len);
     in.len -= head_len;
-    if (to_file && head.status / 100 == 2 && !head.chunked) {
+    if (to_file && head.status / 100 == 2) {
         char *tmp = gi_temp_path(to_file);
         int out = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-        int rc = out < 0 ? gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(errno))
-                         : body_to_fd(fd, out, &in, head.content_length, timeout, to_file, err);
+        int rc = out < 0      ? gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(errno))
+                 : head.chunked ? chunked_to_fd(fd, out, &in, timeout, to_file, err)
+                              : body_to_fd(fd, out, &in, head.content_length, timeout, to_file, err);
         if (out >= 0 && close(out) != 0 && rc == 0)
             rc = gi_fail(err, GI_EIO, "%s: close: %s", tmp, strerror(errno));
         if (rc == 0)

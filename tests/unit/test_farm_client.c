@@ -1,10 +1,14 @@
 /* Unit tests: job submission bodies, the HTTP client's parsers, farm URLs,
  * the worker's asset cache, option values. */
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -12,6 +16,7 @@
 #include "gi_args.h"
 #include "gi_asset_cache.h"
 #include "gi_farm_submit.h"
+#include "gi_fs.h"
 #include "gi_http_client.h"
 #include "gi_test.h"
 
@@ -121,6 +126,92 @@ GI_TEST(test_http_dechunk)
         gi_buf_put(&b, bad[i], strlen(bad[i]));
         GI_CHECK_MSG(gi_http_dechunk(&b, &err) != 0, "accepted %s", bad[i]);
     }
+    gi_buf_free(&b);
+}
+
+/* One canned response from a process listening on 127.0.0.1; returns the
+ * farm URL to reach it (the child exits after one connection). */
+static pid_t serve_once(const char *response, char *url, size_t n)
+{
+    int ls = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    if (ls < 0 || bind(ls, (struct sockaddr *)&a, sizeof a) || listen(ls, 1) ||
+        getsockname(ls, (struct sockaddr *)&a, &al))
+        return -1;
+    snprintf(url, n, "http://127.0.0.1:%d", ntohs(a.sin_port));
+    pid_t pid = fork();
+    if (pid == 0) {
+        int c = accept(ls, NULL, NULL);
+        char buf[4096];
+        size_t got = 0;
+        while (got < sizeof buf - 1) { /* the request's head */
+            ssize_t r = read(c, buf + got, sizeof buf - 1 - got);
+            if (r <= 0)
+                break;
+            got += (size_t)r;
+            buf[got] = '\0';
+            if (strstr(buf, "\r\n\r\n"))
+                break;
+        }
+        /* In small pieces, so that chunks straddle the reads. */
+        for (size_t i = 0, len = strlen(response); i < len; i += 7) {
+            if (write(c, response + i, len - i < 7 ? len - i : 7) < 0)
+                break;
+            usleep(200);
+        }
+        close(c);
+        _exit(0);
+    }
+    close(ls);
+    return pid;
+}
+
+static int download(const char *response, const char *path, gi_error *err)
+{
+    char url_text[64];
+    pid_t pid = serve_once(response, url_text, sizeof url_text);
+    if (pid < 0)
+        return gi_fail(err, GI_EIO, "cannot listen");
+    gi_http_url u;
+    if (gi_http_url_parse(url_text, &u, err))
+        return -1;
+    gi_http_request rq = {.method = "GET", .path = "/x", .timeout_s = 10};
+    gi_buf body;
+    gi_buf_init(&body);
+    int status = gi_http_do(&u, &rq, &body, 1024, path, err);
+    gi_buf_free(&body);
+    gi_http_url_free(&u);
+    waitpid(pid, NULL, 0);
+    return status;
+}
+
+/* Downloads go to the file whether the body comes chunked (a proxy may
+ * re-chunk the farm's) or with a length (and no further). */
+GI_TEST(test_http_download_to_file)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/download.bin", gi_test_tmpdir());
+    gi_error err;
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_CHECK(download("HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n"
+                      "5\r\nhello\r\n1;ext=1\r\n \r\n10\r\n0123456789abcdef\r\n0\r\n\r\n",
+                      path, &err) == 200);
+    GI_REQUIRE_OK(gi_read_file(path, 100, &b, &err));
+    GI_CHECK_MSG(b.len == 22 && memcmp(b.data, "hello 0123456789abcdef", 22) == 0, "%.*s",
+                 (int)b.len, (const char *)b.data);
+    GI_CHECK(download("HTTP/1.1 200 OK\r\nContent-Length: 3\r\n\r\nabcEXTRA", path, &err) ==
+             200);
+    GI_REQUIRE_OK(gi_read_file(path, 100, &b, &err));
+    GI_CHECK(b.len == 3 && memcmp(b.data, "abc", 3) == 0);
+    /* Cut short or malformed: an error, and the file as it was. */
+    GI_CHECK(download("HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n5\r\nhel", path,
+                      &err) < 0);
+    GI_CHECK(download("HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n5\r\nhelloX\r\n",
+                      path, &err) < 0);
+    GI_REQUIRE_OK(gi_read_file(path, 100, &b, &err));
+    GI_CHECK(b.len == 3 && memcmp(b.data, "abc", 3) == 0);
     gi_buf_free(&b);
 }
 
