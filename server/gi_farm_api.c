@@ -550,6 +550,32 @@ static void on_mhd_log(void *cls, const char *fmt, va_list ap)
     (void)cls;
 }
 
+static int hex_value(char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c - 'A' + 10;
+}
+
+/* MHD's unescaping of paths and query values, except that %00 stays as
+ * written: a NUL would cut what the handlers see, so that
+ * /api/v1/jobs/1%00x would read as job 1. */
+static size_t unescape_keeping_nul(void *cls, struct MHD_Connection *conn, char *s)
+{
+    (void)cls;
+    (void)conn;
+    char *w = s;
+    for (const char *r = s; *r;) {
+        if (r[0] == '%' && isxdigit((unsigned char)r[1]) && isxdigit((unsigned char)r[2]) &&
+            (r[1] != '0' || r[2] != '0')) {
+            *w++ = (char)(hex_value(r[1]) * 16 + hex_value(r[2]));
+            r += 3;
+        } else {
+            *w++ = *r++;
+        }
+    }
+    *w = '\0';
+    return (size_t)(w - s);
+}
+
 int gi_farm_api_start(gi_farm *f, gi_error *err)
 {
     f->api_fd = gi_net_listen(f->cfg.listen_api, f->api_addr, sizeof f->api_addr, err);
@@ -560,7 +586,8 @@ int gi_farm_api_start(gi_farm *f, gi_error *err)
         MHD_OPTION_EXTERNAL_LOGGER, on_mhd_log, f, MHD_OPTION_LISTEN_SOCKET, f->api_fd,
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, f, MHD_OPTION_CONNECTION_LIMIT, 256u,
         MHD_OPTION_PER_IP_CONNECTION_LIMIT, 64u, MHD_OPTION_CONNECTION_TIMEOUT, 60u,
-        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(256u << 10), MHD_OPTION_END);
+        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK,
+        unescape_keeping_nul, NULL, MHD_OPTION_END);
     if (!f->mhd) {
         close(f->api_fd);
         f->api_fd = -1;

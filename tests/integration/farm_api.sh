@@ -108,6 +108,10 @@ set -e
 [ "$(api "/api/v1/jobs/$lo?purge=yes" -X DELETE -o /dev/null -w '%{http_code}')" = 400 ] ||
     fail "purge=yes was not refused"
 "$GI" purge "$lo" | grep -q "removed" || fail "gi purge of an ended job"
+# %00 in a path is not a NUL that cuts it short.
+[ "$(api "/api/v1/jobs/$hi%00x" -o /dev/null -w '%{http_code}')" = 404 ] || fail "/jobs/$hi%00x was served"
+[ "$(api "/api/v1/jobs/$hi/outputs/high.exr%00.x" -o /dev/null -w '%{http_code}')" = 404 ] ||
+    fail "an output name with %00 was served"
 [ "$(api "/api/v1/jobs/$lo" -o /dev/null -w '%{http_code}')" = 404 ] || fail "removed job still listed"
 
 # Drain: a second worker gets SIGTERM in the middle of a job; it hands its
