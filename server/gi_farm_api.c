@@ -55,6 +55,7 @@ typedef struct api_req {
     gi_buf body;
     gi_farm_upload *up;
     uint64_t received, limit;
+    const char *allow; /* a 405's Allow header */
 } api_req;
 
 /* ---- helpers ------------------------------------------------------------- */
@@ -72,8 +73,9 @@ static void log_safe(const char *in, char *out, size_t n)
 }
 
 /* body is malloc'ed (freed by MHD) unless persistent. */
-static enum MHD_Result send_body(struct MHD_Connection *conn, unsigned status, char *body,
-                                 size_t len, const char *type, int persistent)
+static enum MHD_Result send_body_allow(struct MHD_Connection *conn, unsigned status, char *body,
+                                       size_t len, const char *type, int persistent,
+                                       const char *allow)
 {
     struct MHD_Response *r = MHD_create_response_from_buffer(
         len, body, persistent ? MHD_RESPMEM_PERSISTENT : MHD_RESPMEM_MUST_FREE);
@@ -86,9 +88,17 @@ static enum MHD_Result send_body(struct MHD_Connection *conn, unsigned status, c
     MHD_add_response_header(r, "Cache-Control", "no-store");
     if (status == MHD_HTTP_UNAUTHORIZED)
         MHD_add_response_header(r, "WWW-Authenticate", "Bearer realm=\"gi-farm\"");
+    if (allow)
+        MHD_add_response_header(r, "Allow", allow);
     enum MHD_Result rc = MHD_queue_response(conn, status, r);
     MHD_destroy_response(r);
     return rc;
+}
+
+static enum MHD_Result send_body(struct MHD_Connection *conn, unsigned status, char *body,
+                                 size_t len, const char *type, int persistent)
+{
+    return send_body_allow(conn, status, body, len, type, persistent, NULL);
 }
 
 static enum MHD_Result send_response(struct MHD_Connection *conn, unsigned status, char *body,
@@ -97,14 +107,20 @@ static enum MHD_Result send_response(struct MHD_Connection *conn, unsigned statu
     return send_body(conn, status, body, len, type, body == NULL);
 }
 
-static enum MHD_Result send_json(struct MHD_Connection *conn, unsigned status, char *json)
+static enum MHD_Result send_json_allow(struct MHD_Connection *conn, unsigned status, char *json,
+                                       const char *allow)
 {
     size_t n = strlen(json);
     /* Newline-terminated: nicer with curl. */
     json = gi_xrealloc(json, n + 2);
     json[n] = '\n';
     json[n + 1] = '\0';
-    return send_response(conn, status, json, n + 1, "application/json");
+    return send_body_allow(conn, status, json, n + 1, "application/json", 0, allow);
+}
+
+static enum MHD_Result send_json(struct MHD_Connection *conn, unsigned status, char *json)
+{
+    return send_json_allow(conn, status, json, NULL);
 }
 
 static char *json_error(const char *msg)
@@ -139,7 +155,8 @@ static enum MHD_Result refuse(gi_farm *f, struct MHD_Connection *conn, api_req *
     if (status != MHD_HTTP_NOT_FOUND)
         gi_warn("api: refused %s %s from %s: %s", method, u, r->peer, msg);
     r->responded = 1;
-    return send_json(conn, status, json_error(msg));
+    return send_json_allow(conn, status, json_error(msg),
+                           status == MHD_HTTP_METHOD_NOT_ALLOWED ? r->allow : NULL);
 }
 
 static int authorized(gi_farm *f, struct MHD_Connection *conn, const char **why)
@@ -178,24 +195,31 @@ static int parse_id(const char *s, size_t n, uint64_t *out)
     return 0;
 }
 
+/* 405, with the methods the path takes (the Allow header). */
+static unsigned not_allowed(api_req *r, const char *allow)
+{
+    r->allow = allow;
+    return MHD_HTTP_METHOD_NOT_ALLOWED;
+}
+
 /* Maps method + path to a route; 0 = found, 404 / 405 otherwise. */
 static unsigned route(const char *method, const char *url, api_req *r)
 {
     int get = strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0;
     const char *p;
     if (strcmp(url, "/") == 0)
-        return get ? (r->route = R_DASHBOARD, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+        return get ? (r->route = R_DASHBOARD, 0) : not_allowed(r, "GET, HEAD");
     if (strcmp(url, "/metrics") == 0)
-        return get ? (r->route = R_METRICS, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+        return get ? (r->route = R_METRICS, 0) : not_allowed(r, "GET, HEAD");
     if (strcmp(url, "/api/v1/workers") == 0)
-        return get ? (r->route = R_WORKERS, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+        return get ? (r->route = R_WORKERS, 0) : not_allowed(r, "GET, HEAD");
     if (strcmp(url, "/api/v1/jobs") == 0) {
         if (get)
             r->route = R_JOBS_LIST;
         else if (strcmp(method, "POST") == 0)
             r->route = R_JOBS_SUBMIT;
         else
-            return MHD_HTTP_METHOD_NOT_ALLOWED;
+            return not_allowed(r, "GET, HEAD, POST");
         return 0;
     }
     if (strncmp(url, "/api/v1/assets/", 15) == 0) {
@@ -208,7 +232,7 @@ static unsigned route(const char *method, const char *url, api_req *r)
         else if (strcmp(method, "HEAD") == 0)
             r->route = R_ASSET_HEAD;
         else
-            return MHD_HTTP_METHOD_NOT_ALLOWED;
+            return not_allowed(r, "HEAD, PUT");
         return 0;
     }
     if (strncmp(url, "/api/v1/jobs/", 13) == 0) {
@@ -223,16 +247,16 @@ static unsigned route(const char *method, const char *url, api_req *r)
             else if (strcmp(method, "DELETE") == 0)
                 r->route = R_JOB_DELETE;
             else
-                return MHD_HTTP_METHOD_NOT_ALLOWED;
+                return not_allowed(r, "GET, HEAD, DELETE");
             return 0;
         }
         if (strcmp(slash, "/retry") == 0)
             return strcmp(method, "POST") == 0 ? (r->route = R_JOB_RETRY, 0)
-                                               : MHD_HTTP_METHOD_NOT_ALLOWED;
+                                               : not_allowed(r, "POST");
         if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/') &&
             strlen(slash + 9) < sizeof r->name) {
             snprintf(r->name, sizeof r->name, "%s", slash + 9);
-            return get ? (r->route = R_JOB_OUTPUT, 0) : MHD_HTTP_METHOD_NOT_ALLOWED;
+            return get ? (r->route = R_JOB_OUTPUT, 0) : not_allowed(r, "GET, HEAD");
         }
     }
     return MHD_HTTP_NOT_FOUND;
@@ -433,6 +457,9 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
     const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Content-Length");
     if (cl) {
         unsigned long long n = strtoull(cl, NULL, 10);
+        if (n > 0 && r->limit == 0)
+            return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST,
+                          "%s %s takes no request body", method, url);
         if (n > r->limit)
             return refuse(f, conn, r, method, url, MHD_HTTP_CONTENT_TOO_LARGE,
                           "request body of %llu bytes is over the limit of %llu", n,
@@ -454,13 +481,18 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
     return MHD_YES;
 }
 
+/* How far past its limit a body is read (and discarded) to answer 413. */
+#define DISCARD_MAX ((uint64_t)64 << 20)
+
 /* A piece of a request body. */
 static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
 {
+    r->received += n;
     if (r->status)
         return; /* already failed: the rest is discarded */
-    r->received += n;
     if (r->received > r->limit) {
+        gi_farm_upload_abort(r->up);
+        r->up = NULL;
         r->status = MHD_HTTP_CONTENT_TOO_LARGE;
         snprintf(r->err, sizeof r->err, "request body is over the limit of %llu bytes",
                  (unsigned long long)r->limit);
@@ -508,11 +540,14 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     if (*upload_data_size) {
         body_piece(f, r, upload_data, *upload_data_size);
         *upload_data_size = 0;
-        if (r->status == MHD_HTTP_CONTENT_TOO_LARGE) {
-            /* Answer now: MHD closes the connection instead of reading on. */
-            gi_farm_upload_abort(r->up);
-            r->up = NULL;
-            return refuse(f, conn, r, method, url, (unsigned)r->status, "%s", r->err);
+        /* A body over the limit (sent chunked, or longer than it said) is
+         * read to its end and answered then: MHD cannot answer in the middle
+         * of a body. One far over it is cut off without an answer. */
+        if (r->status == MHD_HTTP_CONTENT_TOO_LARGE && r->received > r->limit + DISCARD_MAX) {
+            gi_warn("api: %s from %s: closed after %llu bytes of a body over the limit of %llu",
+                    method, r->peer, (unsigned long long)r->received,
+                    (unsigned long long)r->limit);
+            return MHD_NO;
         }
         return MHD_YES;
     }

@@ -62,6 +62,16 @@ code=$(api "/api/v1/assets/$(b2sum -l 256 "$TMP/big" | cut -d' ' -f1)" -o "$TMP/
     -X PUT --data-binary @"$TMP/big")
 [ "$code" = 413 ] || fail "oversized upload: HTTP $code"
 logged "over the limit of 1048576"
+# The same sent chunked (no length to refuse up front): 413 at its end.
+code=$(api "/api/v1/assets/$(b2sum -l 256 "$TMP/big" | cut -d' ' -f1)" -o "$TMP/r" -w '%{http_code}' \
+    -X PUT -H 'Transfer-Encoding: chunked' --data-binary @"$TMP/big")
+[ "$code" = 413 ] || fail "oversized chunked upload: HTTP $code"
+# A body where none is taken: 400; a method a path does not take: 405
+# with the methods it does.
+code=$(api /api/v1/workers -o "$TMP/r" -w '%{http_code}' -X GET --data-binary 'x')
+[ "$code" = 400 ] && grep -q "takes no request body" "$TMP/r" || { cat "$TMP/r"; fail "body on GET: HTTP $code"; }
+api /api/v1/jobs -X PUT -D "$TMP/h" -o /dev/null
+grep -q "^HTTP/1.1 405" "$TMP/h" && grep -qi "^Allow: GET, HEAD, POST" "$TMP/h" || { cat "$TMP/h"; fail "405 without Allow"; }
 code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 64))" -o "$TMP/r" -w '%{http_code}' -X PUT \
     --data-binary 'not these bytes')
 [ "$code" = 400 ] || fail "mismatched upload: HTTP $code"
