@@ -59,10 +59,11 @@ int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
     if (end) {
         size_t off = (size_t)(end - text);
         used = off;
+        /* Whitespace, and NULs (a terminator counted in len), may follow. */
         while (off < len && (text[off] == ' ' || text[off] == '\n' || text[off] == '\r' ||
-                             text[off] == '\t'))
+                             text[off] == '\t' || text[off] == '\0'))
             off++;
-        if (off < len && text[off] != '\0') {
+        if (off < len) {
             cJSON_Delete(root);
             return gi_fail(err, GI_EINVAL, "%s: unexpected text after the JSON document",
                            file);

@@ -1,6 +1,7 @@
 /* gi_farm_submit: parsing and building job submission bodies. */
 #include "gi_farm_submit.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,9 +47,12 @@ static int parse_assets(gi_jv *v, const cJSON *assets, gi_manifest *m)
  * within its tolerance: 2^53 would come back as 9007199254740990, and the
  * farm would render another job than `gi render` does.) Numbers get %.17g,
  * which round-trips every double; strings and literals are cJSON's. */
-static int print_exact(const cJSON *v, gi_buf *out)
+static int print_exact(const cJSON *v, const char *path, gi_buf *out, gi_error *err)
 {
     if (cJSON_IsNumber(v)) {
+        /* 1e400 reads as inf, which JSON cannot write. */
+        if (!isfinite(v->valuedouble))
+            return gi_fail(err, GI_EINVAL, "%s: %s: not a finite number", SUBMIT_WHAT, path);
         char n[64];
         int k = snprintf(n, sizeof n, "%.17g", v->valuedouble);
         gi_buf_put(out, n, (size_t)k);
@@ -57,7 +61,13 @@ static int print_exact(const cJSON *v, gi_buf *out)
     if (cJSON_IsObject(v) || cJSON_IsArray(v)) {
         int obj = cJSON_IsObject(v);
         gi_buf_put_u8(out, obj ? '{' : '[');
-        for (const cJSON *c = v->child; c; c = c->next) {
+        int i = 0;
+        for (const cJSON *c = v->child; c; c = c->next, i++) {
+            char sub[512];
+            if (obj)
+                gi_json_path(sub, sizeof sub, path, c->string);
+            else
+                gi_json_index_path(sub, sizeof sub, path, i);
             if (c != v->child)
                 gi_buf_put_u8(out, ',');
             if (obj) {
@@ -65,12 +75,12 @@ static int print_exact(const cJSON *v, gi_buf *out)
                 char *k = cJSON_PrintUnformatted(key);
                 cJSON_Delete(key);
                 if (!k)
-                    return -1;
+                    return gi_fail(err, GI_ENOMEM, "%s: cannot print the job", SUBMIT_WHAT);
                 gi_buf_put(out, k, strlen(k));
                 gi_buf_put_u8(out, ':');
                 cJSON_free(k);
             }
-            if (print_exact(c, out))
+            if (print_exact(c, sub, out, err))
                 return -1;
         }
         gi_buf_put_u8(out, obj ? '}' : ']');
@@ -78,7 +88,7 @@ static int print_exact(const cJSON *v, gi_buf *out)
     }
     char *t = cJSON_PrintUnformatted(v); /* strings, true, false, null */
     if (!t)
-        return -1;
+        return gi_fail(err, GI_ENOMEM, "%s: cannot print the job", SUBMIT_WHAT);
     gi_buf_put(out, t, strlen(t));
     cJSON_free(t);
     return 0;
@@ -133,9 +143,8 @@ int gi_farm_submission_parse(const char *body, size_t len, gi_farm_submission *o
     } else {
         gi_buf t;
         gi_buf_init(&t);
-        if (print_exact(job, &t)) {
+        if (print_exact(job, "job", &t, err)) {
             gi_buf_free(&t);
-            gi_fail(err, GI_ENOMEM, "%s: cannot print the job", SUBMIT_WHAT);
             goto out;
         }
         gi_buf_put_u8(&t, 0);

@@ -74,6 +74,8 @@ GI_TEST(test_submission_refusals)
         {"{\"job\": {}, \"assets\": {}, \"file\": \"a\\nb\"}", "printable"},
         {"[1]", "must be a JSON object"},
         {"{\"job\": {}, \"assets\": {}} trailing", "unexpected text"},
+        {"{\"job\": {\"a\": [1, {\"seed\": 1e400}]}, \"assets\": {}}",
+         "job.a[1].seed: not a finite number"},
     };
     for (size_t i = 0; i < GI_ARRAY_LEN(bad); i++) {
         gi_farm_submission s;
@@ -83,6 +85,12 @@ GI_TEST(test_submission_refusals)
         GI_CHECK_MSG(strstr(err.msg, bad[i][1]) != NULL, "%s: \"%s\" lacks \"%s\"", bad[i][0],
                      err.msg, bad[i][1]);
     }
+    /* After a NUL (a terminator counted in the length) only more may come. */
+    static const char nul_then[] = "{\"job\": {}, \"assets\": {}}\0garbage";
+    gi_farm_submission s;
+    gi_error err;
+    GI_CHECK(gi_farm_submission_parse(nul_then, sizeof nul_then - 1, &s, &err) != 0 &&
+             strstr(err.msg, "unexpected text"));
 }
 
 GI_TEST(test_http_head_parse)
