@@ -944,8 +944,11 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
         }
         if (w.established)
             backoff = 0.25;
-        /* Jitter, so a restarted coordinator is not hit by every worker at once. */
+        /* Jitter, so a restarted coordinator is not hit by every worker at
+         * once; --backoff-max bounds the wait itself. */
         double wait = backoff * (0.5 + (double)(rand() % 1000) / 1000.0);
+        if (wait > o->backoff_max_s)
+            wait = o->backoff_max_s;
         gi_info("reconnecting in %.1f s", wait);
         nap(wait);
         backoff = backoff * 2 > o->backoff_max_s ? o->backoff_max_s : backoff * 2;
