@@ -39,6 +39,7 @@ void gi_farm_config_default(gi_farm_config *c)
     c->listen_api = "127.0.0.1:7070";
     c->heartbeat_s = 2.0;
     c->lease_s = 30.0;
+    c->api_head_s = 10.0;
     c->dead_s = 120.0;
     c->handshake_s = 10.0;
     c->checkpoint_s = 30.0;

@@ -30,6 +30,7 @@ typedef struct gi_farm_config {
     double lease_s;      /* a lease not renewed for this long expires */
     double dead_s;       /* a connection silent this long is closed */
     double handshake_s;  /* time allowed for HELLO .. AUTH */
+    double api_head_s;   /* time allowed an API client for a request's head */
     double checkpoint_s; /* checkpoint running jobs this often */
     uint32_t max_attempts;       /* runs of a task before its job fails */
     uint32_t blocklist_failures; /* consecutive task failures that blocklist a worker */

@@ -21,9 +21,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "gi_clock.h"
 #include "gi_farm_impl.h"
 #include "gi_farm_submit.h"
 #include "gi_log.h"
@@ -57,6 +59,68 @@ typedef struct api_req {
     uint64_t received, limit;
     const char *allow; /* a 405's Allow header */
 } api_req;
+
+/* A TCP connection of the API. A client gets --api-head-seconds to send a
+ * request's head, from its connection or from the end of its last request;
+ * then it is shut down. MHD's own timeout counts idle time only, so a
+ * client trickling a header line every few seconds would hold its
+ * connection (and, 64 of them, every other client from its address) for
+ * ever. */
+typedef struct gi_api_conn {
+    int fd;
+    double since;   /* when it began to wait for a request's head */
+    int in_request; /* a head has come, the answer has not gone */
+    int cut;        /* shut down already */
+    struct gi_api_conn *prev, *next;
+} gi_api_conn;
+
+static gi_api_conn *api_conn_of(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    return ci ? ci->socket_context : NULL;
+}
+
+static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
+                          enum MHD_ConnectionNotificationCode toe)
+{
+    gi_farm *f = cls;
+    gi_api_conn *c = *socket_context;
+    if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+        c = gi_xcalloc(1, sizeof *c);
+        const union MHD_ConnectionInfo *ci =
+            MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+        c->fd = ci ? ci->connect_fd : -1;
+        c->since = gi_now();
+        c->next = f->api_conns;
+        if (c->next)
+            c->next->prev = c;
+        f->api_conns = c;
+        *socket_context = c;
+    } else if (c) {
+        if (c->prev)
+            c->prev->next = c->next;
+        else
+            f->api_conns = c->next;
+        if (c->next)
+            c->next->prev = c->prev;
+        free(c);
+        *socket_context = NULL;
+    }
+}
+
+/* Shuts down the connections past their time for a request head (MHD
+ * closes them when it next runs). */
+static void cut_slow_connections(gi_farm *f)
+{
+    double now = gi_now();
+    for (gi_api_conn *c = f->api_conns; c; c = c->next)
+        if (!c->in_request && !c->cut && c->fd >= 0 && now - c->since > f->cfg.api_head_s) {
+            shutdown(c->fd, SHUT_RDWR);
+            c->cut = 1;
+            f->m.api_slow_closed++;
+        }
+}
 
 /* ---- helpers ------------------------------------------------------------- */
 
@@ -521,6 +585,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     gi_farm *f = cls;
     api_req *r = *con_cls;
     if (!r) {
+        gi_api_conn *c = api_conn_of(conn);
+        if (c)
+            c->in_request = 1;
         r = gi_xcalloc(1, sizeof *r);
         gi_buf_init(&r->body);
         *con_cls = r;
@@ -564,6 +631,11 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
                          enum MHD_RequestTerminationCode toe)
 {
+    gi_api_conn *c = api_conn_of(conn);
+    if (c) { /* the next request's head is awaited from now */
+        c->in_request = 0;
+        c->since = gi_now();
+    }
     api_req *r = *con_cls;
     if (!r)
         return;
@@ -619,7 +691,8 @@ int gi_farm_api_start(gi_farm *f, gi_error *err)
     f->mhd = MHD_start_daemon(
         MHD_USE_EPOLL | MHD_USE_ERROR_LOG, 0, NULL, NULL, on_request, f,
         MHD_OPTION_EXTERNAL_LOGGER, on_mhd_log, f, MHD_OPTION_LISTEN_SOCKET, f->api_fd,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, f, MHD_OPTION_CONNECTION_LIMIT, 256u,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, f, MHD_OPTION_NOTIFY_CONNECTION,
+        on_connection, f, MHD_OPTION_CONNECTION_LIMIT, 256u,
         MHD_OPTION_PER_IP_CONNECTION_LIMIT, 64u, MHD_OPTION_CONNECTION_TIMEOUT, 60u,
         MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK,
         unescape_keeping_nul, NULL, MHD_OPTION_END);
@@ -648,6 +721,7 @@ int gi_farm_api_timeout_ms(gi_farm *f)
 void gi_farm_api_run(gi_farm *f)
 {
     MHD_run(f->mhd);
+    cut_slow_connections(f);
 }
 
 void gi_farm_api_stop(gi_farm *f)

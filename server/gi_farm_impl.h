@@ -177,6 +177,7 @@ typedef struct gi_farm_metrics {
     uint64_t checkpoints, checkpoint_bytes;
     uint64_t workers_accepted, workers_refused, frames_refused;
     uint64_t api_requests, api_refused_auth, api_refused_input;
+    uint64_t api_slow_closed; /* connections cut for a request head not sent in time */
     uint64_t assets_uploaded, asset_bytes_uploaded, assets_served;
 } gi_farm_metrics;
 
@@ -208,6 +209,7 @@ struct gi_farm {
     int api_fd;
     char api_addr[80];
     struct MHD_Daemon *mhd;
+    struct gi_api_conn *api_conns; /* the API's TCP connections (gi_farm_api.c) */
 
     gi_farm_metrics m;
 };

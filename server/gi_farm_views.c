@@ -328,6 +328,9 @@ char *gi_farm_view_metrics(gi_farm *f)
             (double)m->api_refused_auth);
     counter(&b, "gi_farm_api_refused_input_total", "API requests refused: bad input or limits.",
             (double)m->api_refused_input);
+    counter(&b, "gi_farm_api_slow_closed_total",
+            "API connections closed for not sending a request head in time.",
+            (double)m->api_slow_closed);
     counter(&b, "gi_farm_assets_uploaded_total", "Assets uploaded.", (double)m->assets_uploaded);
     counter(&b, "gi_farm_asset_bytes_uploaded_total", "Bytes of assets uploaded.",
             (double)m->asset_bytes_uploaded);

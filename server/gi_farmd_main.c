@@ -44,6 +44,7 @@ static void usage(FILE *out)
             "  --max-asset-bytes B --max-store-bytes B --max-result-bytes B  (1G, 64G, 1G)\n"
             "  --max-pixels N --max-jobs N --max-workers N    (64M, 1000, 1024)\n"
             "  --check-timeout S --check-memory B             scene checker limits (300, 16G)\n"
+            "  --api-head-seconds S        time an API client has to send a request's head (10)\n"
             "Sizes take K, M, G, T suffixes. See docs/farm.md.\n");
 }
 
@@ -68,6 +69,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--checkpoint", offsetof(gi_farm_config, checkpoint_s), 0.05, 86400},
         {"--blocklist-seconds", offsetof(gi_farm_config, blocklist_s), 0, 86400 * 30},
         {"--check-timeout", offsetof(gi_farm_config, check_timeout_s), 1, 86400},
+        {"--api-head-seconds", offsetof(gi_farm_config, api_head_s), 0.1, 3600},
     };
     static const struct {
         const char *name;

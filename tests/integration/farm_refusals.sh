@@ -9,7 +9,7 @@
 make_secrets
 LOG="$TMP/farmd.log"
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10 --max-result-bytes 16M \
-    --max-asset-bytes 1M
+    --max-asset-bytes 1M --api-head-seconds 1
 logged() { grep -q -- "$1" "$LOG" || { cat "$LOG"; fail "not logged: $1"; }; }
 
 # Wrong farm secret: the worker is refused and says why.
@@ -76,6 +76,30 @@ code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 64))" -o "$TMP/r" -w '%{http_c
     --data-binary 'not these bytes')
 [ "$code" = 400 ] || fail "mismatched upload: HTTP $code"
 logged "hash to"
+
+# A client trickling its request's head, a line every 0.2 s, is cut off
+# after --api-head-seconds; the others are served all the while.
+python3 - "${GI_FARM#http://}" >"$TMP/slow.out" 2>&1 <<'PY' &
+import socket, sys, time
+host, port = sys.argv[1].rsplit(":", 1)
+s = socket.create_connection((host, int(port)))
+s.sendall(b"GET /api/v1/jobs HTTP/1.1\r\nHost: x\r\n")
+t0 = time.time()
+try:
+    while time.time() - t0 < 8:
+        time.sleep(0.2)
+        s.sendall(b"X-Slow: 1\r\n")
+    print("still open after 8 s")
+except OSError:
+    print("closed after %.1f s" % (time.time() - t0))
+PY
+slow=$!
+sleep 0.5
+code=$(api /api/v1/workers -o /dev/null -w '%{http_code}')
+[ "$code" = 200 ] || fail "another client during the slow one: HTTP $code"
+wait $slow
+grep -q "^closed after [1-3]\." "$TMP/slow.out" || { cat "$TMP/slow.out"; fail "the slow client was not cut off"; }
+api /metrics | grep -q "^gi_farm_api_slow_closed_total 1" || fail "the cut is not counted"
 
 # Jobs naming files outside their assets.
 job_body() { # SCENE ASSETS-JSON
