@@ -259,6 +259,16 @@ static int parse_id(const char *s, size_t n, uint64_t *out)
     return 0;
 }
 
+/* The output name or asset hash of the path: one too long to be either is
+ * kept cut short and marked, to be refused as the name it is. */
+static void set_name(api_req *r, const char *p)
+{
+    if (strlen(p) < sizeof r->name)
+        snprintf(r->name, sizeof r->name, "%s", p);
+    else
+        snprintf(r->name, sizeof r->name, "%.200s...", p);
+}
+
 /* 405, with the methods the path takes (the Allow header). */
 static unsigned not_allowed(api_req *r, const char *allow)
 {
@@ -288,9 +298,7 @@ static unsigned route(const char *method, const char *url, api_req *r)
     }
     if (strncmp(url, "/api/v1/assets/", 15) == 0) {
         p = url + 15;
-        if (strlen(p) >= sizeof r->name)
-            return MHD_HTTP_NOT_FOUND;
-        snprintf(r->name, sizeof r->name, "%s", p);
+        set_name(r, p);
         if (strcmp(method, "PUT") == 0)
             r->route = R_ASSET_PUT;
         else if (strcmp(method, "HEAD") == 0)
@@ -317,9 +325,8 @@ static unsigned route(const char *method, const char *url, api_req *r)
         if (strcmp(slash, "/retry") == 0)
             return strcmp(method, "POST") == 0 ? (r->route = R_JOB_RETRY, 0)
                                                : not_allowed(r, "POST");
-        if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/') &&
-            strlen(slash + 9) < sizeof r->name) {
-            snprintf(r->name, sizeof r->name, "%s", slash + 9);
+        if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/')) {
+            set_name(r, slash + 9);
             return get ? (r->route = R_JOB_OUTPUT, 0) : not_allowed(r, "GET, HEAD");
         }
     }

@@ -76,6 +76,9 @@ code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 64))" -o "$TMP/r" -w '%{http_c
     --data-binary 'not these bytes')
 [ "$code" = 400 ] || fail "mismatched upload: HTTP $code"
 logged "hash to"
+code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 300))" -o "$TMP/r" -w '%{http_code}' -X PUT \
+    --data-binary 'x')
+[ "$code" = 400 ] && ! grep -q "no such endpoint" "$TMP/r" || { cat "$TMP/r"; fail "a 300-character hash: HTTP $code"; }
 
 # A client trickling its request's head, a line every 0.2 s, is cut off
 # after --api-head-seconds; the others are served all the while.
