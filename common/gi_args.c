@@ -37,7 +37,8 @@ int gi_args_int(const char *s, int64_t lo, int64_t hi, int64_t *out)
     char *end;
     errno = 0;
     long long v = strtoll(s, &end, 10);
-    if (!*s || *end || errno || v < lo || v > hi)
+    /* strtoll skips leading blanks and a '+': plain digits only. */
+    if (!*s || (*s != '-' && (*s < '0' || *s > '9')) || *end || errno || v < lo || v > hi)
         return -1;
     *out = v;
     return 0;
@@ -48,7 +49,7 @@ int gi_args_bytes(const char *s, uint64_t *out)
     char *end;
     errno = 0;
     unsigned long long v = strtoull(s, &end, 10);
-    if (!*s || end == s || errno || s[0] == '-')
+    if (!*s || end == s || errno || s[0] < '0' || s[0] > '9')
         return -1;
     unsigned shift = 0;
     switch (*end) {

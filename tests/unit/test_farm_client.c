@@ -288,6 +288,11 @@ GI_TEST(test_args_values)
     GI_CHECK(gi_args_bytes("2T", &v) == 0 && v == (UINT64_C(2) << 40));
     GI_CHECK(gi_args_bytes("1.5G", &v) != 0 && gi_args_bytes("-1", &v) != 0);
     GI_CHECK(gi_args_bytes("2000T", &v) != 0 && gi_args_bytes("", &v) != 0);
+    GI_CHECK(gi_args_bytes(" 5", &v) != 0 && gi_args_bytes("+5", &v) != 0);
+    int64_t n;
+    GI_CHECK(gi_args_int("-3", -5, 5, &n) == 0 && n == -3);
+    GI_CHECK(gi_args_int(" 5", 1, 9, &n) != 0 && gi_args_int("+5", 1, 9, &n) != 0);
+    GI_CHECK(gi_args_int("5 ", 1, 9, &n) != 0 && gi_args_int("0x5", 1, 9, &n) != 0);
     double d;
     GI_CHECK(gi_args_number("0.25", 0, 1, &d) == 0 && d == 0.25);
     GI_CHECK(gi_args_number("nan", 0, 1, &d) != 0 && gi_args_number("2", 0, 1, &d) != 0);
