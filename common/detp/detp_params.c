@@ -282,8 +282,8 @@ int gi_detp_resolve_params(gi_detp_params *p, gi_scene *scene, const char *file,
         double batches = ceil((double)n / (double)p->batch);
         if (batches > GI_JOB_MAX_TASKS)
             return gi_fail(err, GI_EINVAL,
-                           "%s: detp.batch: detp.relative_error %g needs %llu photons, in "
-                           "batches of %lld %.4g tasks at once; a job plans at most %u",
+                           "%s: detp.batch: detp.relative_error %g needs %llu photons: in "
+                           "batches of %lld, %.4g tasks at once; a job plans at most %u",
                            file, p->relative_error, (unsigned long long)n, (long long)p->batch,
                            batches, GI_JOB_MAX_TASKS);
     } else {
