@@ -36,13 +36,19 @@ typedef struct exr_io {
     char msg[512];       /* first message from the library's error handler */
 } exr_io;
 
+/* The file this thread reads or writes. The error handler finds its exr_io
+ * here, not through exr_get_user_data: the library calls the handler with
+ * the context's mutex held (writing the header, say), and that mutex does
+ * not allow a second lock, so asking the context would wait for ever (a
+ * full disk used to hang gi-farmd and gi render so). */
+static _Thread_local exr_io *current_io;
+
 static void exr_on_error(exr_const_context_t ctxt, exr_result_t code, const char *msg)
 {
-    void *ud = NULL;
-    if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud)
-        return;
-    exr_io *io = ud;
-    if (io->msg[0] || !msg)
+    (void)ctxt;
+    (void)code;
+    exr_io *io = current_io;
+    if (!io || io->msg[0] || !msg)
         return;
     snprintf(io->msg, sizeof io->msg, "%s", msg);
     for (char *p = io->msg; *p; p++) /* messages are one line */
@@ -362,7 +368,9 @@ int gi_exr_write(const char *path, const gi_image *img, gi_error *err)
         free(tmp);
         return gi_fail(err, GI_EIO, "%s: cannot create temporary file: %s", path, strerror(e));
     }
+    current_io = &io;
     int rc = exr_write_fd(path, tmp, img, &io, err);
+    current_io = NULL;
     if (close(io.fd) != 0 && rc == 0)
         rc = gi_fail(err, GI_EIO, "%s: close: %s", path, strerror(errno));
     rc = gi_temp_finish(tmp, path, rc, err);
@@ -531,6 +539,7 @@ int gi_exr_read(const char *path, gi_image *out, gi_error *err)
 
     exr_context_t ctx = NULL;
     int rc = 0;
+    current_io = &io;
     exr_result_t r = exr_start_read(&ctx, path, &init);
     if (r != EXR_ERR_SUCCESS) {
         rc = exr_fail(err, path, "header read", r, &io, 1);
@@ -541,6 +550,7 @@ int gi_exr_read(const char *path, gi_image *out, gi_error *err)
             rc = exr_read_chunks(ctx, path, &io, &dw, out, err);
     }
     exr_finish(&ctx);
+    current_io = NULL;
     close(io.fd);
     if (rc != 0)
         gi_image_free(out);

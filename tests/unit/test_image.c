@@ -13,7 +13,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "gi_buf.h"
@@ -272,6 +275,40 @@ GI_TEST(exr_roundtrip_rgb_bit_exact)
              strcmp(back.names[2], "R") == 0);
     GI_CHECK(compare_by_name(&img, &back) == 0);
     gi_image_free(&back);
+    gi_image_free(&img);
+    free(p);
+}
+
+/* A disk that takes no byte (RLIMIT_FSIZE 0 stands in for a full one: the
+ * header write at offset 0 fails) fails the write with the reason; it
+ * used to hang in the library's error handler. In a child, so that a hang
+ * is an alarm and not a stuck test run. */
+GI_TEST(exr_write_on_a_full_disk_fails_and_does_not_hang)
+{
+    gi_error err;
+    gi_image img;
+    const char *rgb[] = {"R", "G", "B"};
+    GI_REQUIRE_OK(gi_image_init(&img, 64, 48, 3, rgb, &err));
+    fill_pattern(&img, 7);
+    char *p = tpath("full-disk.exr");
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        alarm(20);
+        signal(SIGXFSZ, SIG_IGN);
+        struct rlimit rl = {0, 0};
+        setrlimit(RLIMIT_FSIZE, &rl);
+        int rc = gi_exr_write(p, &img, &err);
+        int ok = rc != 0 && strstr(err.msg, "full-disk.exr") && strstr(err.msg, "File too large") &&
+                 access(p, F_OK) != 0;
+        if (!ok)
+            fprintf(stderr, "rc %d: %s\n", rc, err.msg);
+        _exit(ok ? 0 : 1);
+    }
+    int status = 0;
+    GI_REQUIRE(pid > 0 && waitpid(pid, &status, 0) == pid);
+    GI_CHECK_MSG(WIFEXITED(status) && WEXITSTATUS(status) == 0, "child status %#x%s", status,
+                 WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM ? " (hung)" : "");
     gi_image_free(&img);
     free(p);
 }
