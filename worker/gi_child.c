@@ -78,10 +78,36 @@ static int fetch_asset(void *fctx, const char *hash, gi_error *err)
     }
 }
 
+/* The same job: the same text, file name and asset bytes. */
+static int same_def(const gi_msg_job *a, const gi_msg_job *b)
+{
+    if (strcmp(a->text, b->text) != 0 || strcmp(a->file, b->file) != 0 ||
+        a->manifest.count != b->manifest.count)
+        return 0;
+    for (size_t i = 0; i < a->manifest.count; i++) {
+        const gi_manifest_entry *e = gi_manifest_find(&b->manifest, a->manifest.entries[i].name);
+        if (!e || memcmp(e->hash, a->manifest.entries[i].hash, GI_HASH_HEX) != 0)
+            return 0;
+    }
+    return 1;
+}
+
+static void unload(child *c)
+{
+    gi_worker_ctx_free(&c->ctx);
+    c->loaded = 0;
+    /* Drop the job's asset bytes too. */
+    gi_asset_store_free(c->store);
+    c->store = gi_asset_store_new();
+}
+
 static void add_def(child *c, gi_msg_job *def)
 {
     for (int i = 0; i < c->def_count; i++)
         if (c->defs[i].job_id == def->job_id) {
+            /* An id given to another job: what was loaded for it is not it. */
+            if (c->loaded && c->ctx.job_id == def->job_id && !same_def(&c->defs[i], def))
+                unload(c);
             gi_msg_job_free(&c->defs[i]);
             c->defs[i] = *def;
             return;
@@ -105,13 +131,8 @@ static int ensure_job(child *c, uint64_t job_id, gi_error *err)
     if (!def)
         return gi_fail(err, GI_EPROTO, "task for job %llu, whose JOB was never sent",
                        (unsigned long long)job_id);
-    if (c->loaded) {
-        gi_worker_ctx_free(&c->ctx);
-        c->loaded = 0;
-        /* A new job: drop the previous job's asset bytes. */
-        gi_asset_store_free(c->store);
-        c->store = gi_asset_store_new();
-    }
+    if (c->loaded)
+        unload(c); /* a new job */
     if (gi_worker_ctx_load(&c->ctx, job_id, def->file, def->text, &def->manifest, fetch_asset,
                            c, c->store, err))
         return -1;

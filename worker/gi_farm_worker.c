@@ -168,6 +168,10 @@ static void sweep_batches(worker *w)
 static void def_add(worker *w, gi_msg_job *m)
 {
     def_drop(w, m->job_id);
+    /* The children get it again with their next task of it: the same id may
+     * be a new job (the coordinator's state was wiped), and a child must not
+     * run it as the old one. */
+    gi_pool_forget_job(&w->pool, m->job_id);
     /* The coordinator sends a job's JOB once per connection and CANCELs it
      * when the job ends, so definitions are never evicted here (a TASK
      * would then arrive without one); a coordinator that keeps more jobs

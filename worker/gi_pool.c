@@ -159,6 +159,21 @@ static int child_has_job(const gi_pool_child *k, uint64_t job_id)
     return 0;
 }
 
+void gi_pool_forget_job(gi_pool *p, uint64_t job_id)
+{
+    for (int i = 0; i < p->count; i++) {
+        gi_pool_child *k = &p->kids[i];
+        for (int j = 0; j < k->jobs_sent_count;)
+            if (k->jobs_sent[j] == job_id) {
+                memmove(&k->jobs_sent[j], &k->jobs_sent[j + 1],
+                        (size_t)(k->jobs_sent_count - j - 1) * sizeof k->jobs_sent[0]);
+                k->jobs_sent_count--;
+            } else {
+                j++;
+            }
+    }
+}
+
 int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
                    const char *job_text, const gi_manifest *manifest, const gi_task *task,
                    gi_error *err)

@@ -72,6 +72,10 @@ int gi_pool_alive(const gi_pool *p, int i);
 /* Index of an idle living child, or -1. */
 int gi_pool_idle_child(const gi_pool *p);
 
+/* Forgets that the children have job_id's JOB: the next task of that id
+ * sends it again (a coordinator may give an id a new job: its state was
+ * wiped). */
+void gi_pool_forget_job(gi_pool *p, uint64_t job_id);
 /* Sends the JOB (once per child) and the TASK to child i, which must be idle. */
 int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
                    const char *job_text, const gi_manifest *manifest, const gi_task *task,

@@ -71,10 +71,11 @@ int gi_worker_batch_dir(gi_worker_ctx *ctx, const char **dir, gi_error *err)
     if (!ctx->batch_dir)
         return gi_fail(err, GI_EIO, "job %llu: this host has no batch directory",
                        (unsigned long long)ctx->job_id);
-    /* Children race to create it: mkdir -p takes EEXIST as success. */
-    if (!ctx->batch_dir_made && gi_mkdirs(ctx->batch_dir, err))
+    /* Children race to create it: mkdir -p takes EEXIST as success. Every
+     * time: the host removes it when the job ends, and the same job may
+     * come back (a retry, an id the coordinator gave again). */
+    if (gi_mkdirs(ctx->batch_dir, err))
         return gi_error_prefix(err, "batch directory");
-    ctx->batch_dir_made = 1;
     *dir = ctx->batch_dir;
     return 0;
 }

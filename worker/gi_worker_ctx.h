@@ -34,7 +34,6 @@ struct gi_worker_ctx {
      * ends (docs/farm.md, "Batch directories"); NULL when the host gives
      * none. Use gi_worker_batch_dir, which creates it. */
     char *batch_dir;
-    int batch_dir_made;
     /* Filled by run(): the method's work units; rays come from rt. */
     gi_task_stats stats;
 };
