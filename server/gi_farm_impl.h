@@ -94,6 +94,7 @@ typedef struct gi_farm_job {
     gi_affinity affinity;
     uint64_t affinity_moves; /* keys that changed owner */
     uint64_t ckpt_seq, ckpt_merged;
+    char ckpt_error[512]; /* why the last checkpoint failed; "" if it did not */
     double ckpt_done_cost;
     double ckpt_last;   /* monotonic */
     double ckpt_cost_s; /* the last one's time: serialized, then written */
@@ -174,7 +175,7 @@ typedef struct gi_farm_metrics {
     uint64_t requeued;
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;
-    uint64_t checkpoints, checkpoint_bytes;
+    uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;
     uint64_t workers_accepted, workers_refused, frames_refused;
     uint64_t api_requests, api_refused_auth, api_refused_input;
     uint64_t api_slow_closed; /* connections cut for a request head not sent in time */
@@ -233,6 +234,8 @@ int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err);
 void gi_farm_job_settle(gi_farm *f, gi_farm_job *j);
 void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why);
 void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The same for what an operator must see: logged as a warning. */
+void gi_farm_job_warn(gi_farm_job *j, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
                             const char *worker, const char *msg);
 /* Timers: checker deadlines and periodic checkpoints. */

@@ -128,13 +128,10 @@ static void push_log_line(gi_farm_job *j, char *line)
     }
 }
 
-void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
+static void job_log(gi_farm_job *j, int warn, const char *fmt, va_list ap)
 {
     char msg[1200];
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
     char stamp[32];
     time_t t = (time_t)gi_farm_wallnow();
     struct tm tm;
@@ -143,7 +140,10 @@ void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
     char line[1300];
     snprintf(line, sizeof line, "%s %s", stamp, msg);
     push_log_line(j, gi_xstrdup(line));
-    gi_info("job %llu: %s", (unsigned long long)j->id, msg);
+    if (warn)
+        gi_warn("job %llu: %s", (unsigned long long)j->id, msg);
+    else
+        gi_info("job %llu: %s", (unsigned long long)j->id, msg);
     /* The log file outlives restarts; the in-memory ring is its tail. */
     char path[4200];
     snprintf(path, sizeof path, "%s/log", j->dir);
@@ -152,6 +152,22 @@ void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
         fprintf(fp, "%s\n", line);
         fclose(fp);
     }
+}
+
+void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    job_log(j, 0, fmt, ap);
+    va_end(ap);
+}
+
+void gi_farm_job_warn(gi_farm_job *j, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    job_log(j, 1, fmt, ap);
+    va_end(ap);
 }
 
 void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
@@ -691,7 +707,7 @@ static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
     }
     /* A checkpoint that does not restore costs its work, not the job. The
      * method may have half-built its state: start from a fresh load. */
-    gi_farm_job_log(j, "checkpoint unusable, starting over: %s", err->msg);
+    gi_farm_job_warn(j, "checkpoint unusable, starting over: %s", err->msg);
     gi_jobrun_free(&j->jr);
     gi_job_free(&j->job);
     return load_for_run(f, j, err) ? -1 : 0;
@@ -799,6 +815,24 @@ static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err)
     return 0;
 }
 
+/* A checkpoint written (why NULL) or failed: failures go to the job's log
+ * (once while the reason stays the same) and its view, so that whoever
+ * watches the job sees its work is not being kept. */
+static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why)
+{
+    if (!why) {
+        if (j->ckpt_error[0])
+            gi_farm_job_log(j, "checkpoint %llu written: checkpoints work again",
+                            (unsigned long long)j->ckpt_seq);
+        j->ckpt_error[0] = '\0';
+        return;
+    }
+    f->m.checkpoint_failures++;
+    if (strncmp(j->ckpt_error, why, sizeof j->ckpt_error - 1) != 0)
+        gi_farm_job_warn(j, "checkpoint failed (the job goes on): %s", why);
+    snprintf(j->ckpt_error, sizeof j->ckpt_error, "%.511s", why);
+}
+
 /* Completes the checkpoint being written, if any, waiting for it if wait:
  * 1 when none is left, 0 while it is still being written. */
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
@@ -828,9 +862,7 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
                  (unsigned long long)j->id, (unsigned long long)j->ckpt_seq,
                  (unsigned long long)j->ckpt_merged, j->ckpt_w_bytes);
     }
-    if (rc)
-        gi_warn("job %llu: checkpoint failed (the job goes on): %s", (unsigned long long)j->id,
-                err.msg);
+    checkpoint_outcome(f, j, rc ? err.msg : NULL);
     return 1;
 }
 
@@ -848,8 +880,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
         return; /* nothing merged since the last one */
     gi_error err;
     if (checkpoint_start(f, j, &err))
-        gi_warn("job %llu: checkpoint failed (the job goes on): %s", (unsigned long long)j->id,
-                err.msg);
+        checkpoint_outcome(f, j, err.msg);
     j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
     if (force)
         checkpoint_finish(f, j, 1);

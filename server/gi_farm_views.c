@@ -119,6 +119,10 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON *ck = cJSON_AddObjectToObject(o, "checkpoint");
     cJSON_AddNumberToObject(ck, "seq", (double)j->ckpt_seq);
     cJSON_AddNumberToObject(ck, "merged", (double)j->ckpt_merged);
+    if (j->ckpt_error[0])
+        cJSON_AddStringToObject(ck, "last_error", j->ckpt_error);
+    else
+        cJSON_AddNullToObject(ck, "last_error");
 
     if (j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED) {
         cJSON *e = cJSON_AddObjectToObject(o, "error");
@@ -315,6 +319,8 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_finish_seconds_total", "Coordinator time in the methods' finish (outputs).",
             m->finish_s);
     counter(&b, "gi_farm_checkpoints_total", "Checkpoints written.", (double)m->checkpoints);
+    counter(&b, "gi_farm_checkpoint_failures_total", "Checkpoints that could not be written.",
+            (double)m->checkpoint_failures);
     counter(&b, "gi_farm_checkpoint_bytes_total", "Bytes of checkpoints written.",
             (double)m->checkpoint_bytes);
     counter(&b, "gi_farm_workers_accepted_total", "Worker connections authenticated.",

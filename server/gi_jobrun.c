@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_crc32c.h"
 #include "gi_log.h"
 #include "gi_progress.h"
 
@@ -285,8 +286,10 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 
 #define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
 /* 2: tasks carry their affinity; 3: the current frame's start (its
- * progress survives a restart). Older versions are still read. */
-#define CHECKPOINT_VERSION 3u
+ * progress survives a restart); 4: a CRC-32C of everything before it at the
+ * end (a damaged checkpoint used to resume into wrong outputs). Older
+ * versions are still read. */
+#define CHECKPOINT_VERSION 4u
 
 double gi_jobrun_checkpoint_interval(double every_s, double last_s)
 {
@@ -299,6 +302,7 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     const gi_job *job = jr->job;
     if (!job->method->save)
         return gi_fail(err, GI_EINTERNAL, "method %s cannot checkpoint", job->method->name);
+    size_t start = out->len;
     gi_buf_put_u32(out, CHECKPOINT_MAGIC);
     gi_buf_put_u32(out, CHECKPOINT_VERSION);
     gi_buf_put_str(out, job->method->name);
@@ -323,8 +327,10 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     size_t at = out->len;
     gi_buf_put_u64(out, 0);
     int rc = job->method->save(job, out, err);
-    if (rc == 0)
+    if (rc == 0) {
         gi_le_put_u64(out->data + at, (uint64_t)(out->len - at - 8));
+        gi_buf_put_u32(out, gi_crc32c(0, out->data + start, out->len - start));
+    }
     return rc;
 }
 
@@ -338,6 +344,16 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     gi_reader r;
     gi_reader_init(&r, in->data, in->len, "checkpoint");
     uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
+    if (!r.failed && magic == CHECKPOINT_MAGIC && version >= 4) {
+        /* Everything but the trailer, and only if its bytes are as written. */
+        if (in->len < 12 ||
+            gi_le_get_u32(in->data + in->len - 4) != gi_crc32c(0, in->data, in->len - 4))
+            return gi_fail(err, GI_EPROTO, "%s: checkpoint damaged (its checksum does not match)",
+                           job->file);
+        gi_reader_init(&r, in->data, in->len - 4, "checkpoint");
+        gi_get_u32(&r);
+        gi_get_u32(&r);
+    }
     char *method = gi_get_str(&r, 64);
     if (r.failed || magic != CHECKPOINT_MAGIC || version < 1 || version > CHECKPOINT_VERSION ||
         !method ||

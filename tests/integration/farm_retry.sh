@@ -68,5 +68,16 @@ st=0
     { cat "$TMP/retry4.log"; fail "retrying a missing job: exit $st"; }
 [ "$(api "/api/v1/jobs/$id/retry" -o /dev/null -w '%{http_code}')" = 405 ] || fail "GET .../retry"
 [ "$(metric gi_farm_jobs_retried_total)" = 2 ] || fail "retries counted: $(metric gi_farm_jobs_retried_total)"
+
+# 4. Checkpoints that cannot be written (a directory in the way of the
+# file) are said in the job's log and view, once; the job goes on.
+id3=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit3.log") || { cat "$TMP/submit3.log"; fail "submit 3"; }
+mkdir -p "$TMP/state/jobs/$id3/checkpoint"
+wait_state "$id3" done 120
+view=$(api "/api/v1/jobs/$id3")
+echo "$view" | grep -q '"last_error":"[^"]*checkpoint[^"]*"' || { echo "$view"; fail "no checkpoint error in the view"; }
+[ "$(echo "$view" | grep -o 'checkpoint failed (the job goes on)' | wc -l)" = 1 ] ||
+    { echo "$view"; fail "the checkpoint failure is not in the job's log once"; }
+[ "$(metric gi_farm_checkpoint_failures_total)" -ge 1 ] || fail "checkpoint failures not counted"
 stop_farmd "$TMP/farmd.log"
 echo "failed job retried after a restart from $resumed of $total tasks, cancelled one from $seen2: identical"

@@ -282,6 +282,31 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     gi_jobrun_free(&jr);
     gi_job_free(&job);
     gi_buf_free(&bad);
+    /* So is one whose bytes changed anywhere, though it still parses: the
+     * method's sums would resume wrong. */
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    drive(&jr, 20);
+    gi_buf ck;
+    gi_buf_init(&ck);
+    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    for (size_t at = 8; at < ck.len; at += ck.len / 7) {
+        memset(&job, 0, sizeof job);
+        job.method = &fake_method;
+        ck.data[at] ^= 0x10;
+        GI_CHECK_MSG(gi_jobrun_restore(&jr, &job, &ck, &err) == -1 && strstr(err.msg, "checksum"),
+                     "a flipped bit at byte %zu of %zu: %s", at, ck.len, err.msg);
+        ck.data[at] ^= 0x10;
+        gi_jobrun_free(&jr);
+        gi_job_free(&job);
+    }
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    GI_CHECK_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_buf_free(&ck);
 }
 
 /* The fake's follow-ups, told to the progress clock before they are planned:
