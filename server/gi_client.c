@@ -23,6 +23,7 @@
 #define MAX_JSON_BODY ((uint64_t)64 << 20)
 #define POLL_S 0.1     /* the longest wait between two looks at a job */
 #define POLL_MIN_S 0.01 /* the shortest, once the job is about to end */
+#define WAIT_UNANSWERED_S 300.0 /* gi wait asks a silent farm again this long */
 
 const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
@@ -144,6 +145,32 @@ static int get_job(client *c, uint64_t id, cJSON **doc)
     char path[64];
     snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
     return get_json(c, path, doc);
+}
+
+/* gi wait's look at a job: 0 with *doc; 1 if the farm did not answer (it
+ * may be restarting: no connection, a timeout, a 5xx), with why; else the
+ * exit status, the message printed. */
+static int look_at_job(client *c, uint64_t id, cJSON **doc, char *why, size_t n)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/api/v1/jobs/%llu", (unsigned long long)id);
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_error err;
+    int st = request(c, "GET", path, NULL, 0, NULL, &b, NULL, &err), rc = 0;
+    if (st < 0 || st >= 500) {
+        if (st < 0)
+            snprintf(why, n, "%s", err.msg);
+        else
+            snprintf(why, n, "HTTP %d", st);
+        rc = -1;
+    } else if (st != 200) {
+        rc = http_failure(path, st, &b);
+    } else if (!(*doc = cJSON_ParseWithLength((const char *)b.data, b.len))) {
+        rc = fail_msg(1, "%s: the farm's answer is not JSON", path);
+    }
+    gi_buf_free(&b);
+    return rc;
 }
 
 static double num(const cJSON *o, const char *k, double dflt)
@@ -283,12 +310,51 @@ static int wait_job(client *c, uint64_t id, int fetch)
     sa.sa_handler = on_sigint;
     sigaction(SIGINT, &sa, &old);
     int rc;
-    double wait = POLL_MIN_S, t_start = gi_now();
+    double wait = POLL_MIN_S, t_start = gi_now(), unanswered = -1, retry = 0.5;
+    char jname[256] = ""; /* the job's name, once the farm said it */
     for (;;) {
         cJSON *job = NULL;
-        if ((rc = get_job(c, id, &job)) != 0)
+        char why[1100];
+        rc = look_at_job(c, id, &job, why, sizeof why);
+        if (rc < 0 && !interrupted) {
+            /* A coordinator restarting (or a network hiccup) is waited for:
+             * the job goes on, and resumes with it. */
+            double now = gi_now();
+            if (unanswered < 0) {
+                unanswered = now;
+                if (started)
+                    gi_progress_end(&prog);
+                fprintf(stderr, "gi: the farm does not answer (%s); asking again for up to %.0f s\n",
+                        why, WAIT_UNANSWERED_S);
+            }
+            if (now - unanswered < WAIT_UNANSWERED_S) {
+                sleep_s(retry);
+                retry = retry * 2 > 5.0 ? 5.0 : retry * 2;
+                continue;
+            }
+            fprintf(stderr,
+                    "gi: the farm has not answered for %.0f s (%s); job %llu goes on there when it "
+                    "is back (gi wait %llu)\n",
+                    WAIT_UNANSWERED_S, why, (unsigned long long)id, (unsigned long long)id);
+            if (c->mode == GI_PROGRESS_JSON)
+                gi_progress_json_end(stderr, jname, "unreachable", gi_now() - t_start, why);
+            rc = 1;
             break;
+        }
+        if (rc < 0) {
+            rc = 130;
+            fprintf(stderr, "gi: interrupted; job %llu goes on on the farm (gi wait %llu)\n",
+                    (unsigned long long)id, (unsigned long long)id);
+            break;
+        }
+        if (rc)
+            break;
+        if (unanswered >= 0)
+            fprintf(stderr, "gi: the farm answers again\n");
+        unanswered = -1;
+        retry = 0.5;
         const char *state = str(job, "state");
+        snprintf(jname, sizeof jname, "%s", str(job, "name"));
         const cJSON *work = cJSON_GetObjectItemCaseSensitive(job, "work");
         const cJSON *stats = cJSON_GetObjectItemCaseSensitive(job, "stats");
         if (!started && strcmp(state, "checking") != 0) {

@@ -84,7 +84,8 @@ void gi_progress_end(gi_progress *p);
  * a render to its end; paths and messages escaped):
  *   {"event":"output","job":J,"kind":K,"path":P}   a file written or fetched
  *   {"event":"end","job":J,"state":S,"elapsed_s":T[,"error":E]}  the last line;
- *     S is done, failed, cancelled or interrupted, E says why when not done. */
+ *     S is done, failed, cancelled, interrupted or (gi wait: the farm stopped
+ *     answering) unreachable; E says why when not done. */
 void gi_progress_json_output(FILE *out, const char *job, const char *kind, const char *path);
 void gi_progress_json_end(FILE *out, const char *job, const char *state, double elapsed_s,
                           const char *error);

@@ -14,11 +14,16 @@ PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 
+# A client waiting for the job all along: it waits out the restarts.
+"$GI" wait "$id" --out "$TMP/waited" --progress none >"$TMP/wait.log" 2>&1 &
+waiter=$!
+
 # 1. kill -9 with at least a fifth merged and checkpointed.
 wait_merged "$id" 5 checkpoint
 seen=$merged
 kill -9 "$FARMD_PID"
 wait "$FARMD_PID" 2>/dev/null || true
+sleep 1 # the waiter finds nobody for a while
 echo "killed gi-farmd -9 with $seen of $total tasks in the last checkpoint seen"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
@@ -49,6 +54,10 @@ total=$(jnum "$id" total)
 api "/api/v1/jobs/$id" | grep -q "resumed from checkpoint" || fail "no resume in the job's log"
 "$GI" fetch "$id" --out "$TMP/farm" >/dev/null || fail "fetch"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the restarts"
+wait "$waiter" || { cat "$TMP/wait.log"; fail "gi wait gave up across the restarts"; }
+grep -q "the farm does not answer" "$TMP/wait.log" && grep -q "the farm answers again" "$TMP/wait.log" ||
+    { cat "$TMP/wait.log"; fail "gi wait did not say it waited for the farm"; }
+cmp "$TMP/job.json.ref/img.exr" "$TMP/waited/img.exr" || fail "gi wait fetched another image"
 # The journal's replay survives a torn tail (a crash in the middle of an append).
 stop_farmd "$TMP/farmd.log"
 printf '\003\000\000\000\377\377' >>"$TMP/state/journal"
