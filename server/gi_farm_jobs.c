@@ -293,6 +293,21 @@ static void end_record(const gi_farm_job *j, gi_jrec *r)
     r->code = (uint32_t)j->error.code;
     r->message = (char *)j->error.msg;
     r->when = j->ended;
+    if (j->final_progress.frames) { /* the run this process saw end */
+        r->has_summary = 1;
+        r->started = j->started;
+        r->tasks = j->final_tasks;
+        r->merged = j->final_merged;
+        r->retries = j->final_retries;
+        r->rays = j->final_stats.rays;
+        r->samples = j->final_stats.samples;
+        r->seconds = j->final_stats.seconds;
+        r->fraction = j->final_progress.fraction;
+        r->done = j->final_progress.done;
+        r->total = j->final_progress.total;
+        r->frame = j->final_progress.frame;
+        r->frames = j->final_progress.frames;
+    }
 }
 
 static void ckpt_record(const gi_farm_job *j, gi_jrec *r)
@@ -376,6 +391,21 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
             j->error.code = (gi_errcode)r->code;
             snprintf(j->error.msg, sizeof j->error.msg, "%s", r->message ? r->message : "");
             j->ended = r->when;
+            if (r->has_summary) {
+                j->started = r->started;
+                j->final_tasks = r->tasks;
+                j->final_merged = r->merged;
+                j->final_retries = r->retries;
+                j->final_stats.rays = r->rays;
+                j->final_stats.samples = r->samples;
+                j->final_stats.seconds = r->seconds;
+                memset(&j->final_progress, 0, sizeof j->final_progress);
+                j->final_progress.fraction = r->fraction;
+                j->final_progress.done = r->done;
+                j->final_progress.total = r->total;
+                j->final_progress.frame = r->frame;
+                j->final_progress.frames = r->frames;
+            }
         }
         return 0;
     case GI_JREC_RETRY:
@@ -563,9 +593,6 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
     j->ended = gi_farm_wallnow();
     gi_farm_check_kill(j);
     gi_farm_sched_drop_job(f, j);
-    gi_jrec r;
-    end_record(j, &r);
-    journal(f, &r);
     if (j->loaded) {
         j->final_tasks = j->jr.task_count;
         j->final_merged = j->jr.merge_next;
@@ -573,6 +600,9 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
         j->final_stats = j->jr.stats;
         gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
     }
+    gi_jrec r;
+    end_record(j, &r);
+    journal(f, &r);
     run_free(j);
     if (state == GI_FJ_DONE) {
         char *ck = checkpoint_path(j);

@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -61,6 +62,20 @@ static void encode_payload(const gi_jrec *r, gi_buf *out)
         gi_buf_put_u32(out, r->code);
         gi_buf_put_str(out, r->message);
         gi_buf_put_f64(out, r->when);
+        if (r->has_summary) {
+            gi_buf_put_f64(out, r->started);
+            gi_buf_put_u64(out, r->tasks);
+            gi_buf_put_u64(out, r->merged);
+            gi_buf_put_u64(out, r->retries);
+            gi_buf_put_u64(out, r->rays);
+            gi_buf_put_u64(out, r->samples);
+            gi_buf_put_f64(out, r->seconds);
+            gi_buf_put_f64(out, r->fraction);
+            gi_buf_put_f64(out, r->done);
+            gi_buf_put_f64(out, r->total);
+            gi_buf_put_u32(out, r->frame);
+            gi_buf_put_u32(out, r->frames);
+        }
         break;
     case GI_JREC_PURGE:
         break;
@@ -113,6 +128,25 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
                            r->code > GI_EINTERNAL))
             return gi_fail(err, GI_EPROTO, "journal END: state %u, code %u out of range",
                            r->end, r->code);
+        if (!rd.failed && rd.left) {
+            r->has_summary = 1;
+            r->started = gi_get_f64(&rd);
+            r->tasks = gi_get_u64(&rd);
+            r->merged = gi_get_u64(&rd);
+            r->retries = gi_get_u64(&rd);
+            r->rays = gi_get_u64(&rd);
+            r->samples = gi_get_u64(&rd);
+            r->seconds = gi_get_f64(&rd);
+            r->fraction = gi_get_f64(&rd);
+            r->done = gi_get_f64(&rd);
+            r->total = gi_get_f64(&rd);
+            r->frame = gi_get_u32(&rd);
+            r->frames = gi_get_u32(&rd);
+            if (!rd.failed && (r->merged > r->tasks || !(r->fraction >= 0 && r->fraction <= 1) ||
+                               !isfinite(r->started) || !isfinite(r->seconds) ||
+                               !isfinite(r->done) || !isfinite(r->total) || r->frame >= r->frames))
+                return gi_fail(err, GI_EPROTO, "journal END: a summary out of range");
+        }
         break;
     case GI_JREC_PURGE:
         break;

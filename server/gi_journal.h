@@ -63,6 +63,13 @@ typedef struct gi_jrec {
     uint32_t code; /* gi_errcode */
     char *message;
     double when; /* END, RETRY */
+    /* END's summary of the run, so that a restarted coordinator still shows
+     * it (journals before it lack it: has_summary 0). Also uses tasks and
+     * merged. */
+    int has_summary;
+    double started, seconds, fraction, done, total;
+    uint64_t retries, rays, samples;
+    uint32_t frame, frames;
 } gi_jrec;
 
 void gi_jrec_init(gi_jrec *r, gi_jrec_type type, uint64_t job_id);

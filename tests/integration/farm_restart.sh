@@ -65,5 +65,8 @@ printf '\003\000\000\000\377\377' >>"$TMP/state/journal"
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS $PORTS
 grep -q "journal: record at byte .* is torn" "$TMP/farmd.log" || fail "the torn record was not reported"
 [ "$(jstate "$id")" = done ] || fail "the job is not remembered as done"
+# ... with its run's numbers, not zeros.
+[ "$(jnum "$id" total)" = "$total" ] && api "/api/v1/jobs/$id" | grep -q '"started":"' ||
+    { api "/api/v1/jobs/$id"; fail "the restart forgot the done job's tasks or start"; }
 stop_farmd "$TMP/farmd.log"
 echo "identical; resumed at $resumed then $resumed2 of $total merged, $results results after the last restart"

@@ -98,6 +98,57 @@ GI_TEST(test_journal_records_roundtrip)
     gi_buf_free(&b);
 }
 
+static int keep_end(void *ctx, const gi_jrec *r, gi_error *err)
+{
+    (void)err;
+    if (r->type == GI_JREC_END)
+        *(gi_jrec *)ctx = *r; /* numbers only: its strings are freed after */
+    return 0;
+}
+
+/* An END carries the run's summary (a restarted coordinator shows it); one
+ * without (older journals) still reads; a summary out of range is damage. */
+GI_TEST(test_journal_end_summary)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put(&b, "GIJ1", 4);
+    gi_buf_put_u32(&b, 1);
+    size_t head = b.len;
+    gi_jrec r;
+    gi_jrec_init(&r, GI_JREC_END, 3);
+    r.end = GI_JOB_END_DONE;
+    r.message = "";
+    r.when = 1.7e9;
+    r.has_summary = 1;
+    r.started = 1.6e9;
+    r.tasks = 96;
+    r.merged = 96;
+    r.retries = 2;
+    r.rays = 123456789;
+    r.samples = 4096;
+    r.seconds = 12.5;
+    r.fraction = 1;
+    r.done = r.total = 4096;
+    r.frame = 5;
+    r.frames = 6;
+    gi_jrec_encode(&r, &b);
+    gi_jrec got;
+    memset(&got, 0, sizeof got);
+    size_t valid;
+    gi_error err;
+    GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &err) == 0);
+    GI_CHECK(got.has_summary && got.started == 1.6e9 && got.tasks == 96 && got.merged == 96 &&
+             got.retries == 2 && got.rays == 123456789 && got.samples == 4096 &&
+             got.seconds == 12.5 && got.fraction == 1 && got.frame == 5 && got.frames == 6);
+    /* A merged count past the tasks: the record is damaged. */
+    b.len = head;
+    r.merged = 97;
+    gi_jrec_encode(&r, &b);
+    GI_CHECK(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &err) != 0 && valid == head);
+    gi_buf_free(&b);
+}
+
 GI_TEST(test_journal_every_torn_tail)
 {
     gi_buf b;
