@@ -293,8 +293,10 @@ static void print_summary(uint64_t id, const cJSON *job)
     char a[32], b[32];
     printf("%s: job %llu (%s) done on the farm\n", str(job, "name"), (unsigned long long)id,
            str(job, "method"));
-    printf("  %s%s, %srays, %.0f tasks", gi_si(num(s, "samples", 0), a, sizeof a), str(job, "unit"),
-           gi_si(num(s, "rays", 0), b, sizeof b), num(t, "total", 0));
+    printf("  %s%s, ", gi_si(num(s, "samples", 0), a, sizeof a), str(job, "unit"));
+    if (strcmp(str(job, "unit"), "rays") != 0) /* radiosity's unit is rays already */
+        printf("%srays, ", gi_si(num(s, "rays", 0), b, sizeof b));
+    printf("%.0f task%s", num(t, "total", 0), num(t, "total", 0) == 1 ? "" : "s");
     if (num(t, "retries", 0) > 0)
         printf(", %.0f retried", num(t, "retries", 0));
     printf("\n");
