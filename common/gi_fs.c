@@ -4,6 +4,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,14 +73,39 @@ static int digits_before(const char *s, const char *end, const char **start)
     return p < end;
 }
 
-int gi_is_temp_name(const char *name)
+/* The writer's pid of a gi_temp_path name, or -1 if name is not one. */
+static long temp_name_pid(const char *name)
 {
     const char *end = name + strlen(name), *p;
     if (!digits_before(name, end, &p) || p == name || p[-1] != '-')
+        return -1;
+    const char *pid_end = p - 1;
+    if (!digits_before(name, pid_end, &p))
+        return -1;
+    if ((size_t)(p - name) < 5 || memcmp(p - 5, ".tmp-", 5) != 0 || pid_end - p > 9)
+        return -1;
+    return strtol(p, NULL, 10);
+}
+
+int gi_is_temp_name(const char *name) { return temp_name_pid(name) >= 0; }
+
+int gi_remove_stale_temps(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d)
         return 0;
-    if (!digits_before(name, p - 1, &p))
-        return 0;
-    return (size_t)(p - name) >= 5 && memcmp(p - 5, ".tmp-", 5) == 0;
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        long pid = temp_name_pid(e->d_name);
+        if (pid <= 0 || (kill((pid_t)pid, 0) == 0 || errno != ESRCH))
+            continue; /* not a temporary file, or its writer may be alive */
+        char *path = gi_path_join(dir, e->d_name);
+        n += unlink(path) == 0;
+        free(path);
+    }
+    closedir(d);
+    return n;
 }
 
 int gi_commit_file(const char *tmp, const char *path, gi_error *err)

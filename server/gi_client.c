@@ -216,6 +216,7 @@ static int fetch_outputs(client *c, uint64_t id, const cJSON *job)
     gi_error err;
     if (gi_output_dir_ready(c->out_dir, &err))
         return fail_msg(1, "--out: %s", err.msg);
+    gi_remove_stale_temps(c->out_dir); /* of a fetch killed while writing */
     const cJSON *outs = cJSON_GetObjectItemCaseSensitive(job, "outputs");
     int n = 0;
     for (const cJSON *o = outs ? outs->child : NULL; o; o = o->next) {

@@ -446,6 +446,10 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
             j->outputs = gi_xcalloc(1, sizeof *j->outputs);
         }
         gi_job_free(&parsed);
+        /* Writes cut short by the coordinator's end (killed, power lost). */
+        char out[4300];
+        snprintf(out, sizeof out, "%s/out", j->dir);
+        gi_remove_stale_temps(out);
         if (j->state == GI_FJ_DONE)
             list_written_outputs(j);
         load_log_tail(j);

@@ -177,6 +177,7 @@ static int cmd_render(int argc, char **argv)
         gi_job_free(&job);
         return gi_error_exit_status(&err);
     }
+    gi_remove_stale_temps(out_dir); /* of a render killed while writing */
     job.out_dir = gi_xstrdup(out_dir);
     /* Stopped, not killed: a checkpoint is written and the batches kept for
      * --resume. SIGHUP too: the terminal or ssh session went away. */

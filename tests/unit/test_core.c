@@ -1,6 +1,8 @@
 /* Unit tests: RNG, buffers, paths, JSON validation. */
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "gi_buf.h"
 #include "gi_fs.h"
@@ -183,6 +185,32 @@ GI_TEST(test_temp_names_are_told_from_outputs)
     GI_CHECK(!gi_is_temp_name("a.tmp-x-3"));
     GI_CHECK(!gi_is_temp_name("tmp-1-2"));
     GI_CHECK(!gi_is_temp_name("12"));
+}
+
+/* Temporary files of writers that are gone go; a live writer's and real
+ * outputs stay. */
+GI_TEST(test_stale_temp_files_are_removed)
+{
+    pid_t dead = fork();
+    if (dead == 0)
+        _exit(0);
+    GI_REQUIRE(dead > 0 && waitpid(dead, NULL, 0) == dead);
+    char dir[512], names[3][128], path[700];
+    snprintf(dir, sizeof dir, "%s/stale-temps", gi_test_tmpdir());
+    gi_error err;
+    GI_REQUIRE_OK(gi_mkdirs(dir, &err));
+    snprintf(names[0], sizeof names[0], "a.exr.tmp-%ld-0", (long)dead);
+    snprintf(names[1], sizeof names[1], "a.exr.tmp-%ld-1", (long)getpid());
+    snprintf(names[2], sizeof names[2], "a.tmp-%ld-2.exr", (long)dead);
+    for (int i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        GI_REQUIRE_OK(gi_write_file_atomic(path, "x", 1, &err));
+    }
+    GI_CHECK(gi_remove_stale_temps(dir) == 1);
+    for (int i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        GI_CHECK_MSG((access(path, F_OK) == 0) == (i > 0), "%s", names[i]);
+    }
 }
 
 static int parse_doc(const char *text, cJSON **out, gi_error *err)
