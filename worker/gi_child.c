@@ -205,13 +205,15 @@ int gi_child_main(int fd, const char *batch_root)
     c.limits = gi_frame_limits_default();
     c.store = gi_asset_store_new();
     signal(SIGPIPE, SIG_IGN);
+    pid_t parent = getppid();
     int status = 0;
     for (;;) {
         gi_error err;
         gi_error_clear(&err);
         gi_frame f;
         int got = gi_frame_recv(fd, &c.limits, "parent", &f, &err);
-        if (got == 0)
+        /* A parent that died (killed: its socket reset) is no error of ours. */
+        if (got == 0 || (got < 0 && getppid() != parent))
             break;
         if (got < 0) {
             gi_error_log("%s", err.msg);

@@ -195,7 +195,7 @@ GI_TEST(test_stale_temp_files_are_removed)
     if (dead == 0)
         _exit(0);
     GI_REQUIRE(dead > 0 && waitpid(dead, NULL, 0) == dead);
-    char dir[512], names[3][128], path[700];
+    char dir[512], names[3][128], path[1024];
     snprintf(dir, sizeof dir, "%s/stale-temps", gi_test_tmpdir());
     gi_error err;
     GI_REQUIRE_OK(gi_mkdirs(dir, &err));
