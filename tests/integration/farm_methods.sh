@@ -23,10 +23,7 @@ write_job "$TMP/rad.json" <<JOB
  "radiosity": {"patches": 40, "levels": 1, "rays": 256},
  "outputs": {"exr": "rad.exr", "ply": "rad.ply", "factorization": "rad.factorization"}}
 JOB
-for j in detp quad rad; do
-    "$GI_RELEASE" render "$TMP/$j.json" --workers 1 --out "$TMP/ref-$j" --progress none >/dev/null 2>&1 ||
-        fail "gi render $j"
-done
+render_refs detp quad rad
 
 OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
 # shellcheck disable=SC2086

@@ -17,10 +17,7 @@ write_job "$TMP/anim.json" <<JOB
                                       {"frame": 2, "translate": [300, -338.9, -50]}]}},
  "outputs": {"bin": "v.bin"}}
 JOB
-for j in b anim; do
-    "$GI_RELEASE" render "$TMP/$j.json" --workers 1 --out "$TMP/ref-$j" --progress none >/dev/null 2>&1 ||
-        fail "gi render $j"
-done
+render_refs b anim
 OPTS="--heartbeat 0.2 --lease 2 --dead 10"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS

@@ -59,6 +59,15 @@ start_farmd() {
     export GI_FARM="http://$API"
 }
 
+# render_refs NAME...: `gi render` of $TMP/NAME.json into $TMP/ref-NAME, the
+# outputs a farm run of it must match.
+render_refs() {
+    for j in "$@"; do
+        "$GI_RELEASE" render "$TMP/$j.json" --workers 1 --out "$TMP/ref-$j" --progress none \
+            >/dev/null 2>&1 || fail "gi render $j"
+    done
+}
+
 # start_worker LOG [prefix command...] -- [gi-worker options...]; sets WORKER_PID.
 start_worker() {
     log=$1
