@@ -147,7 +147,7 @@ static int get_job(client *c, uint64_t id, cJSON **doc)
     return get_json(c, path, doc);
 }
 
-/* gi wait's look at a job: 0 with *doc; 1 if the farm did not answer (it
+/* gi wait's look at a job: 0 with *doc; -1 if the farm did not answer (it
  * may be restarting: no connection, a timeout, a 5xx), with why; else the
  * exit status, the message printed. */
 static int look_at_job(client *c, uint64_t id, cJSON **doc, char *why, size_t n)
