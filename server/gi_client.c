@@ -327,8 +327,9 @@ static int wait_job(client *c, uint64_t id, int fetch)
                 unanswered = now;
                 if (started)
                     gi_progress_end(&prog);
-                fprintf(stderr, "gi: the farm does not answer (%s); asking again for up to %.0f s\n",
-                        why, WAIT_UNANSWERED_S);
+                fprintf(stderr,
+                        "gi: the farm does not answer (%s); asking again for up to %.0f s\n", why,
+                        WAIT_UNANSWERED_S);
             }
             if (now - unanswered < WAIT_UNANSWERED_S) {
                 sleep_s(retry);

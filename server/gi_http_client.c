@@ -263,7 +263,8 @@ static int chunked_to_fd(int fd, int out, gi_buf *pend, double timeout_s, const 
     for (;;) {
         size_t off = 0;
         for (;;) {
-            const char *p = (const char *)pend->data + off, *end = (const char *)pend->data + pend->len;
+            const char *p = (const char *)pend->data + off;
+            const char *end = (const char *)pend->data + pend->len;
             if (state == SIZE) {
                 const char *eol = find_crlf(p, end);
                 if (!eol) {
