@@ -93,6 +93,10 @@ typedef struct gi_farm_job {
      * coordinator sends a key's tasks to the same host again. */
     gi_affinity affinity;
     uint64_t affinity_moves; /* keys that changed owner */
+    /* Task id + 1 -> the host its last attempt failed on: its retry goes to
+     * another host when one can take it (a full disk, a broken GPU driver:
+     * host trouble follows the host, not the task). */
+    gi_affinity failed_on;
     uint64_t ckpt_seq, ckpt_merged;
     char ckpt_error[512]; /* why the last checkpoint failed; "" if it did not */
     double ckpt_done_cost;

@@ -80,6 +80,7 @@ static void run_free(gi_farm_job *j)
     gi_jobrun_free(&j->jr);
     gi_job_free(&j->job);
     gi_affinity_free(&j->affinity);
+    gi_affinity_free(&j->failed_on);
     j->loaded = 0;
 }
 

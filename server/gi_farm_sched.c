@@ -187,13 +187,27 @@ static int host_present(void *ctx, const void *owner)
 }
 
 typedef struct taker {
+    const gi_farm *farm;
     const gi_farm_job *job;
     const gi_farm_host *host;
 } taker;
 
+/* Some host other than `host` can take work now. */
+static int another_present(const gi_farm *f, const gi_farm_host *host)
+{
+    for (size_t i = 0; i < f->host_count; i++)
+        if (f->hosts[i] != host && f->hosts[i]->present)
+            return 1;
+    return 0;
+}
+
 static int may_take(void *ctx, const gi_task *t)
 {
     const taker *k = ctx;
+    /* Not back to the host it just failed on, while another can take it. */
+    if (gi_affinity_owner(&k->job->failed_on, t->id + 1) == k->host &&
+        another_present(k->farm, k->host))
+        return 0;
     return gi_affinity_may_take(&k->job->affinity, t->affinity, k->host, host_present, NULL);
 }
 
@@ -299,7 +313,7 @@ static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, unsigned char *exha
     long i;
     while ((i = pick_job(f, exhausted, passed)) >= 0) {
         gi_farm_job *j = f->jobs[i];
-        taker k = {j, c->host};
+        taker k = {f, j, c->host};
         uint64_t refused;
         const gi_task *t = gi_jobrun_lease_if(&j->jr, may_take, &k, &refused);
         if (t) {
@@ -392,6 +406,15 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
     gi_farm_job_task_error(j, l->task_id, l->attempt, conn_name(c), e->msg);
     gi_farm_job_log(j, "task %llu (attempt %u) failed on %s: %s", (unsigned long long)l->task_id,
                     l->attempt, conn_name(c), e->msg);
+    if (c->host) {
+        /* The retry goes elsewhere if it can (may_take), and so does the
+         * task's affinity key: its files on this host may be the trouble. */
+        gi_affinity_set(&j->failed_on, l->task_id + 1, c->host);
+        const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l->task_id);
+        uint64_t key = jt ? jt->task.affinity : 0;
+        if (key && gi_affinity_owner(&j->affinity, key) == c->host)
+            gi_affinity_set(&j->affinity, key, NULL);
+    }
     gi_jobrun_fail(&j->jr, l->task_id, l->attempt, e);
     gi_farm_job_settle(f, j);
 }

@@ -1,6 +1,7 @@
 # Task failures on the farm: a worker whose tasks keep failing is
 # blocklisted and the others finish the job (identical image); a task that
-# fails on every attempt fails its job with the task's error.
+# fails on every attempt fails its job with the task's error; a task that
+# failed on one host is retried on another one.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -43,5 +44,15 @@ set -e
 [ $rc -eq 1 ] || { cat "$TMP/wait.log"; fail "a job whose task always fails: exit $rc"; }
 grep -q "failed: task 2 failed 4 times; last error: flaky: pool child 0 .* was killed by signal 9" "$TMP/wait.log" ||
     { cat "$TMP/wait.log"; fail "no clear error"; }
+
+# The same host trouble with a healthy worker beside it: the failed task is
+# retried there, not on the host it failed on, and the job is done.
+start_worker "$TMP/good2.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c4" --name good2
+wait_workers 2
+id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit 3"
+wait_state "$id" done 60
+[ "$(jnum "$id" retries)" = 1 ] || { api "/api/v1/jobs/$id"; fail "task 2 was not retried once, elsewhere"; }
+"$GI" fetch "$id" --out "$TMP/out3" >/dev/null || fail "fetch 3"
+cmp "$TMP/ref/img.exr" "$TMP/out3/img.exr" || fail "image differs after the retry elsewhere"
 stop_farmd "$LOG"
 echo ok
