@@ -89,6 +89,12 @@ static long temp_name_pid(const char *name)
 
 int gi_is_temp_name(const char *name) { return temp_name_pid(name) >= 0; }
 
+int gi_is_stale_temp_name(const char *name)
+{
+    long pid = temp_name_pid(name);
+    return pid > 0 && kill((pid_t)pid, 0) != 0 && errno == ESRCH;
+}
+
 int gi_remove_stale_temps(const char *dir)
 {
     DIR *d = opendir(dir);
@@ -97,8 +103,7 @@ int gi_remove_stale_temps(const char *dir)
     int n = 0;
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
-        long pid = temp_name_pid(e->d_name);
-        if (pid <= 0 || (kill((pid_t)pid, 0) == 0 || errno != ESRCH))
+        if (!gi_is_stale_temp_name(e->d_name))
             continue; /* not a temporary file, or its writer may be alive */
         char *path = gi_path_join(dir, e->d_name);
         n += unlink(path) == 0;

@@ -18,8 +18,10 @@ char *gi_temp_path(const char *path);
 /* `name` is one gi_temp_path made: it ends in .tmp-<pid>-<n> (a write cut
  * short, never an output, whatever else the name holds). */
 int gi_is_temp_name(const char *name);
-/* Removes from dir the temporary files of processes that are gone (a
- * render or coordinator killed while writing); returns how many. */
+/* `name` is a temporary file's whose writer is gone (a render or
+ * coordinator killed while writing). */
+int gi_is_stale_temp_name(const char *name);
+/* Removes such files from dir; returns how many. */
 int gi_remove_stale_temps(const char *dir);
 /* fsyncs `tmp` and renames it to `path`; removes tmp on failure. */
 int gi_commit_file(const char *tmp, const char *path, gi_error *err);

@@ -229,8 +229,10 @@ static int cmp_name(const void *a, const void *b)
 
 /* The outputs as written, from the job's out directory: a method may write
  * more than the job names (an animation writes NAME.0003.exr per frame).
- * Temporary files (gi_temp_path) and hidden names are not outputs. Keeps
- * the declared names if the directory holds nothing. */
+ * Temporary files (gi_temp_path) and hidden names are not outputs; those
+ * of a coordinator killed while writing are removed here, in the one read
+ * of the directory (at start-up for done jobs, when a job is done).
+ * Keeps the declared names if the directory holds nothing. */
 static void list_written_outputs(gi_farm_job *j)
 {
     char path[4300];
@@ -242,6 +244,11 @@ static void list_written_outputs(gi_farm_job *j)
     int n = 0, cap = 0;
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
+        if (gi_is_stale_temp_name(e->d_name)) { /* the coordinator was killed writing it */
+            char *stale = gi_path_join(path, e->d_name);
+            unlink(stale);
+            free(stale);
+        }
         if (e->d_name[0] == '.' || gi_is_temp_name(e->d_name))
             continue;
         if (n == cap) {
@@ -447,10 +454,6 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
             j->outputs = gi_xcalloc(1, sizeof *j->outputs);
         }
         gi_job_free(&parsed);
-        /* Writes cut short by the coordinator's end (killed, power lost). */
-        char out[4300];
-        snprintf(out, sizeof out, "%s/out", j->dir);
-        gi_remove_stale_temps(out);
         if (j->state == GI_FJ_DONE)
             list_written_outputs(j);
         load_log_tail(j);

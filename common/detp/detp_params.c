@@ -279,13 +279,12 @@ int gi_detp_resolve_params(gi_detp_params *p, gi_scene *scene, const char *file,
         p->photon_count = n;
         if ((uint64_t)p->batch > n)
             p->batch = (int64_t)n;
-        double batches = ceil((double)n / (double)p->batch);
-        if (batches > GI_JOB_MAX_TASKS)
-            return gi_fail(err, GI_EINVAL,
-                           "%s: detp.batch: detp.relative_error %g needs %llu photons: in "
-                           "batches of %lld, %.4g tasks at once; a job plans at most %u",
-                           file, p->relative_error, (unsigned long long)n, (long long)p->batch,
-                           batches, GI_JOB_MAX_TASKS);
+        gi_jv v = {file, err};
+        if (gi_job_check_tasks(&v, "detp.batch", ceil((double)n / (double)p->batch),
+                               "detp.relative_error %g needs %llu photons: in batches of %lld, "
+                               "they",
+                               p->relative_error, (unsigned long long)n, (long long)p->batch))
+            return -1;
     } else {
         p->photon_count = (uint64_t)p->photons;
     }
