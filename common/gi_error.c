@@ -1,6 +1,7 @@
 /* gi_error: error records and checked allocation. */
 #include "gi_error.h"
 
+#include <errno.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -67,8 +68,20 @@ const char *gi_errcode_name(gi_errcode code)
     case GI_ECRASH: return "worker crashed";
     case GI_ECANCEL: return "cancelled";
     case GI_EINTERNAL: return "internal error";
+    case GI_EHOST: return "host disk error";
     }
     return "unknown error";
+}
+
+gi_errcode gi_disk_errcode(int errnum)
+{
+    switch (errnum) {
+    case ENOSPC:
+    case EDQUOT:
+    case EROFS:
+    case EIO: return GI_EHOST;
+    default: return GI_EIO;
+    }
 }
 
 int gi_error_exit_status(const gi_error *err)

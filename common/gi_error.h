@@ -18,7 +18,9 @@ typedef enum gi_errcode {
     GI_EPROTO,   /* malformed or unexpected protocol frame */
     GI_ECRASH,   /* a worker process died while running a task */
     GI_ECANCEL,  /* the job was cancelled */
-    GI_EINTERNAL /* a broken invariant or a library failure */
+    GI_EINTERNAL, /* a broken invariant or a library failure */
+    GI_EHOST     /* this host's own disk failed (full, over quota, read-only, a device
+                  * error): not the task's fault, another host may run it */
 } gi_errcode;
 
 typedef struct gi_error {
@@ -36,6 +38,10 @@ int gi_error_prefix(gi_error *err, const char *fmt, ...)
 
 void gi_error_clear(gi_error *err);
 const char *gi_errcode_name(gi_errcode code);
+
+/* The code for a failed write to this host's own disk: GI_EHOST for no
+ * space, quota, read-only file system or a device error; GI_EIO otherwise. */
+gi_errcode gi_disk_errcode(int errnum);
 
 /* Process exit status for an error: 2 for bad input, 1 otherwise. */
 int gi_error_exit_status(const gi_error *err);

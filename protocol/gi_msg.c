@@ -129,7 +129,7 @@ static int decode_error_fields(gi_reader *r, gi_error *e)
         free(msg);
         return -1;
     }
-    e->code = code <= GI_EINTERNAL ? (gi_errcode)code : GI_EINTERNAL;
+    e->code = code <= GI_EHOST ? (gi_errcode)code : GI_EINTERNAL;
     snprintf(e->msg, sizeof e->msg, "%s", msg);
     free(msg);
     return 0;

@@ -81,6 +81,7 @@ typedef struct gi_farm_job {
     double run_t0;          /* monotonic start of this process's run */
     uint64_t resumed_merged; /* tasks merged before a restart (from a checkpoint) */
     uint64_t results_accepted, results_late, leases, lease_expiries;
+    uint64_t host_disk_errors; /* tasks a host's full disk sent elsewhere */
     double merge_s, finish_s; /* coordinator time in method merge / finish */
     uint64_t result_bytes;    /* result data accepted */
     uint64_t merged_bytes;    /* result data merged (in task order) */

@@ -404,8 +404,14 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
     f->m.task_failures++;
     c->tasks_failed++;
     gi_farm_job_task_error(j, l->task_id, l->attempt, conn_name(c), e->msg);
-    gi_farm_job_log(j, "task %llu (attempt %u) failed on %s: %s", (unsigned long long)l->task_id,
-                    l->attempt, conn_name(c), e->msg);
+    /* A host's full or read-only disk is not the task's fault: the attempt
+     * is not counted, the host's failures are (host_failure: it is
+     * blocklisted after a few), and the task waits for a host that can
+     * run it instead of failing the job. */
+    int host_disk = e->code == GI_EHOST && c->host;
+    gi_farm_job_log(j, "task %llu (attempt %u) failed on %s: %s%s", (unsigned long long)l->task_id,
+                    l->attempt, conn_name(c), e->msg,
+                    host_disk ? " (that host's disk: not counted as an attempt)" : "");
     if (c->host) {
         /* The retry goes elsewhere if it can (may_take), and so does the
          * task's affinity key: its files on this host may be the trouble. */
@@ -415,7 +421,12 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
         if (key && gi_affinity_owner(&j->affinity, key) == c->host)
             gi_affinity_set(&j->affinity, key, NULL);
     }
-    gi_jobrun_fail(&j->jr, l->task_id, l->attempt, e);
+    if (host_disk) {
+        j->host_disk_errors++;
+        gi_jobrun_requeue(&j->jr, l->task_id);
+    } else {
+        gi_jobrun_fail(&j->jr, l->task_id, l->attempt, e);
+    }
     gi_farm_job_settle(f, j);
 }
 

@@ -106,6 +106,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON_AddNumberToObject(t, "results_this_run", (double)j->results_accepted);
     cJSON_AddNumberToObject(t, "late_results", (double)j->results_late);
     cJSON_AddNumberToObject(t, "lease_expiries", (double)j->lease_expiries);
+    cJSON_AddNumberToObject(t, "host_disk_errors", (double)j->host_disk_errors);
 
     cJSON *s = cJSON_AddObjectToObject(o, "stats");
     cJSON_AddNumberToObject(s, "rays", (double)st.rays);

@@ -256,10 +256,13 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
         return 0;
     jr->leased--;
     jt->task.attempt++;
-    if (why->code == GI_EINVAL || jt->task.attempt >= jr->max_attempts) {
+    /* Bad input fails the same way every time, and so does a full disk
+     * here (the farm gives such a task to another host, gi_farm_sched.c). */
+    if (why->code == GI_EINVAL || why->code == GI_EHOST ||
+        jt->task.attempt >= jr->max_attempts) {
         gi_error e;
-        if (why->code == GI_EINVAL)
-            gi_fail(&e, GI_EINVAL, "%s", why->msg);
+        if (why->code == GI_EINVAL || why->code == GI_EHOST)
+            gi_fail(&e, why->code, "%s", why->msg);
         else
             gi_fail(&e, why->code, "task %llu failed %u times; last error: %s",
                     (unsigned long long)task_id, jt->task.attempt, why->msg);

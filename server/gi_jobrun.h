@@ -74,7 +74,8 @@ const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const 
 int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf *result,
                        const gi_task_stats *stats);
 /* A leased task failed (error from the worker, or a crash). It is retried up
- * to max_attempts; bad input (GI_EINVAL) fails the job at once. */
+ * to max_attempts; bad input (GI_EINVAL) and this host's full disk
+ * (GI_EHOST) fail the job at once. */
 int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why);
 /* A lease given back without running (worker shutting down). */
 void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);

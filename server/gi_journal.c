@@ -127,7 +127,7 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
         r->message = gi_get_str(&rd, MAX_MESSAGE);
         r->when = gi_get_f64(&rd);
         if (!rd.failed && (r->end < GI_JOB_END_DONE || r->end > GI_JOB_END_CANCELLED ||
-                           r->code > GI_EINTERNAL))
+                           r->code > GI_EHOST))
             return gi_fail(err, GI_EPROTO, "journal END: state %u, code %u out of range",
                            r->end, r->code);
         if (!rd.failed && rd.left) {

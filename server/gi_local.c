@@ -31,6 +31,7 @@
 #include "gi_batch_dir.h"
 #include "gi_batch_root.h"
 #include "gi_file_writer.h"
+#include "gi_fs.h"
 #include "gi_local_checkpoint.h"
 #include "gi_log.h"
 #include "gi_pool.h"
@@ -215,6 +216,14 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
 {
     gi_job *job = lr->job;
     int keep_batches = 0;
+    if (err && lr->jr.failed && lr->jr.error.code == GI_EHOST && lr->batch_root &&
+        strstr(err->msg, lr->batch_root)) {
+        gi_error e = *err;
+        char *tmp = gi_dirname(lr->batch_root);
+        gi_fail(err, e.code, "%s; the photon batches are written under $TMPDIR (%s): free space "
+                "there or set TMPDIR to a larger disk", e.msg, tmp);
+        free(tmp);
+    }
     if (!checkpoints) {
         /* none */
     } else if (rc == 0) {
@@ -241,7 +250,8 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
             if (err)
                 gi_warn("%s", cerr.msg);
         }
-    } else if (lr->jr.failed && lr->jr.error.code == GI_EIO && lr->ckpt_ours) {
+    } else if (lr->jr.failed && (lr->jr.error.code == GI_EIO || lr->jr.error.code == GI_EHOST) &&
+               lr->ckpt_ours) {
         /* A write failed (a full disk, a path in the way): the last
          * checkpoint, taken with every output before it on disk, still
          * holds the work up to it, and with it the batches it names. */

@@ -1,6 +1,7 @@
 /* gi_worker_ctx: loading a job in a worker process and running its tasks. */
 #include "gi_worker_ctx.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -74,8 +75,11 @@ int gi_worker_batch_dir(gi_worker_ctx *ctx, const char **dir, gi_error *err)
     /* Children race to create it: mkdir -p takes EEXIST as success. Every
      * time: the host removes it when the job ends, and the same job may
      * come back (a retry, an id the coordinator gave again). */
-    if (gi_mkdirs(ctx->batch_dir, err))
+    if (gi_mkdirs(ctx->batch_dir, err)) {
+        if (err) /* gi_mkdirs leaves mkdir's errno: a full disk is the host's */
+            err->code = gi_disk_errcode(errno);
         return gi_error_prefix(err, "batch directory");
+    }
     *dir = ctx->batch_dir;
     return 0;
 }

@@ -221,11 +221,11 @@ int detp_grid_write(const char *path, const detp_grid_spec *spec, uint64_t p0, u
         char *tmp = gi_temp_path(path);
         FILE *fp = fopen(tmp, "wb");
         if (!fp || fwrite(b.data, 1, b.len, fp) != b.len)
-            rc = gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(errno));
+            rc = gi_fail(err, gi_disk_errcode(errno), "%s: %s", tmp, strerror(errno));
         if (fp && fclose(fp) != 0 && rc == 0)
-            rc = gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(errno));
+            rc = gi_fail(err, gi_disk_errcode(errno), "%s: %s", tmp, strerror(errno));
         if (rc == 0 && rename(tmp, path) != 0)
-            rc = gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(errno));
+            rc = gi_fail(err, gi_disk_errcode(errno), "%s: rename: %s", path, strerror(errno));
         if (rc)
             unlink(tmp);
         else

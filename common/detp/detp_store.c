@@ -93,17 +93,17 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
     char *tmp = gi_temp_path(path);
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) {
-        gi_fail(err, GI_EIO, "%s: %s", tmp, strerror(errno));
+        gi_fail(err, gi_disk_errcode(errno), "%s: %s", tmp, strerror(errno));
         free(tmp);
         return -1;
     }
     int rc = 0;
     if (write_all(fd, &hd, sizeof hd) || write_all(fd, s->v, s->count * sizeof *s->v))
-        rc = gi_fail(err, GI_EIO, "%s: write: %s", tmp, strerror(errno));
+        rc = gi_fail(err, gi_disk_errcode(errno), "%s: write: %s", tmp, strerror(errno));
     if (close(fd) != 0 && rc == 0)
-        rc = gi_fail(err, GI_EIO, "%s: close: %s", tmp, strerror(errno));
+        rc = gi_fail(err, gi_disk_errcode(errno), "%s: close: %s", tmp, strerror(errno));
     if (rc == 0 && rename(tmp, path) != 0)
-        rc = gi_fail(err, GI_EIO, "%s: rename: %s", path, strerror(errno));
+        rc = gi_fail(err, gi_disk_errcode(errno), "%s: rename: %s", path, strerror(errno));
     if (rc != 0)
         unlink(tmp);
     else if (!records_invalid(&hd, s->v, s->count))

@@ -1,6 +1,7 @@
 /* Unit tests: the farm's control messages (handshake, heartbeat, drain,
  * cancel), worker authentication, secrets and tokens, per-connection frame
  * limits. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,6 +13,7 @@
 
 #include "gi_auth.h"
 #include "gi_frame.h"
+#include "gi_msg.h"
 #include "gi_msg_ctrl.h"
 #include "gi_net.h"
 #include "gi_test.h"
@@ -149,6 +151,31 @@ GI_TEST(test_msg_tasklist_and_cancel)
     gi_msg_cancel_encode(&b, &c);
     GI_REQUIRE_OK(gi_msg_cancel_decode(&b, &c2, &err));
     GI_CHECK(c2.job_id == 5 && c2.task_id == GI_MSG_ALL_TASKS);
+    gi_buf_free(&b);
+}
+
+/* A FAIL keeps its code: a host's full disk (GI_EHOST) must reach the
+ * coordinator as such, or the task's attempts are spent on it. */
+GI_TEST(test_msg_fail_keeps_host_disk_code)
+{
+    GI_CHECK(gi_disk_errcode(ENOSPC) == GI_EHOST && gi_disk_errcode(EDQUOT) == GI_EHOST &&
+             gi_disk_errcode(EROFS) == GI_EHOST && gi_disk_errcode(EIO) == GI_EHOST);
+    GI_CHECK(gi_disk_errcode(ENOENT) == GI_EIO && gi_disk_errcode(EACCES) == GI_EIO);
+    gi_error why, err;
+    gi_fail(&why, gi_disk_errcode(ENOSPC), "b0.f0.base: write: %s", strerror(ENOSPC));
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_fail_encode(&b, 3, 4, 1, &why);
+    gi_msg_fail m;
+    GI_REQUIRE_OK(gi_msg_fail_decode(&b, &m, &err));
+    GI_CHECK(m.job_id == 3 && m.task_id == 4 && m.attempt == 1 && m.error.code == GI_EHOST);
+    GI_CHECK(strcmp(m.error.msg, why.msg) == 0);
+    /* A code from a newer build is an internal error, not a crash. */
+    gi_buf_reset(&b);
+    why.code = (gi_errcode)(GI_EHOST + 1);
+    gi_msg_fail_encode(&b, 3, 4, 1, &why);
+    GI_REQUIRE_OK(gi_msg_fail_decode(&b, &m, &err));
+    GI_CHECK(m.error.code == GI_EINTERNAL);
     gi_buf_free(&b);
 }
 
