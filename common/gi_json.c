@@ -227,6 +227,11 @@ int gi_jv_int(gi_jv *v, const cJSON *obj, const char *path, const char *key, int
     double d = item->valuedouble;
     if (!isfinite(d) || d != floor(d))
         return gi_jv_fail(v, p, "expected an integer, got %g", d);
+    /* From 2^53 on the double is not the integer written (2^53 + 1 reads
+     * as 2^53): echoing it would name a number the user did not write. */
+    if (fabs(d) >= 9007199254740992.0 && (d < (double)lo || d > (double)hi))
+        return gi_jv_fail(v, p, "out of range [%lld, %lld] (and integers of 2^53 or more are "
+                          "not exact in JSON)", (long long)lo, (long long)hi);
     if (d < (double)lo || d > (double)hi)
         return gi_jv_fail(v, p, "%.0f is out of range [%lld, %lld]", d, (long long)lo,
                           (long long)hi);

@@ -237,6 +237,7 @@ GI_TEST(test_json_errors_name_file_and_field)
     cJSON_Delete(doc);
 
     GI_REQUIRE_OK(parse_doc("{\"n\": 1.5, \"i\": 3, \"s\": \"x\", \"big\": 1e999, "
+                            "\"seed\": 9007199254740993, "
                             "\"v\": [1, 2], \"o\": {\"k\": true}, \"dup\": 1, \"dup\": 2}",
                             &doc, &err));
     gi_jv v = {"t.json", &err};
@@ -247,6 +248,11 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK_MSG(strstr(err.msg, "t.json: n: expected an integer") != NULL, "%s", err.msg);
     GI_CHECK(gi_jv_int(&v, doc, "", "i", 1, 0, 2, &i) == -1);
     GI_CHECK(strstr(err.msg, "out of range") != NULL);
+    /* 2^53 + 1 reads as 2^53: the message must not name 9007199254740992. */
+    GI_CHECK(gi_jv_int(&v, doc, "", "seed", 1, 0, ((int64_t)1 << 53) - 1, &i) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json: seed: out of range [0, 9007199254740991] (and "
+                               "integers of 2^53 or more are not exact in JSON)") != NULL,
+                 "%s", err.msg);
     GI_CHECK(gi_jv_int(&v, doc, "", "s", 1, 0, 2, &i) == -1);
     GI_CHECK(strstr(err.msg, "got a string") != NULL);
     GI_CHECK(gi_jv_number(&v, doc, "", "big", 1, -1e300, 1e300, &d) == -1);
@@ -257,10 +263,10 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK(gi_jv_number(&v, doc, "", "missing", 0, 0, 1, &d) == 0 && d == 42);
     gi_vec3 v3;
     GI_CHECK(gi_jv_vec3(&v, doc, "", "v", 1, 0, 1, &v3) == -1);
-    static const char *const allowed[] = {"n", "i", "s", "big", "v", "o", NULL};
+    static const char *const allowed[] = {"n", "i", "s", "big", "seed", "v", "o", NULL};
     GI_CHECK(gi_jv_keys(&v, doc, "", allowed) == -1);
     GI_CHECK_MSG(strstr(err.msg, "dup: unknown key") != NULL, "%s", err.msg);
-    static const char *const allowed2[] = {"n", "i", "s", "big", "v", "o", "dup", NULL};
+    static const char *const allowed2[] = {"n", "i", "s", "big", "seed", "v", "o", "dup", NULL};
     GI_CHECK(gi_jv_keys(&v, doc, "", allowed2) == -1);
     GI_CHECK_MSG(strstr(err.msg, "dup: key appears twice") != NULL, "%s", err.msg);
     const cJSON *o;
