@@ -16,6 +16,25 @@ static void ensure_sodium(void)
         abort();
 }
 
+/* path is a file of systemd's credentials directory for this service
+ * ($CREDENTIALS_DIRECTORY, LoadCredential=), which others cannot enter. */
+static int in_credentials_directory(const char *path)
+{
+    const char *dir = getenv("CREDENTIALS_DIRECTORY");
+    if (!dir || !dir[0])
+        return 0;
+    char *real_dir = realpath(dir, NULL), *real = realpath(path, NULL);
+    struct stat st;
+    int in = real_dir && real && stat(real_dir, &st) == 0 && !(st.st_mode & S_IRWXO);
+    if (in) {
+        size_t n = strlen(real_dir);
+        in = strncmp(real, real_dir, n) == 0 && real[n] == '/' && !strchr(real + n + 1, '/');
+    }
+    free(real_dir);
+    free(real);
+    return in;
+}
+
 static int read_secret_file(const char *path, const char *what, gi_buf *out, gi_error *err)
 {
     int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
@@ -26,7 +45,11 @@ static int read_secret_file(const char *path, const char *what, gi_buf *out, gi_
         close(fd);
         return gi_fail(err, GI_EINVAL, "%s file %s: not a regular file", what, path);
     }
-    if (st.st_mode & (S_IRWXG | S_IRWXO)) {
+    /* systemd writes a credential 0400 and, where the file system has ACLs,
+     * grants the service's user through one: stat then shows the ACL's mask
+     * as group bits (0440) although no group may read it. */
+    mode_t forbidden = in_credentials_directory(path) ? S_IRWXO : (S_IRWXG | S_IRWXO);
+    if (st.st_mode & forbidden) {
         close(fd);
         return gi_fail(err, GI_EINVAL,
                        "%s file %s: group or others may access it (mode %03o); "

@@ -243,6 +243,23 @@ GI_TEST(test_secret_read)
     chmod(path, 0644);
     GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
     GI_CHECK(strstr(err.msg, "chmod 600") && !strstr(err.msg, "0123456789"));
+    /* systemd's credentials directory: a credential shows 0440 where ACLs
+     * grant it to the service's user; others' bits are still refused. */
+    char creds[512], cred[600];
+    snprintf(creds, sizeof creds, "%s/credentials", gi_test_tmpdir());
+    mkdir(creds, 0500);
+    chmod(creds, 0700);
+    snprintf(cred, sizeof cred, "%s/farm-secret", creds);
+    write_file(cred, "0123456789abcdef0123\n", 0440);
+    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err) != 0);
+    setenv("CREDENTIALS_DIRECTORY", creds, 1);
+    GI_REQUIRE_OK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err));
+    GI_CHECK(s.len == 20);
+    chmod(cred, 0444);
+    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err) != 0);
+    chmod(path, 0640); /* not in the credentials directory */
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    unsetenv("CREDENTIALS_DIRECTORY");
     write_file(path, "short\n", 0600);
     GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
     GI_CHECK(strstr(err.msg, "shorter than 16 bytes") != NULL);
