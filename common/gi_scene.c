@@ -194,6 +194,20 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
                            b->file, name, i);
         mesh->positions[i] = p;
     }
+    /* A mirroring transform (negative determinant) would turn every face's
+     * front to its other side: the triangles are re-wound so that a
+     * mirrored object faces, and emits, the way the original does. */
+    const double(*m)[4] = transform->m;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (det < 0)
+        for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+            uint32_t *ix = &mesh->indices[3 * t];
+            uint32_t swap = ix[1];
+            ix[1] = ix[2];
+            ix[2] = swap;
+        }
     if (mesh->normals) {
         for (uint32_t i = 0; i < mesh->vertex_count; i++) {
             gi_vec3 n = mesh->normals[i];

@@ -14,6 +14,7 @@
 #include "gi_fs.h"
 #include "gi_json.h"
 #include "gi_mesh.h"
+#include "gi_polygon.h"
 #include "gi_scene_build.h"
 
 #define MAX_COORD 1e12
@@ -112,7 +113,8 @@ static int parse_transform(gi_jv *v, const cJSON *arr, const char *path, gi_mat4
 }
 
 /* "polygons": {"vertices": [[x,y,z], ...], "faces": [[i,j,k,...], ...]}
- * Faces are convex polygons, fanned into triangles from their first vertex. */
+ * Faces are simple polygons: convex ones are fanned into triangles from
+ * their first vertex, concave ones cut into ears (gi_polygon.h). */
 static int parse_polygons(gi_jv *v, const cJSON *poly, const char *path, gi_mesh_data *m)
 {
     static const char *const keys[] = {"vertices", "faces", NULL};
@@ -165,17 +167,19 @@ static int parse_polygons(gi_jv *v, const cJSON *poly, const char *path, gi_mesh
             }
             ix[k] = (uint32_t)d;
         }
-        for (int t = 1; t + 1 < n; t++) {
-            if (m->triangle_count == cap) {
-                cap = cap ? 2 * cap : 16;
-                m->indices = gi_xrealloc(m->indices, cap * 3 * sizeof *m->indices);
-            }
-            uint32_t *tri = &m->indices[3 * m->triangle_count++];
-            tri[0] = ix[0];
-            tri[1] = ix[t];
-            tri[2] = ix[t + 1];
+        while (m->triangle_count + (size_t)n - 2 > cap) {
+            cap = cap ? 2 * cap : 16;
+            m->indices = gi_xrealloc(m->indices, cap * 3 * sizeof *m->indices);
         }
+        int made = gi_polygon_triangulate(m->positions, ix, n, &m->indices[3 * m->triangle_count]);
         free(ix);
+        if (made < 0 && n > GI_POLYGON_MAX_CONCAVE)
+            return gi_jv_fail(v, q, "a concave face of more than %d vertices: split it",
+                              GI_POLYGON_MAX_CONCAVE);
+        if (made < 0)
+            return gi_jv_fail(v, q, "its edges cross (not a simple polygon): split it into "
+                              "simple ones");
+        m->triangle_count += (uint32_t)made;
     }
     if (nv == 0 || m->triangle_count == 0)
         return gi_jv_fail(v, path, "empty mesh: no vertices or no faces");

@@ -84,6 +84,88 @@ GI_TEST(test_scene_shapes_transforms_and_mobile)
     gi_scene_free(&s);
 }
 
+/* A mirroring transform keeps each face's front where the original's was:
+ * a mirrored ball still faces out, a quad mirrored through its plane
+ * emits to the other side. */
+GI_TEST(test_scene_mirroring_transform_keeps_front_faces)
+{
+    gi_error err;
+    gi_scene s;
+    const char *text =
+        "{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+        "                 \"l\": {\"emission\": [1, 1, 1]}},"
+        " \"objects\": ["
+        "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [2, 3]},"
+        "   \"transform\": [{\"scale\": [1, -1, 1]}, {\"translate\": [0, 5, 0]}]},"
+        "  {\"name\": \"ball\", \"material\": \"w\", \"sphere\": {\"radius\": 2},"
+        "   \"transform\": [{\"scale\": [-1, 1, 1]}, {\"translate\": [10, 0, 0]}]}"
+        " ]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("mirror.json", text, &s, &err));
+    const gi_object *lamp = &s.objects[0], *ball = &s.objects[1];
+    for (uint32_t t = lamp->first_triangle; t < lamp->first_triangle + lamp->triangle_count; t++)
+        GI_CHECK_NEAR(gi_scene_triangle_normal(&s, t).y, -1.0, 1e-6);
+    for (uint32_t t = ball->first_triangle; t < ball->first_triangle + ball->triangle_count; t++) {
+        const uint32_t *ix = &s.indices[3 * t];
+        gi_vec3 c = gi_scale(gi_add(gi_add(s.positions[ix[0]], s.positions[ix[1]]),
+                                    s.positions[ix[2]]), 1.0f / 3.0f);
+        GI_CHECK(gi_dot(gi_scene_triangle_normal(&s, t), gi_sub(c, gi_v3(10, 0, 0))) > 0.0f);
+    }
+    for (uint32_t v = ball->first_vertex; v < ball->first_vertex + ball->vertex_count; v++)
+        GI_CHECK(gi_dot(s.normals[v], gi_sub(s.positions[v], gi_v3(10, 0, 0))) > 0.99f);
+    gi_scene_free(&s);
+}
+
+/* Concave faces are cut into ears that cover the face once and face its
+ * way (fanning from the first vertex made a backwards triangle outside
+ * it); convex ones stay fans; faces whose edges cross are refused. */
+GI_TEST(test_scene_concave_polygons)
+{
+    gi_error err;
+    gi_scene s;
+    /* An arrow in the y = 0 plane, counter-clockwise seen from +y (front +y),
+     * its notch at vertex 0, the second of the face: area 4 * 4 - 4 * 2 / 2
+     * = 12 (the fan from (0, 0, 4) made the notch a backwards triangle). */
+    const char *text =
+        "{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5], \"emission\": [1, 1, 1]}},"
+        " \"objects\": [{\"name\": \"arrow\", \"material\": \"w\", \"polygons\": {"
+        "   \"vertices\": [[2, 0, 2], [0, 0, 4], [0, 0, 0], [4, 0, 0], [4, 0, 4]],"
+        "   \"faces\": [[1, 0, 4, 3, 2]]}},"
+        "  {\"name\": \"square\", \"material\": \"w\", \"polygons\": {"
+        "   \"vertices\": [[0, 1, 0], [0, 1, 1], [1, 1, 1], [1, 1, 0]],"
+        "   \"faces\": [[0, 1, 2, 3]]}}]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("arrow.json", text, &s, &err));
+    const gi_object *arrow = &s.objects[0];
+    GI_REQUIRE(arrow->triangle_count == 3);
+    double area = 0;
+    for (uint32_t t = arrow->first_triangle; t < arrow->first_triangle + 3; t++) {
+        area += gi_scene_triangle_area(&s, t);
+        GI_CHECK_NEAR(gi_scene_triangle_normal(&s, t).y, 1.0, 1e-6);
+    }
+    GI_CHECK_NEAR(area, 12.0, 1e-5);
+    /* The square: the fan (0 1 2), (0 2 3), as before. */
+    const uint32_t *sq = &s.indices[3 * s.objects[1].first_triangle];
+    uint32_t v0 = s.objects[1].first_vertex;
+    GI_CHECK(sq[0] == v0 && sq[1] == v0 + 1 && sq[2] == v0 + 2 && sq[3] == v0 && sq[4] == v0 + 2 &&
+             sq[5] == v0 + 3);
+    gi_scene_free(&s);
+
+    const char *bowtie =
+        "{\"materials\": {\"w\": {\"emission\": [1, 1, 1]}},"
+        " \"objects\": [{\"name\": \"bow\", \"material\": \"w\", \"polygons\": {"
+        "   \"vertices\": [[0, 0, 0], [2, 0, 2], [2, 0, 0], [0, 0, 2], [1, 0, 3]],"
+        "   \"faces\": [[0, 1, 2, 3, 4]]}}]}";
+    GI_CHECK(gi_test_load_scene_text("bow.json", bowtie, &s, &err) != 0);
+    GI_CHECK_MSG(strstr(err.msg, "faces[0]: its edges cross") != NULL, "%s", err.msg);
+    /* A pentagram: every corner turns the same way, but twice around. */
+    const char *star =
+        "{\"materials\": {\"w\": {\"emission\": [1, 1, 1]}},"
+        " \"objects\": [{\"name\": \"star\", \"material\": \"w\", \"polygons\": {"
+        "   \"vertices\": [[0, 0, 10], [6, 0, -8], [-9.5, 0, 3], [9.5, 0, 3], [-6, 0, -8]],"
+        "   \"faces\": [[0, 1, 2, 3, 4]]}}]}";
+    GI_CHECK(gi_test_load_scene_text("star.json", star, &s, &err) != 0);
+    GI_CHECK_MSG(strstr(err.msg, "faces[0]: its edges cross") != NULL, "%s", err.msg);
+}
+
 GI_TEST(test_scene_of_meshes_needs_no_materials_block)
 {
     gi_error err;
