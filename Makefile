@@ -48,8 +48,8 @@ fuzz: deps
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	for p in $(PROGRAMS); do \
-	  [ -f $(BUILD)/release/$$p ] && install -m 755 $(BUILD)/release/$$p $(DESTDIR)$(PREFIX)/bin/; \
-	done; true
+	  install -m 755 $(BUILD)/release/$$p $(DESTDIR)$(PREFIX)/bin/ || exit 1; \
+	done
 
 clean:
 	rm -rf $(BUILD)

@@ -23,6 +23,8 @@ static void log_read_env(void)
     for (int i = 0; i < 4; i++)
         if (strcmp(env, names[i]) == 0)
             log_state.level = (gi_log_level)i;
+    if (strcmp(env, "warning") == 0) /* the word the log lines print */
+        log_state.level = GI_LOG_WARN;
 }
 
 void gi_log_init(const char *program)

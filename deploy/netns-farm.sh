@@ -21,7 +21,7 @@ set -eu
 NET=${GI_NETNS_NET:-10.77.0}
 cmd=${1:-}
 P=${2:-}
-[ -n "$cmd" ] && [ -n "$P" ] || { sed -n '2,22p' "$0"; exit 2; }
+[ -n "$cmd" ] && [ -n "$P" ] || { sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 case "$P" in *[!a-zA-Z0-9_-]* | ?????????????*) echo "netns-farm: PREFIX must be 1-12 of [a-zA-Z0-9_-]" >&2; exit 2 ;; esac
 
 hosts() { # the host names, coordinator first

@@ -445,10 +445,10 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
             return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
         if (!purging)
             return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
-                          "job %llu has ended (%s): DELETE /api/v1/jobs/%llu?purge=1 removes it "
-                          "and its files",
+                          "job %llu has ended (%s): `gi purge %llu` (DELETE "
+                          "/api/v1/jobs/%llu?purge=1) removes it and its files",
                           (unsigned long long)j->id, gi_fj_state_name(j->state),
-                          (unsigned long long)j->id);
+                          (unsigned long long)j->id, (unsigned long long)j->id);
         {
             uint64_t id = j->id;
             if (gi_farm_job_purge(f, j, &err))

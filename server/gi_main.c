@@ -90,7 +90,7 @@ static void print_summary(const gi_job *job, const gi_local_summary *s)
     if (s->stats.samples != s->stats.rays || strcmp(job->method->unit, "rays") != 0)
         printf("%s%s (%s%s/s), ", gi_si((double)s->stats.samples, a, sizeof a), job->method->unit,
                gi_si(samples / secs, b, sizeof b), job->method->unit);
-    printf("%srays (%srays/s, %srays/s per worker)\n", gi_si((double)s->stats.rays, c, sizeof c),
+    printf("%srays (%srays/s, %srays per worker-second)\n", gi_si((double)s->stats.rays, c, sizeof c),
            gi_si(rays / secs, d, sizeof d), gi_si(rays / worker_secs, e, sizeof e));
     printf("  %llu task%s", (unsigned long long)s->tasks, s->tasks == 1 ? "" : "s");
     if (s->retries)

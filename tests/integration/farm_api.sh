@@ -102,7 +102,7 @@ set +e
 "$GI" cancel "$lo" >/dev/null 2>"$TMP/cancel.log"
 rc=$?
 set -e
-[ $rc -eq 1 ] && grep -q "has ended (done): DELETE /api/v1/jobs/$lo?purge=1 removes it" "$TMP/cancel.log" ||
+[ $rc -eq 1 ] && grep -q "has ended (done): .gi purge $lo. (DELETE /api/v1/jobs/$lo?purge=1) removes it" "$TMP/cancel.log" ||
     { cat "$TMP/cancel.log"; fail "gi cancel of an ended job: exit $rc"; }
 [ "$(jstate "$lo")" = done ] || fail "gi cancel changed an ended job"
 [ "$(api "/api/v1/jobs/$lo?purge=yes" -X DELETE -o /dev/null -w '%{http_code}')" = 400 ] ||
