@@ -197,6 +197,27 @@ static size_t active_workers(const gi_farm *f)
     return n;
 }
 
+/* Blocklisting and batch affinity go by name: two live workers sharing one
+ * (two gi-worker on a host, both without --name) are taken for one host.
+ * A worker reconnecting after a lost link has the same name too, but its
+ * old connection has gone silent. */
+static void warn_same_name(const gi_farm *f, const gi_farm_conn *c)
+{
+    double now = gi_now();
+    for (size_t i = 0; i < f->conn_count; i++) {
+        const gi_farm_conn *o = f->conns[i];
+        if (o != c && o->state == GI_FC_ACTIVE && o->have_hello &&
+            strcmp(o->hello.name, c->hello.name) == 0 &&
+            now - o->last_heard < 2 * f->cfg.heartbeat_s) {
+            gi_warn("worker %s (%s) joined while another worker of that name (%s) is active: "
+                    "they count as one host for blocklisting and batch affinity; give each "
+                    "gi-worker its own --name",
+                    c->hello.name, c->peer, o->peer);
+            return;
+        }
+    }
+}
+
 static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
 {
     uint8_t mac[GI_MSG_MAC_BYTES], want[GI_MSG_MAC_BYTES];
@@ -234,6 +255,7 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     gi_frame_limits lim = worker_limits(f);
     gi_frame_decoder_set_limits(&c->dec, &lim);
     c->state = GI_FC_ACTIVE;
+    warn_same_name(f, c);
     c->host = gi_farm_host_get(f, c->hello.name);
     c->next_heartbeat = gi_now() + f->cfg.heartbeat_s;
     f->m.workers_accepted++;

@@ -1,7 +1,8 @@
 # Task failures on the farm: a worker whose tasks keep failing is
 # blocklisted and the others finish the job (identical image); a task that
 # fails on every attempt fails its job with the task's error; a task that
-# failed on one host is retried on another one.
+# failed on one host is retried on another one; two live workers of one
+# name are warned about.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -54,5 +55,9 @@ wait_state "$id" done 60
 [ "$(jnum "$id" retries)" = 1 ] || { api "/api/v1/jobs/$id"; fail "task 2 was not retried once, elsewhere"; }
 "$GI" fetch "$id" --out "$TMP/out3" >/dev/null || fail "fetch 3"
 cmp "$TMP/ref/img.exr" "$TMP/out3/img.exr" || fail "image differs after the retry elsewhere"
+
+# A second live worker of the same name is taken for the same host: said.
+start_worker "$TMP/dup.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c5" --name good2
+wait_log "$LOG" "worker good2 (.*) joined while another worker of that name (.*) is active"
 stop_farmd "$LOG"
 echo ok
