@@ -106,6 +106,14 @@ static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     if (state_new(job, &st, err))
         return -1;
     job->state = st;
+    /* "auto" discs are the mesh's own spacing: on an unsubdivided scene of
+     * big faces that is a blurred, dark-edged bake, and nothing else says so. */
+    if (p->radius.kind == GI_DETP_LEN_AUTO && p->disc_radius > 0.05 * p->scene_size)
+        gi_warn("%s: detp: the discs' radius is %.3g (%.0f%% of the scene's size, the mesh's mean "
+                "edge with %u vertices): a coarse bake; set detp.subdivide (\"2%%\", say) for "
+                "finer lighting",
+                job->name, (double)p->disc_radius, 100.0 * p->disc_radius / p->scene_size,
+                job->scene.vertex_count);
     if (p->anim.enabled)
         return detp_anim_plan(job, st, q, err);
     for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch) {

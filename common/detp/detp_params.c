@@ -38,11 +38,19 @@ static int parse_len(gi_jv *v, const cJSON *obj, const char *key, double lo, dou
         }
         char *end = NULL;
         double pct = strtod(s, &end);
-        if (end != s && end && strcmp(end, "%") == 0 && isfinite(pct) && pct > 0.0 &&
-            pct <= 100.0) {
-            out->kind = GI_DETP_LEN_PERCENT;
-            out->value = pct;
-            return 0;
+        if (end != s && end && strcmp(end, "%") == 0 && isfinite(pct)) {
+            if (pct == 0.0 && lo == 0.0) { /* "0%": off, like 0 */
+                out->kind = GI_DETP_LEN_UNITS;
+                out->value = 0;
+                return 0;
+            }
+            if (pct > 0.0 && pct <= 100.0) {
+                out->kind = GI_DETP_LEN_PERCENT;
+                out->value = pct;
+                return 0;
+            }
+            return gi_jv_fail(v, path, "\"%.40s\" is out of range: a percentage of the scene "
+                              "size is in (0%%, 100%%]%s", s, lo == 0.0 ? ", or 0 for none" : "");
         }
     }
     return gi_jv_fail(v, path, "expected a length in scene units, a percentage of the scene "

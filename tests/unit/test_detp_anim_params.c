@@ -1,5 +1,6 @@
 /* Unit tests: the detp.animation block (parse, refusals, resolve), the
- * per-frame pose (keys, interpolation, hold) and gi_scene_pose_object. */
+ * per-frame pose (keys, interpolation, hold) and gi_scene_pose_object; the
+ * detp block's lengths. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,6 +20,27 @@ static int parse_detp(const char *detp, gi_detp_params *p, gi_error *err)
     int rc = gi_detp_parse_params(p, cJSON_GetObjectItemCaseSensitive(root, "detp"), &v);
     cJSON_Delete(root);
     return rc;
+}
+
+/* Lengths: units, a percentage of the scene's size, "auto"; a percentage
+ * out of range says so, and "0%" is no subdivision, like 0. */
+GI_TEST(test_detp_lengths)
+{
+    gi_detp_params *p = gi_xcalloc(1, sizeof *p);
+    gi_error err;
+    GI_REQUIRE_OK(parse_detp("{\"radius\": \"2.5%\", \"subdivide\": \"0%\"}", p, &err));
+    GI_CHECK(p->radius.kind == GI_DETP_LEN_PERCENT && p->radius.value == 2.5);
+    GI_CHECK(p->subdivide.kind == GI_DETP_LEN_UNITS && p->subdivide.value == 0);
+    GI_CHECK(parse_detp("{\"radius\": \"200%\"}", p, &err) != 0);
+    GI_CHECK_MSG(strstr(err.msg, "detp.radius: \"200%\" is out of range: a percentage of the "
+                                 "scene size is in (0%, 100%]") != NULL, "%s", err.msg);
+    GI_CHECK(parse_detp("{\"radius\": \"0%\"}", p, &err) != 0);
+    GI_CHECK(strstr(err.msg, "is out of range") && !strstr(err.msg, "0 for none"));
+    GI_CHECK(parse_detp("{\"subdivide\": \"-1%\"}", p, &err) != 0);
+    GI_CHECK(strstr(err.msg, "(0%, 100%], or 0 for none") != NULL);
+    GI_CHECK(parse_detp("{\"radius\": \"2 percent\"}", p, &err) != 0);
+    GI_CHECK(strstr(err.msg, "expected a length in scene units") != NULL);
+    free(p);
 }
 
 #define ANIM(body) "{\"animation\": {\"object\": \"ball\", \"frames\": 24, " body "}}"
