@@ -474,6 +474,8 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
     case R_ASSET_HEAD: {
         uint64_t size;
         int have = gi_farm_store_has(f, r->name, &size);
+        if (have) /* the client will not upload it: its job is coming */
+            gi_farm_store_touch(f, r->name);
         return send_response(conn, have ? MHD_HTTP_OK : MHD_HTTP_NOT_FOUND, NULL, 0,
                              "application/octet-stream");
     }
@@ -484,7 +486,8 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
         if (f->store_bytes + bytes > f->cfg.max_store_bytes) {
             gi_farm_upload_abort(u);
             return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
-                          "the asset store is full (%llu bytes, limit %llu)",
+                          "the asset store is full (%llu bytes, limit %llu): `gi purge` ended "
+                          "jobs to free their files",
                           (unsigned long long)f->store_bytes,
                           (unsigned long long)f->cfg.max_store_bytes);
         }
@@ -537,7 +540,8 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
                           (unsigned long long)r->limit);
         if (r->route == R_ASSET_PUT && f->store_bytes + n > f->cfg.max_store_bytes)
             return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
-                          "the asset store is full (%llu bytes, limit %llu)",
+                          "the asset store is full (%llu bytes, limit %llu): `gi purge` ended "
+                          "jobs to free their files",
                           (unsigned long long)f->store_bytes,
                           (unsigned long long)f->cfg.max_store_bytes);
     }

@@ -56,6 +56,10 @@ typedef struct gi_farm_job {
     double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
     char *file, *text;
     gi_manifest manifest;
+    /* Data the job published that its last checkpoint needs from the asset
+     * store (named by hash; <dir>/published), kept there until the job
+     * no longer needs it (gi_farm_store_release). */
+    gi_manifest published;
     char *name, *method; /* from parsing the text, for listings */
     char **outputs;      /* output file names */
     int output_count;
@@ -105,6 +109,7 @@ typedef struct gi_farm_job {
     double ckpt_cost_s; /* the last one's time: serialized, then written */
     /* The checkpoint being written (gi_farm_jobs.c), and what it holds. */
     struct gi_file_writer *ckpt_w;
+    gi_manifest ckpt_w_published; /* the data it needs from the store */
     uint64_t ckpt_w_merged;
     double ckpt_w_done_cost;
     size_t ckpt_w_bytes;
@@ -283,6 +288,14 @@ int gi_farm_upload_write(gi_farm_upload *u, const void *data, size_t len, gi_err
 int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err);
 void gi_farm_upload_abort(gi_farm_upload *u);
 int gi_farm_store_scan(gi_farm *f, gi_error *err);
+/* Touched: a client was told the store has it (a job about to name it). */
+void gi_farm_store_touch(const gi_farm *f, const char *hash);
+/* Removes the files of m (hashes) that no job of the farm names in its
+ * manifest or published data: files of a manifest only once untouched for
+ * GI_FARM_STORE_GRACE_S (an upload's job may not be submitted yet).
+ * Returns the bytes freed. */
+#define GI_FARM_STORE_GRACE_S 600.0
+uint64_t gi_farm_store_release(gi_farm *f, const gi_manifest *m, int uploaded);
 /* Bytes of hash for a worker: a live job's published data, else the store. */
 int gi_farm_asset_bytes(gi_farm *f, const char *hash, gi_buf *out, gi_error *err);
 

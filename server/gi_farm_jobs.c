@@ -43,6 +43,7 @@ const char *gi_fj_state_name(gi_fj_state s)
 
 static void start_checkers(gi_farm *f);
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait);
+static void published_load(gi_farm_job *j);
 
 static int terminal(const gi_farm_job *j)
 {
@@ -59,6 +60,8 @@ static gi_farm_job *job_new(gi_farm *f, uint64_t id)
     j->check_fd = -1;
     j->est_task_s = 1.0;
     gi_manifest_init(&j->manifest);
+    gi_manifest_init(&j->published);
+    gi_manifest_init(&j->ckpt_w_published);
     gi_buf_init(&j->check_msg);
     size_t n = strlen(f->jobs_dir) + 32;
     j->dir = gi_xmalloc(n);
@@ -104,6 +107,8 @@ static void job_free(gi_farm_job *j)
     free(j->declared);
     free(j->dir);
     gi_manifest_free(&j->manifest);
+    gi_manifest_free(&j->published);
+    gi_manifest_free(&j->ckpt_w_published);
     gi_buf_free(&j->check_msg);
     for (int i = 0; i < j->log_count; i++)
         free(j->log[(j->log_start + i) % GI_FJ_LOG_KEEP]);
@@ -458,6 +463,7 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
         if (j->state == GI_FJ_DONE)
             list_written_outputs(j);
         load_log_tail(j);
+        published_load(j);
         if (!terminal(j))
             unfinished++;
     }
@@ -595,6 +601,68 @@ static char *checkpoint_path(const gi_farm_job *j)
     return p;
 }
 
+static char *published_path(const gi_farm_job *j)
+{
+    size_t n = strlen(j->dir) + 16;
+    char *p = gi_xmalloc(n);
+    snprintf(p, n, "%s/published", j->dir);
+    return p;
+}
+
+/* <dir>/published: "HASH SIZE" lines, what the checkpoint on disk needs
+ * from the asset store. A line that does not parse is skipped: at worst
+ * the store keeps a file longer. */
+static void published_load(gi_farm_job *j)
+{
+    char *path = published_path(j);
+    gi_buf b;
+    gi_buf_init(&b);
+    if (gi_read_file(path, (size_t)1 << 24, &b, NULL) == 0) {
+        gi_buf_put(&b, "", 1);
+        for (char *line = (char *)b.data, *next; line && *line; line = next) {
+            next = strchr(line, '\n');
+            if (next)
+                *next++ = '\0';
+            char hash[GI_HASH_HEX];
+            unsigned long long size;
+            if (sscanf(line, "%64s %llu", hash, &size) == 2 && gi_hash_is_valid(hash))
+                gi_manifest_put(&j->published, hash, hash, size);
+        }
+    }
+    gi_buf_free(&b);
+    free(path);
+}
+
+static int published_save(const gi_farm_job *j, const gi_manifest *m, gi_error *err)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    for (size_t i = 0; i < m->count; i++) {
+        char line[GI_HASH_HEX + 32];
+        int n = snprintf(line, sizeof line, "%s %llu\n", m->entries[i].hash,
+                         (unsigned long long)m->entries[i].size);
+        gi_buf_put(&b, line, (size_t)n);
+    }
+    char *path = published_path(j);
+    int rc = gi_write_file_atomic(path, b.data, b.len, err);
+    free(path);
+    gi_buf_free(&b);
+    return rc;
+}
+
+/* The job's published data is no longer needed (it is done, or purged). */
+static uint64_t published_release(gi_farm *f, gi_farm_job *j)
+{
+    gi_manifest old = j->published;
+    gi_manifest_init(&j->published);
+    char *path = published_path(j);
+    unlink(path);
+    free(path);
+    uint64_t freed = gi_farm_store_release(f, &old, 0);
+    gi_manifest_free(&old);
+    return freed;
+}
+
 static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
 {
     checkpoint_finish(f, j, 1); /* journaled before the END */
@@ -617,6 +685,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
         char *ck = checkpoint_path(j);
         unlink(ck); /* nothing left to resume */
         free(ck);
+        published_release(f, j);
     } /* a failed or cancelled job's stays for gi_farm_job_retry */
 }
 
@@ -704,6 +773,11 @@ int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
             f->job_count--;
             break;
         }
+    /* Its files in the asset store go with it, unless another job names
+     * the same bytes. */
+    uint64_t freed = gi_farm_store_release(f, &j->manifest, 1) + published_release(f, j);
+    gi_info("job %llu purged: %llu bytes of the asset store freed", (unsigned long long)j->id,
+            (unsigned long long)freed);
     job_free(j);
     return 0;
 }
@@ -831,12 +905,15 @@ static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err)
 {
     /* Data the method published for its tasks must outlive a restart too:
      * into the store, where workers' requests find it by hash. */
+    gi_manifest_free(&j->ckpt_w_published);
+    gi_manifest_init(&j->ckpt_w_published);
     if (j->job.assets) {
         for (size_t i = 0; i < gi_asset_store_count(j->job.assets); i++) {
             char hash[GI_HASH_HEX];
             const gi_buf *b = gi_asset_store_at(j->job.assets, i, hash);
             if (gi_farm_store_put(f, hash, b->data, b->len, err))
                 return -1;
+            gi_manifest_put(&j->ckpt_w_published, hash, hash, b->len);
         }
     }
     gi_buf cp;
@@ -872,6 +949,33 @@ static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why)
     snprintf(j->ckpt_error, sizeof j->ckpt_error, "%.511s", why);
 }
 
+/* The checkpoint being written is in place (written) or not: the data it
+ * needs from the store becomes the job's published set, and what only the
+ * checkpoint before needed goes; else what it alone stored goes. */
+static void checkpoint_published(gi_farm *f, gi_farm_job *j, int written)
+{
+    gi_manifest gone = j->ckpt_w_published;
+    gi_manifest_init(&j->ckpt_w_published);
+    gi_error err;
+    if (written && published_save(j, &gone, &err) != 0) {
+        gi_warn("job %llu: %s (the asset store keeps the data of older checkpoints)",
+                (unsigned long long)j->id, err.msg);
+        for (size_t i = 0; i < j->published.count; i++) /* keep both sets */
+            gi_manifest_put(&gone, j->published.entries[i].hash, j->published.entries[i].hash,
+                            j->published.entries[i].size);
+        gi_manifest_free(&j->published);
+        j->published = gone;
+        return;
+    }
+    if (written) {
+        gi_manifest old = j->published;
+        j->published = gone;
+        gone = old;
+    }
+    gi_farm_store_release(f, &gone, 0);
+    gi_manifest_free(&gone);
+}
+
 /* Completes the checkpoint being written, if any, waiting for it if wait:
  * 1 when none is left, 0 while it is still being written. */
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
@@ -885,6 +989,7 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
     int rc = gi_file_writer_finish(j->ckpt_w, &seconds, &err);
     j->ckpt_w = NULL;
     j->ckpt_cost_s += seconds; /* the disk's time too (gi_jobrun_checkpoint_interval) */
+    checkpoint_published(f, j, rc == 0);
     if (rc == 0) {
         char *ap = affinity_path(j);
         gi_farm_affinity_save(j, ap);
@@ -918,8 +1023,10 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
     if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
         return; /* nothing merged since the last one */
     gi_error err;
-    if (checkpoint_start(f, j, &err))
+    if (checkpoint_start(f, j, &err)) {
+        checkpoint_published(f, j, 0);
         checkpoint_outcome(f, j, err.msg);
+    }
     j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
     if (force)
         checkpoint_finish(f, j, 1);

@@ -5,7 +5,9 @@
  * survives a restart with the checkpoint that refers to it). Uploads stream
  * into <state>/assets/tmp/ while being hashed and are renamed into place
  * only if the bytes match the name; a file in the store is never rewritten.
- * Names are hashes, so no request can name a path. */
+ * Names are hashes, so no request can name a path. A file goes when no job
+ * names it any more: a purged job's uploads (unless another job uses the
+ * same bytes), published data its newer checkpoint no longer needs. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -199,6 +201,46 @@ int gi_farm_store_scan(gi_farm *f, gi_error *err)
     f->store_bytes = 0;
     gi_fs_walk_fanout(f->assets_dir, count_bytes, &f->store_bytes);
     return 0;
+}
+
+void gi_farm_store_touch(const gi_farm *f, const char *hash)
+{
+    if (!gi_hash_is_valid(hash))
+        return;
+    char *p = gi_farm_store_path(f, hash);
+    utimensat(AT_FDCWD, p, NULL, 0);
+    free(p);
+}
+
+/* Some job of the farm names hash. */
+static int named(const gi_farm *f, const char *hash)
+{
+    for (size_t i = 0; i < f->job_count; i++)
+        if (gi_manifest_has_hash(&f->jobs[i]->manifest, hash) ||
+            gi_manifest_has_hash(&f->jobs[i]->published, hash))
+            return 1;
+    return 0;
+}
+
+uint64_t gi_farm_store_release(gi_farm *f, const gi_manifest *m, int uploaded)
+{
+    uint64_t freed = 0;
+    double now = gi_farm_wallnow();
+    for (size_t i = 0; i < m->count; i++) {
+        const char *hash = m->entries[i].hash;
+        if (!gi_hash_is_valid(hash) || named(f, hash))
+            continue;
+        char *p = gi_farm_store_path(f, hash);
+        struct stat st;
+        if (stat(p, &st) == 0 && S_ISREG(st.st_mode) &&
+            (!uploaded || now - (double)st.st_mtime >= GI_FARM_STORE_GRACE_S) && unlink(p) == 0) {
+            freed += (uint64_t)st.st_size;
+            f->store_bytes -= (uint64_t)st.st_size < f->store_bytes ? (uint64_t)st.st_size
+                                                                     : f->store_bytes;
+        }
+        free(p);
+    }
+    return freed;
 }
 
 int gi_farm_asset_bytes(gi_farm *f, const char *hash, gi_buf *out, gi_error *err)
