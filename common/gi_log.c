@@ -11,7 +11,52 @@ static struct {
     const char *program;
     gi_log_level level;
     int initialized;
-} log_state = {"gi", GI_LOG_WARN, 0};
+    int json;
+} log_state = {"gi", GI_LOG_WARN, 0, 0};
+
+void gi_log_json(int on) { log_state.json = on; }
+
+/* s as a JSON string (quoted) into out, cut to fit. */
+static void json_string(char *out, size_t n, const char *s)
+{
+    size_t k = 0;
+    out[k++] = '"';
+    for (; *s && k + 8 < n; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') {
+            out[k++] = '\\';
+            out[k++] = (char)c;
+        } else if (c < 0x20) {
+            k += (size_t)snprintf(out + k, n - k, "\\u%04x", c);
+        } else {
+            out[k++] = (char)c;
+        }
+    }
+    out[k++] = '"';
+    out[k] = '\0';
+}
+
+/* One line out: text, or the JSON event (level NULL: a message). */
+static void emit(const char *level, const char *text)
+{
+    if (!log_state.json) {
+        if (level)
+            fprintf(stderr, "%s[%ld] %s: %s\n", log_state.program, (long)getpid(), level, text);
+        else
+            fprintf(stderr, "%s: %s\n", log_state.program, text);
+        return;
+    }
+    char prog[256], msg[8192];
+    json_string(prog, sizeof prog, log_state.program);
+    json_string(msg, sizeof msg, text);
+    if (level)
+        fprintf(stderr, "{\"event\":\"log\",\"level\":\"%s\",\"program\":%s,\"pid\":%ld,"
+                        "\"message\":%s}\n",
+                level, prog, (long)getpid(), msg);
+    else
+        fprintf(stderr, "{\"event\":\"message\",\"program\":%s,\"message\":%s}\n", prog, msg);
+    fflush(stderr);
+}
 
 static void log_read_env(void)
 {
@@ -52,12 +97,19 @@ void gi_log(gi_log_level level, const char *fmt, ...)
         return;
     static const char *names[] = {"error", "warning", "info", "debug"};
     char line[2048];
-    int n = snprintf(line, sizeof line, "%s[%ld] %s: ", log_state.program, (long)getpid(),
-                     names[level]);
     va_list ap;
     va_start(ap, fmt);
-    if (n > 0 && (size_t)n < sizeof line)
-        vsnprintf(line + n, sizeof line - (size_t)n, fmt, ap);
+    vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
-    fprintf(stderr, "%s\n", line);
+    emit(names[level], line);
+}
+
+void gi_say(const char *fmt, ...)
+{
+    char line[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    emit(NULL, line);
 }

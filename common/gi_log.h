@@ -10,6 +10,13 @@ void gi_log_init(const char *program);
 void gi_log_set_level(gi_log_level level);
 int gi_log_enabled(gi_log_level level);
 void gi_log(gi_log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* A message for the user: "program: message". */
+void gi_say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* JSON lines instead of text (--progress json): every log line becomes
+ * {"event": "log", "level", "program", "pid", "message"} and every message
+ * {"event": "message", "program", "message"}, so that a program reading
+ * stderr meets only JSON. Forked children inherit it. */
+void gi_log_json(int on);
 
 #define gi_error_log(...) gi_log(GI_LOG_ERROR, __VA_ARGS__)
 #define gi_warn(...) gi_log(GI_LOG_WARN, __VA_ARGS__)

@@ -18,6 +18,7 @@
 #include "gi_fs.h"
 #include "gi_http_client.h"
 #include "gi_job.h"
+#include "gi_log.h"
 #include "gi_progress.h"
 
 #define MAX_JSON_BODY ((uint64_t)64 << 20)
@@ -73,12 +74,12 @@ static int fail_msg(int status, const char *fmt, ...) __attribute__((format(prin
 
 static int fail_msg(int status, const char *fmt, ...)
 {
+    char line[2048];
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "gi: ");
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, "\n");
+    vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
+    gi_say("%s", line);
     return status;
 }
 
@@ -327,19 +328,17 @@ static int wait_job(client *c, uint64_t id, int fetch)
                 unanswered = now;
                 if (started)
                     gi_progress_end(&prog);
-                fprintf(stderr,
-                        "gi: the farm does not answer (%s); asking again for up to %.0f s\n", why,
-                        WAIT_UNANSWERED_S);
+                gi_say("the farm does not answer (%s); asking again for up to %.0f s", why,
+                       WAIT_UNANSWERED_S);
             }
             if (now - unanswered < WAIT_UNANSWERED_S) {
                 sleep_s(retry);
                 retry = retry * 2 > 5.0 ? 5.0 : retry * 2;
                 continue;
             }
-            fprintf(stderr,
-                    "gi: the farm has not answered for %.0f s (%s); job %llu goes on there when it "
-                    "is back (gi wait %llu)\n",
-                    WAIT_UNANSWERED_S, why, (unsigned long long)id, (unsigned long long)id);
+            gi_say("the farm has not answered for %.0f s (%s); job %llu goes on there when it is "
+                   "back (gi wait %llu)",
+                   WAIT_UNANSWERED_S, why, (unsigned long long)id, (unsigned long long)id);
             if (c->mode == GI_PROGRESS_JSON)
                 gi_progress_json_end(stderr, jname, "unreachable", gi_now() - t_start, why);
             rc = 1;
@@ -347,14 +346,14 @@ static int wait_job(client *c, uint64_t id, int fetch)
         }
         if (rc < 0) {
             rc = 130;
-            fprintf(stderr, "gi: interrupted; job %llu goes on on the farm (gi wait %llu)\n",
-                    (unsigned long long)id, (unsigned long long)id);
+            gi_say("interrupted; job %llu goes on on the farm (gi wait %llu)",
+                   (unsigned long long)id, (unsigned long long)id);
             break;
         }
         if (rc)
             break;
         if (unanswered >= 0)
-            fprintf(stderr, "gi: the farm answers again\n");
+            gi_say("the farm answers again");
         unanswered = -1;
         retry = 0.5;
         const char *state = str(job, "state");
@@ -411,8 +410,8 @@ static int wait_job(client *c, uint64_t id, int fetch)
         if (interrupted) {
             if (started)
                 gi_progress_end(&prog);
-            fprintf(stderr, "gi: interrupted; job %llu goes on on the farm (gi wait %llu)\n",
-                    (unsigned long long)id, (unsigned long long)id);
+            gi_say("interrupted; job %llu goes on on the farm (gi wait %llu)",
+                   (unsigned long long)id, (unsigned long long)id);
             rc = 130;
             break;
         }
@@ -441,7 +440,7 @@ static int upload_assets(client *c, const gi_job *job)
                 rc = fail_msg(1, "%s: the bytes of %s are not loaded", job->file, e->name);
             else if ((rc = call(c, "PUT", path, bytes->data, bytes->len, "application/octet-stream",
                                 201, 200, &b, NULL)) == 0)
-                fprintf(stderr, "gi: uploaded %s (%zu bytes)\n", e->name, bytes->len);
+                gi_say("uploaded %s (%zu bytes)", e->name, bytes->len);
         }
         gi_buf_free(&b);
         if (rc)
@@ -483,7 +482,7 @@ static int cmd_submit(client *c)
     gi_job_free(&job);
     if (rc)
         return rc;
-    fprintf(stderr, "gi: submitted %s as job %llu\n", c->arg, (unsigned long long)id);
+    gi_say("submitted %s as job %llu", c->arg, (unsigned long long)id);
     if (c->wait)
         return wait_job(c, id, 1);
     /* Wait for the farm's own scene check, so a scene it refuses is an
@@ -703,6 +702,7 @@ int gi_client_main(int argc, char **argv)
         return fail_msg(2, "%s: --out and --progress are for --wait", cmd);
     if (gi_progress_mode_parse(c.progress, &c.mode))
         return fail_msg(2, "--progress must be auto, bar, lines, json or none");
+    gi_log_json(c.mode == GI_PROGRESS_JSON);
     if (prio && gi_args_int(prio, 1, GI_FARM_PRIORITY_MAX, &c.priority))
         return fail_msg(2, "--priority must be an integer in [1, %d]", GI_FARM_PRIORITY_MAX);
     int needs_arg = strcmp(cmd, "jobs") != 0 && strcmp(cmd, "workers") != 0;

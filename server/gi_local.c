@@ -294,27 +294,27 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             lr.ckpt_ours = 1;
             gi_progress_at at;
             gi_jobrun_progress(&lr.jr, gi_now(), &at);
-            fprintf(stderr, "gi: %s: resuming from %s (%.0f%% done", job->name, ckpt,
-                    100.0 * at.fraction);
+            char where[64] = "";
+            if (at.frames > 1)
+                snprintf(where, sizeof where, ", at frame %u of %u", at.frame, at.frames);
+            gi_say("%s: resuming from %s (%.0f%% done%s)", job->name, ckpt, 100.0 * at.fraction,
+                   where);
             summary->resumed = 1;
             summary->fraction_before = at.fraction;
             summary->stats_before = lr.jr.stats;
-            if (at.frames > 1)
-                fprintf(stderr, ", at frame %u of %u", at.frame, at.frames);
-            fprintf(stderr, ")\n");
             warn_missing_frames(job);
             if (root && gi_local_batch_root_ours(root)) {
                 lr.batch_root = root; /* the stopped render's batches, read again */
                 root = NULL;
                 gi_batch_root_claim(lr.batch_root, ckpt);
                 if (dir_has_entries(lr.batch_root))
-                    fprintf(stderr, "gi: %s: reading the photon batches kept in %s\n",
-                            job->name, lr.batch_root);
+                    gi_say("%s: reading the photon batches kept in %s", job->name,
+                           lr.batch_root);
             }
             free(root);
         } else if (resumed == 0) {
-            fprintf(stderr, "gi: %s: no checkpoint in %s; starting from the beginning\n",
-                    job->name, job->out_dir);
+            gi_say("%s: no checkpoint in %s; starting from the beginning", job->name,
+                   job->out_dir);
         }
     } else if (checkpoints && access(ckpt, F_OK) == 0) {
         gi_warn("%s holds an earlier run that was stopped; this run starts over and replaces "

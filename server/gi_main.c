@@ -164,16 +164,19 @@ static int cmd_render(int argc, char **argv)
         fprintf(stderr, "gi render: --progress must be auto, bar, lines, json or none\n");
         return 2;
     }
+    int json = opts.progress == GI_PROGRESS_JSON;
+    gi_log_json(json);
     gi_error err;
     gi_error_clear(&err);
     gi_job job;
-    if (gi_job_load(job_path, &job, &err)) {
-        fprintf(stderr, "gi: %s\n", err.msg);
-        gi_job_free(&job);
-        return gi_error_exit_status(&err);
-    }
-    if (gi_output_dir_ready(out_dir, &err)) {
-        fprintf(stderr, "gi: --out: %s\n", err.msg);
+    double t0 = gi_now();
+    if (gi_job_load(job_path, &job, &err) == 0 && gi_output_dir_ready(out_dir, &err) != 0)
+        gi_error_prefix(&err, "--out");
+    if (err.code != GI_OK) {
+        if (json) /* the end event says why; there is no job name yet */
+            gi_progress_json_end(stderr, job_path, "failed", gi_now() - t0, err.msg);
+        else
+            gi_say("%s", err.msg);
         gi_job_free(&job);
         return gi_error_exit_status(&err);
     }
@@ -184,17 +187,16 @@ static int cmd_render(int argc, char **argv)
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     signal(SIGHUP, on_signal);
-    int json = opts.progress == GI_PROGRESS_JSON;
     if (json) {
         job.on_output = json_output;
         job.on_output_ctx = &job;
     }
     gi_local_summary summary;
-    double t0 = gi_now();
     int rc = gi_render_local(&job, &opts, &summary, &err);
     int status = 0;
     if (rc) {
-        fprintf(stderr, "gi: %s\n", err.msg);
+        if (!json) /* the end event carries it */
+            gi_say("%s", err.msg);
         status = err.code == GI_ECANCEL ? 130 : gi_error_exit_status(&err);
     } else {
         print_summary(&job, &summary);

@@ -171,15 +171,21 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force)
     case GI_PROGRESS_JSON:
         if (!force && now - p->last_print < 0.5)
             return;
+    {
         snprintf(b1, sizeof b1, "%.3f", eta);
+        cJSON *name = cJSON_CreateString(p->job_name); /* quoted and escaped */
+        char *quoted = cJSON_PrintUnformatted(name);
         fprintf(p->out,
-                "{\"event\":\"progress\",\"job\":\"%s\",\"done\":%.17g,\"total\":%.17g,"
+                "{\"event\":\"progress\",\"job\":%s,\"done\":%.17g,\"total\":%.17g,"
                 "\"fraction\":%.6f,\"frame\":%u,\"frames\":%u,\"elapsed_s\":%.3f,"
                 "\"eta_s\":%s,\"rays\":%.17g}\n",
-                p->job_name, at->done, at->total, f, at->frame, at->frames, elapsed,
+                quoted ? quoted : "\"\"", at->done, at->total, f, at->frame, at->frames, elapsed,
                 isfinite(eta) ? b1 : "null", at->rays);
         fflush(p->out);
+        cJSON_free(quoted);
+        cJSON_Delete(name);
         break;
+    }
     default:
         return;
     }
