@@ -244,6 +244,12 @@ typedef struct gi_detp_tracer {
 
 void gi_detp_tracer_init(gi_detp_tracer *tr, gi_rt *rt, const gi_scene *scene, uint64_t seed,
                          uint64_t photons_total, int max_bounces, int second_hit);
+/* t_second of a segment from org along dir that hit triangle hit_tri at
+ * t_hit: where its line meets the next surface behind that hit, INFINITY
+ * if none (the tracer and the incremental update share it, so that both
+ * compute the same float). */
+float gi_detp_second_t(const gi_detp_tracer *tr, gi_vec3 org, gi_vec3 dir, float t_hit,
+                       uint32_t hit_tri);
 /* Appends the segments of photon `photon`'s path. */
 void gi_detp_trace_photon(const gi_detp_tracer *tr, uint64_t photon, gi_detp_segments *out);
 /* Continues a path from a segment (origin, direction, energy) at `bounce`:

@@ -90,14 +90,7 @@ static int mobile_hit_before(const gi_detp_tracer *tr, RTCScene mobile,
  * computes it (detp_photons.c). */
 static float second_distance(const gi_detp_tracer *tr, const gi_detp_segment *g)
 {
-    gi_vec3 p = gi_madd(g->org, g->dir, g->t_hit);
-    gi_vec3 ng = tr->scene->tri_normal[g->hit_tri];
-    gi_vec3 ng_f = gi_dot(ng, g->dir) < 0.0f ? ng : gi_neg(ng);
-    gi_vec3 o2 = gi_rt_offset(p, ng_f, g->dir);
-    gi_hit h2;
-    if (gi_rt_intersect(tr->rt, o2, g->dir, 0.0f, FLT_MAX, &h2))
-        return gi_dot(gi_sub(o2, g->org), g->dir) + h2.t;
-    return INFINITY;
+    return gi_detp_second_t(tr, g->org, g->dir, g->t_hit, g->hit_tri);
 }
 
 static void append(gi_detp_segments *s, const gi_detp_segment *v, size_t n)

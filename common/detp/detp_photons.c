@@ -92,6 +92,54 @@ void gi_detp_trace_from(const gi_detp_tracer *tr, uint64_t photon, uint32_t boun
     gi_detp_trace_from_hit(tr, photon, bounce, org, dir, energy, NULL, out);
 }
 
+/* The closest hit behind a hit on triangle hit_tri. On the mobile with no
+ * other object near it, the mobile's own BVH first: what it hits is the
+ * whole scene's hit (gi_detp_tracer.mobile_alone); only rays through the
+ * whole scene are counted. */
+static int hit_behind(const gi_detp_tracer *tr, uint32_t hit_tri, gi_vec3 org, gi_vec3 dir,
+                      float tnear, gi_hit *h)
+{
+    if (tr->mobile_alone && hit_tri - tr->mobile_first < tr->mobile_count &&
+        gi_rt_intersect_in(tr->rt, tr->mobile_alone, org, dir, tnear, FLT_MAX, h))
+        return 1;
+    return gi_rt_intersect(tr->rt, org, dir, tnear, FLT_MAX, h);
+}
+
+float gi_detp_second_t(const gi_detp_tracer *tr, gi_vec3 org, gi_vec3 dir, float t_hit,
+                       uint32_t hit_tri)
+{
+    const gi_scene *s = tr->scene;
+    gi_vec3 p = gi_madd(org, dir, t_hit);
+    gi_vec3 ng = s->tri_normal[hit_tri];
+    float c = fabsf(gi_dot(ng, dir));
+    gi_hit h2;
+    if (c >= 0.05f) {
+        /* The segment's own line, from just behind its hit: where it next
+         * meets a surface, exactly. (A ray started off the surface along
+         * its normal runs beside the line, by an offset that grows with
+         * the distance from the origin, and can pass a surface the line
+         * crosses: a floor behind a thin wall then took light from the
+         * wall's other side.) */
+        float tnear = t_hit + gi_rt_offset_scale(p) / c;
+        return hit_behind(tr, hit_tri, org, dir, tnear, &h2) ? h2.t : INFINITY;
+    }
+    /* Grazing: behind the surface along its normal, as the reflections
+     * start, and the line's crossing of the plane met, when nearer. */
+    gi_vec3 o2 = gi_rt_offset(p, gi_dot(ng, dir) < 0.0f ? ng : gi_neg(ng), dir);
+    if (!hit_behind(tr, hit_tri, o2, dir, 0.0f, &h2))
+        return INFINITY;
+    float t = gi_dot(gi_sub(o2, org), dir) + h2.t;
+    gi_vec3 q2 = gi_madd(o2, dir, h2.t), n2 = s->tri_normal[h2.tri];
+    float den = gi_dot(dir, n2);
+    if (fabsf(den) > 1e-3f) {
+        float tp = gi_dot(gi_sub(q2, org), n2) / den;
+        float reach = 4.0f * gi_maxf(gi_rt_offset_scale(o2), gi_rt_offset_scale(q2)) / fabsf(den);
+        if (tp < t && t - tp <= reach)
+            t = tp;
+    }
+    return t;
+}
+
 void gi_detp_trace_from_hit(const gi_detp_tracer *tr, uint64_t photon, uint32_t bounce,
                             gi_vec3 org, gi_vec3 dir, gi_vec3 energy, const gi_hit *first,
                             gi_detp_segments *out)
@@ -118,15 +166,8 @@ void gi_detp_trace_from_hit(const gi_detp_tracer *tr, uint64_t photon, uint32_t 
         gi_vec3 p = gi_madd(org, dir, h.t);
         gi_vec3 ng = s->tri_normal[h.tri];
         gi_vec3 ng_f = gi_dot(ng, dir) < 0.0f ? ng : gi_neg(ng);
-        if (tr->second_hit) {
-            /* Through the surface: start just behind it, same line. */
-            gi_vec3 o2 = gi_rt_offset(p, ng_f, dir);
-            gi_hit h2;
-            if ((tr->mobile_alone && h.tri - tr->mobile_first < tr->mobile_count &&
-                 gi_rt_intersect_in(tr->rt, tr->mobile_alone, o2, dir, 0.0f, FLT_MAX, &h2)) ||
-                gi_rt_intersect(tr->rt, o2, dir, 0.0f, FLT_MAX, &h2))
-                g->t_second = gi_dot(gi_sub(o2, org), dir) + h2.t;
-        }
+        if (tr->second_hit)
+            g->t_second = gi_detp_second_t(tr, org, dir, h.t, h.tri);
         if ((tr->max_bounces >= 0 && (int64_t)bounce >= tr->max_bounces) ||
             bounce + 1 >= GI_DETP_MAX_PATH)
             return;

@@ -360,15 +360,8 @@ static void check_animation(anim *a, const char *what)
             }
             if (!got)
                 continue;
-            /* t_second as the tracer computes it. */
-            gi_vec3 p = gi_madd(g->org, g->dir, g->t_hit);
-            gi_vec3 ng = a->s.tri_normal[g->hit_tri];
-            gi_vec3 ng_f = gi_dot(ng, g->dir) < 0.0f ? ng : gi_neg(ng);
-            gi_vec3 o2 = gi_rt_offset(p, ng_f, g->dir);
-            gi_hit h2;
-            float t2 = gi_rt_intersect(&a->rt, o2, g->dir, 0.0f, FLT_MAX, &h2)
-                           ? gi_dot(gi_sub(o2, g->org), g->dir) + h2.t
-                           : INFINITY;
+            /* t_second as the tracer computes it, at this pose. */
+            float t2 = gi_detp_second_t(&tr, g->org, g->dir, g->t_hit, g->hit_tri);
             second_bad += !(t2 == g->t_second || (isinf(t2) && isinf(g->t_second)));
         }
 

@@ -84,6 +84,62 @@ static const char *room(const char *rho)
     return text;
 }
 
+/* Rule 1's extension behind a thin wall stops short of the floor there,
+ * wherever the room is: the second ray used to start off the wall along
+ * its normal, by an offset that grows with the distance from the origin,
+ * and its hit lay past where the segment's line crosses the floor (a room
+ * moved by its own width put 18% of the lit side's light on the dark
+ * side's floor). */
+GI_TEST(test_detp_extension_stops_before_the_surface_behind_a_wall)
+{
+    static const double offsets[] = {0, 4, 20, 100};
+    for (int k = 0; k < 4; k++) {
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "{\"materials\": {\"w\": {\"diffuse\": [0.7, 0.7, 0.7]},"
+                 " \"L\": {\"emission\": [10, 10, 10]}}, \"objects\": ["
+                 " {\"name\": \"room\", \"material\": \"w\", \"box\": {\"size\": [4, 4, 4],"
+                 "  \"inward\": true}, \"transform\": [{\"translate\": [%g, 0, 0]}]},"
+                 " {\"name\": \"lamp\", \"material\": \"L\", \"quad\": {\"size\": [1, 1]},"
+                 "  \"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}},"
+                 "  {\"translate\": [%g, 1.9, 0]}]},"
+                 " {\"name\": \"wall\", \"material\": \"w\", \"quad\": {\"size\": [4, 4]},"
+                 "  \"transform\": [{\"rotate\": {\"axis\": [0, 0, 1], \"degrees\": 90}},"
+                 "  {\"translate\": [%g, 0, 0]}]}]}",
+                 offsets[k], offsets[k] + 1, offsets[k]);
+        gi_error err;
+        gi_scene s;
+        GI_REQUIRE_OK(gi_test_load_scene_text("wall.json", text, &s, &err));
+        gi_rt rt;
+        GI_REQUIRE_OK(gi_rt_create(&rt, &s, &err));
+        gi_detp_tracer tr;
+        gi_detp_tracer_init(&tr, &rt, &s, 5, 20000, -1, 1);
+        gi_detp_segments segs;
+        gi_detp_segments_init(&segs);
+        for (uint64_t p = 0; p < 20000; p++)
+            gi_detp_trace_photon(&tr, p, &segs);
+        gi_detp_set_extent(&segs, GI_DETP_AC_SECOND_HIT, (float)(1e-5 * 4));
+        size_t behind = 0, below = 0;
+        for (size_t i = 0; i < segs.count; i++) {
+            const gi_detp_segment *g = &segs.v[i];
+            if (!(g->t_end > g->t_hit) || !isfinite(g->t_end))
+                continue;
+            gi_vec3 hit = gi_madd(g->org, g->dir, g->t_hit);
+            gi_vec3 end = gi_madd(g->org, g->dir, g->t_end);
+            if (fabs(hit.x - offsets[k]) < 1e-3 && end.x < offsets[k]) {
+                behind++; /* an extension through the wall into the dark side */
+                below += end.y < -2.0f;
+            }
+        }
+        GI_CHECK(behind > 100);
+        GI_CHECK_MSG(below == 0, "room at x = %g: %zu of %zu extensions behind the wall reach "
+                                 "below the floor", offsets[k], below, behind);
+        gi_detp_segments_free(&segs);
+        gi_rt_free(&rt);
+        gi_scene_free(&s);
+    }
+}
+
 GI_TEST(test_detp_absorb_or_reflect_keeps_photons_equal_and_unbiased)
 {
     gi_error err;
