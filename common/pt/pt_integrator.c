@@ -165,8 +165,9 @@ static int vertex_close(const gi_pt_tracer *tr, gi_pt_path *P, const pt_shade *v
      * L is read after it ends. */
     int go_on = 1;
     if (P->bounce + 1 >= prm->rr_depth) {
-        float q = gi_minf(0.95f, gi_max3(P->beta));
-        go_on = gi_rng_float(&P->rng) < q;
+        float q = gi_rr_survival(P->beta);
+        go_on = gi_rng_float(&P->rng) < q && (prm->max_bounces >= 0 ||
+                                               P->bounce + 1 < GI_RR_MAX_PATH);
         P->beta = gi_scale(P->beta, 1.0f / q);
     }
     P->prev_pdf = pdf;

@@ -156,8 +156,8 @@ static void radiance(gi_quad_path *p, const double *u, gi_rng *rng, double *rgb)
             break;
         beta = gi_mul(beta, bsdf.rho); /* f cos / pdf of cosine sampling */
         if (random_part && k >= p->rr_depth) {
-            float q = gi_minf(0.95f, gi_max3(beta));
-            if (!(gi_rng_float(rng) < q))
+            float q = gi_rr_survival(beta);
+            if (!(gi_rng_float(rng) < q) || (p->max_bounces < 0 && k >= GI_RR_MAX_PATH))
                 break;
             beta = gi_scale(beta, 1.0f / q);
         }

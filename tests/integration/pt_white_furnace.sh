@@ -1,5 +1,6 @@
 # White furnace: inside a closed box whose walls all reflect 0.5 and emit
-# 1.0, radiance is 1 / (1 - 0.5) = 2.0 everywhere (within 1%).
+# 1.0, radiance is 1 / (1 - 0.5) = 2.0 everywhere (within 1%). With an
+# albedo of 0.99 it is 100: Russian roulette must not starve long paths.
 . "$(dirname "$0")/lib.sh"
 cat >"$TMP/furnace.json" <<SCENE
 {
@@ -32,4 +33,14 @@ for strategy in bsdf light; do
         "$IMGTOOL" check-mean "$TMP/$strategy/furnace.exr" 2.0 0.01 || fail "$strategy: mean is not 2.0"
     fi
 done
+# Albedo 0.99 (green; paths of ~100 bounces): a roulette capped at 0.95
+# gave 92-96 (weights growing as (0.99 / 0.95)^bounces, infinite variance).
+sed 's/"diffuse": \[0.5, 0.5, 0.5\]/"diffuse": [0.5, 0.99, 0.5]/' "$TMP/furnace.json" >"$TMP/bright.json"
+sed 's/"scene": "furnace.json"/"scene": "bright.json"/; s/"spp": 32768/"spp": 1024/; s/"pass_spp": 4096/"pass_spp": 256/' \
+    "$TMP/job.json" >"$TMP/bright-job.json"
+"$GI_RELEASE" render "$TMP/bright-job.json" --workers 2 --out "$TMP/bright" --progress none >/dev/null ||
+    fail "render (albedo 0.99)"
+"$IMGTOOL" stats "$TMP/bright/furnace.exr" | awk '$1 == "mean" { g = $3 } END {
+    if (g < 98.5 || g > 101.5) { print "albedo 0.99: mean green " g ", expected 100"; exit 1 } }' ||
+    fail "albedo 0.99 furnace"
 echo ok
