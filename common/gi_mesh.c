@@ -1,5 +1,5 @@
-/* gi_mesh: ownership of gi_mesh_data, concatenation, and vertex normals for
- * meshes whose file gave none. */
+/* gi_mesh: ownership of gi_mesh_data and concatenation (vertex normals for
+ * meshes whose file gave none: gi_mesh_normals.c). */
 #include "gi_mesh.h"
 
 #include <stdlib.h>
@@ -19,55 +19,6 @@ void gi_mesh_data_free(gi_mesh_data *m)
     gi_mesh_data_init(m);
 }
 
-/* Normals of vertices [first, first + count) from the triangles
- * [first_tri, first_tri + tri_count), written into m->normals. */
-static void compute_normals_range(gi_mesh_data *m, uint32_t first, uint32_t count,
-                                  uint32_t first_tri, uint32_t tri_count)
-{
-    /* Sums in double: a vertex shared by many triangles of very different
-     * sizes would otherwise lose the small ones to rounding. */
-    double *acc = gi_xcalloc((size_t)count * 3 + 1, sizeof *acc);
-    for (uint32_t t = first_tri; t < first_tri + tri_count; t++) {
-        const uint32_t *ix = &m->indices[3 * (size_t)t];
-        /* Indices are validated by the scene, not here: skip what is out of
-         * range rather than write outside the accumulator. */
-        if (ix[0] - first >= count || ix[1] - first >= count || ix[2] - first >= count)
-            continue;
-        gi_vec3 a = m->positions[ix[0]], b = m->positions[ix[1]], c = m->positions[ix[2]];
-        double e1[3] = {(double)b.x - a.x, (double)b.y - a.y, (double)b.z - a.z};
-        double e2[3] = {(double)c.x - a.x, (double)c.y - a.y, (double)c.z - a.z};
-        /* The unnormalized cross product has length 2 * area: summing it
-         * weights each face normal by its area. */
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                       e1[0] * e2[1] - e1[1] * e2[0]};
-        for (int k = 0; k < 3; k++) {
-            double *v = &acc[3 * (size_t)(ix[k] - first)];
-            v[0] += n[0];
-            v[1] += n[1];
-            v[2] += n[2];
-        }
-    }
-    for (uint32_t i = 0; i < count; i++) {
-        const double *v = &acc[3 * (size_t)i];
-        double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        gi_vec3 n = gi_v3(0.0f, 1.0f, 0.0f);
-        if (len > 0.0 && isfinite(len))
-            n = gi_v3((float)(v[0] / len), (float)(v[1] / len), (float)(v[2] / len));
-        m->normals[first + i] = n;
-    }
-    free(acc);
-}
-
-/* A vertex with no defined direction (used by no triangle, or only by
- * degenerate ones, or by faces whose normals cancel) gets +y: any unit
- * vector is as good, and a fixed one keeps results deterministic. */
-void gi_mesh_compute_normals(gi_mesh_data *m)
-{
-    free(m->normals);
-    m->normals = gi_xmalloc(((size_t)m->vertex_count + 1) * sizeof *m->normals);
-    compute_normals_range(m, 0, m->vertex_count, 0, m->triangle_count);
-}
-
 static void add_default_material(gi_mesh_data *m)
 {
     m->materials = gi_xrealloc(m->materials, (m->material_count + 1) * sizeof *m->materials);
@@ -79,6 +30,21 @@ static void add_default_material(gi_mesh_data *m)
 
 void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src)
 {
+    /* Normals survive if either part has them; a part without gets the
+     * normals the scene would compute for it (the vertex sets are disjoint,
+     * so computing them per part gives the same result as for the whole),
+     * before the append: splitting at hard edges adds vertices. */
+    if (src->normals && !dst->normals && dst->vertex_count > 0)
+        gi_mesh_compute_normals(dst);
+    if (dst->normals && !src->normals && src->vertex_count > 0) {
+        gi_mesh_data copy;
+        gi_mesh_data_init(&copy);
+        gi_mesh_data_append(&copy, src);
+        gi_mesh_compute_normals(&copy);
+        gi_mesh_data_append(dst, &copy);
+        gi_mesh_data_free(&copy);
+        return;
+    }
     /* A part with triangles but no materials means "the default material"
      * (index 0): make that explicit, or its triangles would point at the
      * other part's materials after the shift. */
@@ -94,12 +60,7 @@ void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src)
          * 2^31 vertices, the scene at 2^30): reaching it is a bug. */
         abort();
     }
-    /* Normals survive if either part has them; a part without gets the
-     * normals the scene would compute for it (the vertex sets are disjoint,
-     * so computing them per part gives the same result as for the whole). */
     int keep_normals = dst->normals || src->normals;
-    int fill_dst = keep_normals && !dst->normals && v0 > 0;
-    int fill_src = keep_normals && !src->normals && src->vertex_count > 0;
 
     dst->positions = gi_xrealloc(dst->positions, (nv + 1) * sizeof *dst->positions);
     if (src->vertex_count)
@@ -133,8 +94,4 @@ void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src)
     dst->vertex_count = (uint32_t)nv;
     dst->triangle_count = (uint32_t)nt;
     dst->material_count = (uint32_t)nm;
-    if (fill_dst)
-        compute_normals_range(dst, 0, v0, 0, t0);
-    if (fill_src)
-        compute_normals_range(dst, v0, src->vertex_count, t0, src->triangle_count);
 }

@@ -50,7 +50,11 @@ void gi_mesh_quad(gi_mesh_data *out, double size_x, double size_z); /* y = 0, no
 void gi_mesh_box(gi_mesh_data *out, double sx, double sy, double sz, int inward);
 void gi_mesh_sphere(gi_mesh_data *out, double radius, int subdivisions); /* icosphere */
 
-/* Area-weighted vertex normals (for meshes without normals). */
+/* Vertex normals for meshes without: a vertex is split (a copy at the same
+ * position, triangles re-indexed) at hard edges, where faces meet at more
+ * than GI_MESH_CREASE_DEG; each copy gets the area-weighted normal of its
+ * smooth group. A mesh without hard edges keeps its vertices. */
+#define GI_MESH_CREASE_DEG 60
 void gi_mesh_compute_normals(gi_mesh_data *m);
 
 #endif

@@ -419,7 +419,7 @@ static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_
      * the point and line meshes. (Not AI_CONFIG_PP_SBP_REMOVE: a file with
      * nothing but lines would then fail as "No meshes remaining" instead of
      * "no triangles".) No aiProcess_GenNormals: the scene computes
-     * area-weighted normals for meshes without, the same way for every
+     * normals for meshes without (split at hard edges), the same way for every
      * format. */
     unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                      aiProcess_PreTransformVertices | aiProcess_SortByPType |

@@ -223,8 +223,6 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
             mesh->normals[i] = gi_mat4_normal(&inv, n);
         }
     }
-    if (!mesh->normals)
-        gi_mesh_compute_normals(mesh);
 
     uint32_t with_area = 0;
     for (uint32_t t = 0; t < mesh->triangle_count; t++) {
@@ -247,6 +245,16 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
                        "and %u belongs to more than two triangles (set \"allow_non_manifold\": "
                        "true to accept it)",
                        b->file, name, bad.a, bad.b);
+    /* After the manifold check, which must see the file's own topology:
+     * splitting vertices at hard edges makes boundary edges of them. */
+    if (!mesh->normals) {
+        gi_mesh_compute_normals(mesh);
+        if ((uint64_t)mesh->vertex_count + s->vertex_count > lim->max_scene_vertices)
+            return gi_fail(err, GI_EINVAL,
+                           "%s: object \"%s\": the scene exceeds the limit of %u vertices "
+                           "(%u after splitting the mesh's vertices at hard edges)",
+                           b->file, name, lim->max_scene_vertices, mesh->vertex_count);
+    }
 
     /* Append to the scene arrays. */
     uint32_t v0 = s->vertex_count, t0 = s->triangle_count;

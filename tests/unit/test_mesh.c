@@ -259,13 +259,16 @@ GI_TEST(mesh_import_obj_without_normals)
         GI_CHECK(near3(m.materials[0].diffuse, gi_v3(0.8f, 0.8f, 0.8f), 1e-6f));
         GI_CHECK(gi_is_black(m.materials[0].emission));
         GI_CHECK_NEAR(mesh_area(&m), 3.0, 1e-6);
-        /* What the scene does next: the corner's normal is the mean of
-         * three equal-area faces, -(1,1,1)/sqrt(3). */
+        /* What the scene does next: the three faces meet at 90 degrees, so
+         * every vertex is split per face (the corner in three) and each
+         * copy has its face's normal, not the diagonal mean. */
         gi_mesh_compute_normals(&m);
-        int corner = find_vertex(&m, gi_v3(0, 0, 0));
-        GI_REQUIRE(corner >= 0);
-        float s = (float)(1.0 / sqrt(3.0));
-        GI_CHECK(near3(m.normals[corner], gi_v3(-s, -s, -s), 1e-6f));
+        GI_CHECK(m.vertex_count == 12 && m.triangle_count == 6);
+        GI_CHECK(indices_valid(&m));
+        for (uint32_t t = 0; t < m.triangle_count; t++)
+            for (int k = 0; k < 3; k++)
+                GI_CHECK(near3(m.normals[m.indices[3 * t + k]], tri_normal(&m, t), 1e-6f));
+        GI_CHECK_NEAR(mesh_area(&m), 3.0, 1e-6);
     }
     gi_mesh_data_free(&m);
     gi_dir_source_free(&d);
@@ -738,25 +741,37 @@ GI_TEST(mesh_compute_normals_cube_corner)
     memcpy(m.indices, ix, sizeof ix);
     m.tri_material = gi_xcalloc(m.triangle_count, sizeof *m.tri_material);
     gi_mesh_compute_normals(&m);
-    float s = (float)(1.0 / sqrt(3.0)), h = (float)sqrt(0.5);
-    GI_CHECK(near3(m.normals[0], gi_v3(-s, -s, -s), 1e-6f));
-    /* (0,1,0) lies on the z = 0 and x = 0 faces, area 1/2 each. */
-    GI_CHECK(near3(m.normals[1], gi_v3(-h, 0, -h), 1e-6f));
-    GI_CHECK(near3(m.normals[2], gi_v3(0, 0, -1), 1e-6f));
-    /* Only degenerate triangles, or none: +y by convention. */
-    for (int i = 7; i <= 9; i++)
+    /* Hard edges (90 degrees) split the vertices: (0,0,0) in three, the
+     * three on two faces in two (5 copies appended after the 11). Each
+     * vertex's first group, in triangle order, keeps its index. */
+    GI_REQUIRE(m.vertex_count == 16);
+    for (uint32_t i = 0; i < 3 * m.triangle_count; i++)
+        GI_REQUIRE(m.indices[i] < m.vertex_count);
+    for (uint32_t t = 0; t < 6; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = m.indices[3 * t + k];
+            GI_CHECK(near3(m.normals[v], tri_normal(&m, t), 1e-6f));
+            GI_CHECK(near3(m.positions[v], p[ix[3 * t + k]], 0));
+        }
+    GI_CHECK(near3(m.normals[0], gi_v3(0, 0, -1), 1e-6f));
+    GI_CHECK(m.indices[0] == 0 && m.indices[6] >= 11 && m.indices[12] >= 11);
+    /* Only degenerate triangles, or none: +y by convention, not split. */
+    for (int i = 7; i <= 9; i++) {
         GI_CHECK(near3(m.normals[i], gi_v3(0, 1, 0), 0));
+        GI_CHECK(m.indices[18 + i - 7] == (uint32_t)i);
+    }
     GI_CHECK(near3(m.normals[10], gi_v3(0, 1, 0), 0));
     for (uint32_t i = 0; i < m.vertex_count; i++)
         GI_CHECK_NEAR(gi_length(m.normals[i]), 1.0, 1e-6);
 
-    /* Area weighting, not angle or count: a big and a small triangle at a
-     * shared vertex, the big one dominates in proportion to its area. */
+    /* Area weighting, not angle or count, within a smooth group: a big and
+     * a small triangle sharing an edge at 45 degrees (under the crease
+     * angle); the big one dominates in proportion to its area. */
     gi_mesh_data w;
     gi_mesh_data_init(&w);
-    static const gi_vec3 q[] = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {0, 0, 1}, {0, -1, 0}};
-    static const uint32_t qi[] = {0, 1, 2, 0, 3, 4}; /* area 4.5 (+z), area 0.5 (+x) */
-    w.vertex_count = 5;
+    static const gi_vec3 q[] = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0}, {-1, 0, 1}};
+    static const uint32_t qi[] = {0, 1, 2, 0, 2, 3}; /* area 4.5 (+z), 2.12 (+x+z) */
+    w.vertex_count = 4;
     w.triangle_count = 2;
     w.positions = gi_xmalloc(sizeof q);
     memcpy(w.positions, q, sizeof q);
@@ -764,8 +779,12 @@ GI_TEST(mesh_compute_normals_cube_corner)
     memcpy(w.indices, qi, sizeof qi);
     w.tri_material = gi_xcalloc(2, sizeof *w.tri_material);
     gi_mesh_compute_normals(&w);
-    gi_vec3 want = gi_normalize(gi_v3(0.5f, 0, 4.5f));
+    GI_CHECK(w.vertex_count == 4); /* smooth: nothing split */
+    gi_vec3 want = gi_normalize(gi_v3(3, 0, 12));
     GI_CHECK(near3(w.normals[0], want, 1e-6f));
+    GI_CHECK(near3(w.normals[2], want, 1e-6f));
+    GI_CHECK(near3(w.normals[1], gi_v3(0, 0, 1), 1e-6f));
+    GI_CHECK(near3(w.normals[3], gi_normalize(gi_v3(1, 0, 1)), 1e-6f));
     gi_mesh_data_free(&w);
     gi_mesh_data_free(&m);
 }

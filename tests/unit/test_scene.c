@@ -179,6 +179,54 @@ GI_TEST(test_scene_of_meshes_needs_no_materials_block)
     gi_scene_free(&s);
 }
 
+/* A mesh file without normals is split at its hard edges: the cube of 8
+ * shared vertices gets 24, each with its face's normal (as the built-in box
+ * has), not corner normals pointing diagonally out; still manifold (its
+ * crease edges become boundary edges), also when mobile and transformed.
+ * A gentle fold (30 degrees) stays one smooth vertex row. */
+GI_TEST(test_scene_mesh_without_normals_is_split_at_hard_edges)
+{
+    gi_error err;
+    gi_scene s;
+    char text[1600];
+    snprintf(text, sizeof text,
+             "{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+             "                 \"l\": {\"emission\": [1, 1, 1]}},"
+             " \"objects\": ["
+             "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [1, 1]},"
+             "   \"transform\": [{\"translate\": [0, 9, 0]}]},"
+             "  {\"name\": \"cube\", \"mesh\": \"%s/tests/data/meshes/cube_shared.obj\","
+             "   \"material\": \"w\", \"mobile\": true,"
+             "   \"transform\": [{\"scale\": [60, 30, 60]},"
+             "                   {\"rotate\": {\"axis\": [0, 1, 0], \"degrees\": 30}}]},"
+             "  {\"name\": \"fold\", \"material\": \"w\", \"polygons\": {"
+             "   \"vertices\": [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0],"
+             "                  [2, 0.57735, 0], [2, 0.57735, 1]],"
+             "   \"faces\": [[0, 1, 2, 3], [3, 2, 5, 4]]}}"
+             " ]}",
+             gi_test_srcdir());
+    GI_REQUIRE_OK(gi_test_load_scene_text("cube.json", text, &s, &err));
+    const gi_object *cube = &s.objects[1], *fold = &s.objects[2];
+    GI_CHECK(cube->triangle_count == 12 && cube->vertex_count == 24);
+    GI_CHECK(cube->mobile);
+    for (uint32_t t = cube->first_triangle; t < cube->first_triangle + 12; t++) {
+        gi_vec3 fn = gi_scene_triangle_normal(&s, t);
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = s.indices[3 * t + k];
+            GI_CHECK(v >= cube->first_vertex && v < cube->first_vertex + 24);
+            GI_CHECK_MSG(gi_dot(s.normals[v], fn) > 1.0f - 1e-6f,
+                         "triangle %u vertex %u: normal (%g %g %g), face (%g %g %g)", t, v,
+                         s.normals[v].x, s.normals[v].y, s.normals[v].z, fn.x, fn.y, fn.z);
+        }
+        GI_CHECK(!s.tri_smooth[t]);
+    }
+    /* The fold's middle row is shared, its normal between the two faces. */
+    GI_CHECK(fold->vertex_count == 6);
+    gi_vec3 mid = s.normals[fold->first_vertex + 3];
+    GI_CHECK(mid.y > 0.85f && mid.y < 0.999f && mid.x < -0.1f);
+    gi_scene_free(&s);
+}
+
 typedef struct bad_case {
     const char *text, *expect;
 } bad_case;
