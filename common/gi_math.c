@@ -1,6 +1,7 @@
-/* gi_math: affine transforms. */
+/* gi_math: affine transforms, triangle normals. */
 #include "gi_math.h"
 
+#include <math.h>
 #include <string.h>
 
 gi_mat4 gi_mat4_identity(void)
@@ -112,8 +113,25 @@ gi_vec3 gi_mat4_vector(const gi_mat4 *m, gi_vec3 v)
 gi_vec3 gi_mat4_normal(const gi_mat4 *inv, gi_vec3 n)
 {
     const double (*a)[4] = inv->m;
-    gi_vec3 r = gi_v3((float)(a[0][0] * n.x + a[1][0] * n.y + a[2][0] * n.z),
-                      (float)(a[0][1] * n.x + a[1][1] * n.y + a[2][1] * n.z),
-                      (float)(a[0][2] * n.x + a[1][2] * n.y + a[2][2] * n.z));
-    return gi_normalize(r);
+    /* Normalized in double: under a tiny scale (1e-20) the inverse's
+     * entries are so large that the float length would overflow. */
+    double r[3] = {a[0][0] * n.x + a[1][0] * n.y + a[2][0] * n.z,
+                   a[0][1] * n.x + a[1][1] * n.y + a[2][1] * n.z,
+                   a[0][2] * n.x + a[1][2] * n.y + a[2][2] * n.z};
+    double len = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    if (!(len > 0.0) || !isfinite(len))
+        return gi_v3((float)r[0], (float)r[1], (float)r[2]);
+    return gi_v3((float)(r[0] / len), (float)(r[1] / len), (float)(r[2] / len));
+}
+
+gi_vec3 gi_triangle_normal(gi_vec3 a, gi_vec3 b, gi_vec3 c)
+{
+    double e1[3] = {(double)b.x - a.x, (double)b.y - a.y, (double)b.z - a.z};
+    double e2[3] = {(double)c.x - a.x, (double)c.y - a.y, (double)c.z - a.z};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
+    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0.0) || !isfinite(len))
+        return gi_v3(0.0f, 0.0f, 0.0f);
+    return gi_v3((float)(n[0] / len), (float)(n[1] / len), (float)(n[2] / len));
 }

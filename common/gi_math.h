@@ -87,5 +87,9 @@ gi_vec3 gi_mat4_point(const gi_mat4 *m, gi_vec3 p);
 gi_vec3 gi_mat4_vector(const gi_mat4 *m, gi_vec3 v);
 /* Normals transform by the inverse transpose; `inv` is the inverse of m. */
 gi_vec3 gi_mat4_normal(const gi_mat4 *inv, gi_vec3 n);
+/* The unit normal of triangle (a, b, c), counter-clockwise seen from its
+ * front, or (0, 0, 0) if it has no area. In double: the float cross product
+ * of edges longer than ~1e9 overflows, of edges under ~1e-19 underflows. */
+gi_vec3 gi_triangle_normal(gi_vec3 a, gi_vec3 b, gi_vec3 c);
 
 #endif

@@ -227,9 +227,9 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
     uint32_t with_area = 0;
     for (uint32_t t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *ix = &mesh->indices[3 * t];
-        gi_vec3 e1 = gi_sub(mesh->positions[ix[1]], mesh->positions[ix[0]]);
-        gi_vec3 e2 = gi_sub(mesh->positions[ix[2]], mesh->positions[ix[0]]);
-        if (gi_length(gi_cross(e1, e2)) > 0.0f)
+        gi_vec3 n = gi_triangle_normal(mesh->positions[ix[0]], mesh->positions[ix[1]],
+                                       mesh->positions[ix[2]]);
+        if (gi_length(n) > 0.0f)
             with_area++;
     }
     if (with_area == 0)
@@ -304,7 +304,7 @@ void gi_scene_update_triangles(gi_scene *s, uint32_t first, uint32_t count)
     for (uint32_t t = first; t < first + count; t++) {
         gi_vec3 a, b, c;
         gi_scene_triangle(s, t, &a, &b, &c);
-        gi_vec3 n = gi_normalize(gi_cross(gi_sub(b, a), gi_sub(c, a)));
+        gi_vec3 n = gi_triangle_normal(a, b, c);
         s->tri_normal[t] = n;
         const uint32_t *ix = &s->indices[3 * t];
         int smooth = 0;

@@ -149,8 +149,7 @@ static uint32_t refine_pass(mesh *m, float max2, edge_map *map)
             continue;
         }
         split++;
-        gi_vec3 fn = gi_normalize(gi_cross(gi_sub(m->pos[v[1]], m->pos[v[0]]),
-                                           gi_sub(m->pos[v[2]], m->pos[v[0]])));
+        gi_vec3 fn = gi_triangle_normal(m->pos[v[0]], m->pos[v[1]], m->pos[v[2]]);
         uint32_t mid[3];
         for (int k = 0; k < 3; k++)
             mid[k] = (mask >> k & 1) ? midpoint(m, map, v[k], v[(k + 1) % 3], fn) : 0;

@@ -1,4 +1,5 @@
 /* Unit tests: scene files (JSON), assembly checks, lights, camera. */
+#include <math.h>
 #include <string.h>
 
 #include "gi_camera.h"
@@ -224,6 +225,40 @@ GI_TEST(test_scene_mesh_without_normals_is_split_at_hard_edges)
     GI_CHECK(fold->vertex_count == 6);
     gi_vec3 mid = s.normals[fold->first_vertex + 3];
     GI_CHECK(mid.y > 0.85f && mid.y < 0.999f && mid.x < -0.1f);
+    gi_scene_free(&s);
+}
+
+/* Far from unit scale, face normals are computed in double: at 1e9 mm a
+ * wall's float cross product (~1e47) overflowed to a NaN normal and every
+ * method rendered black; a sphere scaled by 1e-20 underflowed to "every
+ * triangle is degenerate", and its normals' inverse transform overflowed. */
+GI_TEST(test_scene_normals_far_from_unit_scale)
+{
+    gi_error err;
+    gi_scene s;
+    const char *text =
+        "{\"materials\": {\"w\": {\"diffuse\": [0.5, 0.5, 0.5]},"
+        "                 \"l\": {\"emission\": [1, 1, 1]}},"
+        " \"objects\": ["
+        "  {\"name\": \"lamp\", \"material\": \"l\", \"quad\": {\"size\": [130, 105]},"
+        "   \"transform\": [{\"scale\": [1, -1, 1]}, {\"translate\": [0, 548, 0]},"
+        "                   {\"scale\": 1e9}]},"
+        "  {\"name\": \"room\", \"material\": \"w\", \"box\": {\"size\": [556, 549, 559],"
+        "   \"inward\": true}, \"transform\": [{\"translate\": [0, 274, 0]}, {\"scale\": 1e9}]},"
+        "  {\"name\": \"dust\", \"material\": \"w\", \"sphere\": {\"radius\": 1},"
+        "   \"transform\": [{\"scale\": 1e-20}]}"
+        " ]}";
+    GI_REQUIRE_OK(gi_test_load_scene_text("huge.json", text, &s, &err));
+    for (uint32_t t = 0; t < s.triangle_count; t++)
+        GI_CHECK_MSG(fabs(gi_length(gi_scene_triangle_normal(&s, t)) - 1.0) < 1e-6,
+                     "triangle %u (object %u)", t, s.tri_object[t]);
+    for (uint32_t v = 0; v < s.vertex_count; v++)
+        GI_CHECK_MSG(fabs(gi_length(s.normals[v]) - 1.0) < 1e-6, "vertex %u", v);
+    GI_CHECK_NEAR(gi_scene_triangle_normal(&s, s.objects[0].first_triangle).y, -1.0, 1e-6);
+    GI_CHECK(s.light_count == 2 && isfinite(s.total_power) && s.total_power > 0);
+    for (uint32_t i = 0; i < s.light_count; i++)
+        GI_CHECK(isfinite(s.light_geom[i].pdf_area) && s.light_geom[i].pdf_area > 0 &&
+                 s.light_geom[i].n.y < -0.999f);
     gi_scene_free(&s);
 }
 
