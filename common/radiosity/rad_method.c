@@ -198,6 +198,15 @@ static int rad_check_scene(gi_job *job, gi_error *err)
 {
     const gi_rad_params *p = job->params;
     const gi_scene *s = &job->scene;
+    /* Elements emit from their front face only: a two-sided emitter would
+     * silently lose half its light (and its back would stay dark). */
+    for (uint32_t m = 0; m < s->material_count; m++)
+        if (s->materials[m].two_sided && !gi_is_black(s->materials[m].emission))
+            return gi_fail(err, GI_EINVAL,
+                           "%s: material \"%s\" is a two-sided emitter, and radiosity's "
+                           "elements emit from their front face only: make the emitter two "
+                           "one-sided faces back to back, or render with another method",
+                           job->file, s->materials[m].name);
     for (uint32_t i = 0; i < p->emissions.count; i++) {
         const gi_rad_emission *e = &p->emissions.items[i];
         for (uint32_t j = 0; j < e->material_count; j++) {
@@ -208,6 +217,11 @@ static int rad_check_scene(gi_job *job, gi_error *err)
                 return gi_fail(err, GI_EINVAL,
                                "%s: radiosity.emissions[%u].materials: no material \"%s\" in "
                                "the scene",
+                               job->file, i, e->materials[j].name);
+            if (s->materials[m].two_sided)
+                return gi_fail(err, GI_EINVAL,
+                               "%s: radiosity.emissions[%u].materials: \"%s\" is two-sided, and "
+                               "radiosity's elements emit from their front face only",
                                job->file, i, e->materials[j].name);
         }
         for (uint32_t j = 0; j < e->object_count; j++)
