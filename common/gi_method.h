@@ -54,6 +54,12 @@ typedef struct gi_method {
     int (*check_scene)(gi_job *job, gi_error *err);
     int (*plan)(gi_job *job, gi_task_queue *tasks, gi_error *err);
     int (*run)(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
+    /* Optional: refuses a result as it arrives (a non-finite value from a
+     * worker with bad memory, say), before it waits for its turn to merge:
+     * the task then fails and runs again, elsewhere on a farm, instead of
+     * the value reaching the outputs or failing the job. */
+    int (*check_result)(const gi_job *job, const gi_task *task, const gi_buf *result,
+                        gi_error *err);
     int (*merge)(gi_job *job, const gi_task *task, const gi_buf *result,
                  gi_task_queue *followups, gi_error *err);
     int (*finish)(gi_job *job, gi_task_queue *followups, gi_error *err);

@@ -3,6 +3,7 @@
 
 #include <float.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "gi_camera.h"
 #include "gi_rng.h"
@@ -140,6 +141,21 @@ int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp
     float rr = r * 1.001f + 1e-4f * (1.0f + gi_length(c));
     split_ctx sp = {object, c, rr * rr, rest, rest_known};
     render(rt, job, t, spp, &sp, shade, user, result);
+    return 0;
+}
+
+int gi_tile_check_finite(const gi_tile *t, const uint8_t *px, size_t len, gi_error *err)
+{
+    uint32_t w = t->x1 - t->x0;
+    for (size_t i = 0; i + 4 <= len; i += 4) {
+        float v;
+        memcpy(&v, px + i, 4); /* little-endian hosts only (gi_buf.h) */
+        if (!isfinite(v)) {
+            size_t pix = i / 12;
+            return gi_fail(err, GI_EPROTO, "pixel (%u, %u) is not finite (%g)",
+                           t->x0 + (uint32_t)(pix % w), t->y0 + (uint32_t)(pix / w), (double)v);
+        }
+    }
     return 0;
 }
 

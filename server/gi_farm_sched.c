@@ -460,6 +460,14 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         gi_buf_free(&r.data);
         return;
     }
+    if (gi_jobrun_check_result(&j->jr, l.task_id, &r.data, &err)) {
+        /* A worker's wrong answer: its task fails, the host's failures count. */
+        gi_buf_free(&r.data);
+        charge(j, -l.est_s);
+        host_failure(f, c, &err);
+        task_failed(f, c, j, &l, &err);
+        return;
+    }
     if (c->host) {
         c->host->consecutive_failures = 0;
         c->host->successes++;

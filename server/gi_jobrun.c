@@ -223,6 +223,17 @@ static int advance(gi_jobrun *jr)
     }
 }
 
+int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
+                           gi_error *err)
+{
+    const gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    const gi_method *m = jr->job->method;
+    if (!jt || jt->state != GI_TASK_LEASED || !m->check_result ||
+        m->check_result(jr->job, &jt->task, result, err) == 0)
+        return 0;
+    return gi_error_prefix(err, "task %llu's result", (unsigned long long)task_id);
+}
+
 int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf *result,
                        const gi_task_stats *stats)
 {

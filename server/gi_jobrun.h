@@ -68,6 +68,11 @@ const gi_task *gi_jobrun_lease(gi_jobrun *jr);
  * caller can tell "nothing for you" (> 0) from "nothing at all" (0). */
 const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const gi_task *t),
                                   void *ctx, uint64_t *passed);
+/* The method's check of a result for a leased task (0 if it has none, or
+ * the task is not leased: gi_jobrun_complete ignores such a result). On -1
+ * the caller fails the task with err (gi_jobrun_fail). */
+int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
+                           gi_error *err);
 /* A result for a leased task: taken over (result is left empty). Stale or
  * duplicate results are ignored. Returns -1 if the job failed (merge or
  * finish error): see jr->error. */

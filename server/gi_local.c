@@ -55,7 +55,11 @@ typedef struct local_run {
 static void on_result(void *user, int child, gi_msg_result *r)
 {
     local_run *lr = user;
-    gi_jobrun_complete(&lr->jr, r->task_id, r->attempt, &r->data, &r->stats);
+    gi_error e;
+    if (gi_jobrun_check_result(&lr->jr, r->task_id, &r->data, &e))
+        gi_jobrun_fail(&lr->jr, r->task_id, r->attempt, &e);
+    else
+        gi_jobrun_complete(&lr->jr, r->task_id, r->attempt, &r->data, &r->stats);
 }
 
 static void on_fail(void *user, int child, gi_msg_fail *f)

@@ -311,6 +311,24 @@ static int write_frame(gi_job *job, detp_state *st, const detp_vertex_data *v,
     return 0;
 }
 
+/* Image tiles' pixels are finite (the per-vertex results are checked as
+ * they are decoded, detp_result.c). */
+static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
+                             gi_error *err)
+{
+    if (t->kind != DETP_TASK_TILE && t->kind != DETP_TASK_ANIM_TILE)
+        return 0;
+    gi_reader pr;
+    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
+    gi_tile tile;
+    if (gi_tile_read(&pr, job->width, job->height, &tile, err))
+        return -1;
+    const size_t timing = 16; /* seconds and rays, before the pixels */
+    if (result->len < timing)
+        return gi_fail(err, GI_EPROTO, "truncated");
+    return gi_tile_check_finite(&tile, result->data + timing, result->len - timing, err);
+}
+
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
 {
     const gi_detp_params *p = job->params;
@@ -520,6 +538,7 @@ const gi_method gi_method_detp = {
     .check_scene = detp_check_scene,
     .plan = detp_plan,
     .run = detp_run,
+    .check_result = detp_check_result,
     .merge = detp_merge,
     .finish = detp_finish,
     .save = detp_save,

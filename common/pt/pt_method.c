@@ -167,6 +167,25 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     return 0;
 }
 
+static int pt_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
+                           gi_error *err)
+{
+    pt_tile tl;
+    if (decode_tile(job, t, &tl, err))
+        return -1;
+    uint32_t w = tl.tile.x1 - tl.tile.x0;
+    for (size_t i = 0; i + 8 <= result->len; i += 8) {
+        double v;
+        memcpy(&v, result->data + i, 8); /* little-endian hosts only (gi_buf.h) */
+        if (!isfinite(v)) {
+            size_t pix = i / (8 * PT_VALUES_PER_PIXEL);
+            return gi_fail(err, GI_EPROTO, "pixel (%u, %u) is not finite (%g)",
+                           tl.tile.x0 + (uint32_t)(pix % w), tl.tile.y0 + (uint32_t)(pix / w), v);
+        }
+    }
+    return 0;
+}
+
 static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
                     gi_error *err)
 {
@@ -265,6 +284,7 @@ const gi_method gi_method_pt = {
     .check_scene = NULL,
     .plan = pt_plan,
     .run = pt_run,
+    .check_result = pt_check_result,
     .merge = pt_merge,
     .finish = pt_finish,
     .save = pt_save,

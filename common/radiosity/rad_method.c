@@ -552,6 +552,18 @@ static void put_hits(void *user, uint32_t e, uint32_t node, uint32_t hits)
     st->counts[(size_t)e * st->stride + node] = (uint16_t)hits;
 }
 
+static int rad_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
+                            gi_error *err)
+{
+    const rad_state *st = job->state;
+    tile_task tt;
+    if (t->kind != RAD_TASK_TILE || !st->images)
+        return 0;
+    if (decode_tile(job, t, st->em->count, &tt, err))
+        return -1;
+    return gi_tile_check_finite(&tt.tile, result->data, result->len, err);
+}
+
 static int rad_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
                      gi_error *err)
 {
@@ -924,6 +936,7 @@ const gi_method gi_method_radiosity = {
     .check_scene = rad_check_scene,
     .plan = rad_plan,
     .run = rad_run,
+    .check_result = rad_check_result,
     .merge = rad_merge,
     .finish = rad_finish,
     .save = rad_save,

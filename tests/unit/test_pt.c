@@ -1,6 +1,9 @@
 /* Unit tests: the path tracer's estimator against closed forms. */
+#include <math.h>
 #include <string.h>
 
+#include "gi_fs.h"
+#include "gi_jobrun.h"
 #include "gi_rt.h"
 #include "gi_test.h"
 #include "pt/pt.h"
@@ -158,4 +161,38 @@ GI_TEST(test_irradiance_matches_lambert_polygon_formula)
         }
     gi_rt_free(&rt);
     gi_scene_free(&s);
+}
+
+/* A worker's result holding a NaN is refused as it arrives (the task then
+ * fails and runs again) and names the pixel; a finite one passes. */
+GI_TEST(test_pt_result_with_nan_is_refused)
+{
+    char text[1024], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"pt\", \"seed\": 2,"
+             " \"image\": {\"width\": 16, \"height\": 8}, \"pt\": {\"spp\": 2, \"tile\": 8}}",
+             gi_test_srcdir());
+    snprintf(path, sizeof path, "%s/nan.json", gi_test_tmpdir());
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
+    gi_job job;
+    GI_REQUIRE_OK(gi_job_load(path, &job, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t != NULL);
+    gi_buf res;
+    gi_buf_init(&res);
+    for (int i = 0; i < 8 * 8 * 4; i++)
+        gi_buf_put_f64(&res, 0.25);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) == 0);
+    double nan = NAN;
+    memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 1), &nan, 8); /* pixel (5, 3), green */
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) != 0);
+    GI_CHECK_MSG(strstr(err.msg, "task 0's result: pixel (5, 3) is not finite") != NULL, "%s",
+                 err.msg);
+    GI_CHECK(err.code == GI_EPROTO); /* a retry, not bad input */
+    gi_buf_free(&res);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
 }
