@@ -226,7 +226,10 @@ char *gi_farm_view_workers(gi_farm *f)
         cJSON_AddNumberToObject(o, "consecutive_failures", h ? h->consecutive_failures : 0);
         cJSON_AddNumberToObject(o, "blocklisted_seconds",
                                 blocked ? floor(h->blocked_until - now) : 0);
-        cJSON_AddStringToObject(o, "last_error", h ? h->last_error : "");
+        if (h && h->last_error[0]) /* null when there is none, as in a job's view */
+            cJSON_AddStringToObject(o, "last_error", h->last_error);
+        else
+            cJSON_AddNullToObject(o, "last_error");
         cJSON_AddItemToArray(a, o);
     }
     cJSON *o = cJSON_CreateObject();

@@ -109,8 +109,12 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
     for (size_t k = 0; k < GI_ARRAY_LEN(secs); k++)
         if ((rc = gi_args_take(argc, argv, i, secs[k].name, &v)) != 0) {
             if (rc < 0 || gi_args_number(v, secs[k].lo, secs[k].hi,
-                                         (double *)((char *)c + secs[k].off)))
-                return bad(secs[k].name, rc < 0 ? "" : v, "a number of seconds in range");
+                                         (double *)((char *)c + secs[k].off))) {
+                char want[96];
+                snprintf(want, sizeof want, "a number of seconds in [%g, %g]", secs[k].lo,
+                         secs[k].hi);
+                return bad(secs[k].name, rc < 0 ? "" : v, want);
+            }
             return 1;
         }
     for (size_t k = 0; k < GI_ARRAY_LEN(sizes); k++)
@@ -122,8 +126,12 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
     for (size_t k = 0; k < GI_ARRAY_LEN(counts); k++)
         if ((rc = gi_args_take(argc, argv, i, counts[k].name, &v)) != 0) {
             int64_t n;
-            if (rc < 0 || gi_args_int(v, counts[k].lo, counts[k].hi, &n))
-                return bad(counts[k].name, rc < 0 ? "" : v, "an integer in range");
+            if (rc < 0 || gi_args_int(v, counts[k].lo, counts[k].hi, &n)) {
+                char want[96];
+                snprintf(want, sizeof want, "an integer in [%lld, %lld]",
+                         (long long)counts[k].lo, (long long)counts[k].hi);
+                return bad(counts[k].name, rc < 0 ? "" : v, want);
+            }
             *(uint32_t *)((char *)c + counts[k].off) = (uint32_t)n;
             return 1;
         }
