@@ -519,14 +519,10 @@ int gi_exr_read(const char *path, gi_image *out, gi_error *err)
 {
     memset(out, 0, sizeof *out);
     exr_io io = {.fd = -1};
-    io.fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (io.fd < 0)
-        return gi_fail(err, errno == ENOENT ? GI_EINVAL : GI_EIO, "%s: %s", path, strerror(errno));
     struct stat st;
-    if (fstat(io.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(io.fd);
-        return gi_fail(err, GI_EINVAL, "%s: not a regular file", path);
-    }
+    io.fd = gi_open_regular(path, O_RDONLY, &st, err);
+    if (io.fd < 0)
+        return -1;
     io.size = (int64_t)st.st_size;
 
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;

@@ -12,17 +12,51 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+int gi_open_regular(const char *path, int flags, struct stat *st, gi_error *err)
+{
+    /* O_NONBLOCK: opening a FIFO to read waits for a writer, forever. */
+    int fd = open(path, flags | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        int e = errno;
+        gi_fail(err, e == ENOENT ? GI_EINVAL : GI_EIO, "%s: %s", path, strerror(e));
+        errno = e;
+        return -1;
+    }
+    struct stat own;
+    if (!st)
+        st = &own;
+    if (fstat(fd, st) != 0) {
+        int e = errno;
+        close(fd);
+        gi_fail(err, GI_EIO, "%s: %s", path, strerror(e));
+        errno = e;
+        return -1;
+    }
+    if (!S_ISREG(st->st_mode)) {
+        close(fd);
+        gi_fail(err, GI_EINVAL, "%s: not a regular file", path);
+        errno = EINVAL;
+        return -1;
+    }
+    /* Reads of a regular file never block; the flag only matters to
+     * writers (and to whatever the caller hands the descriptor to). */
+    int fl = fcntl(fd, F_GETFL);
+    if (fl < 0 || fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) < 0) {
+        int e = errno;
+        close(fd);
+        gi_fail(err, GI_EIO, "%s: %s", path, strerror(e));
+        errno = e;
+        return -1;
+    }
+    return fd;
+}
+
 int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return gi_fail(err, errno == ENOENT ? GI_EINVAL : GI_EIO, "%s: %s", path,
-                       strerror(errno));
     struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        close(fd);
-        return gi_fail(err, GI_EINVAL, "%s: not a regular file", path);
-    }
+    int fd = gi_open_regular(path, O_RDONLY, &st, err);
+    if (fd < 0)
+        return -1;
     if ((unsigned long long)st.st_size > max_bytes) {
         close(fd);
         return gi_fail(err, GI_EINVAL, "%s: file is %lld bytes, over the limit of %zu",

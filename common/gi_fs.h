@@ -10,7 +10,14 @@
 #include "gi_buf.h"
 #include "gi_error.h"
 
-/* Reads a whole file; refuses files larger than max_bytes. */
+struct stat;
+/* Opens path (flags | O_CLOEXEC) if it is a regular file, filling *st (if
+ * not NULL). A FIFO, device or directory is refused without blocking. On
+ * failure returns -1, err says why naming path (GI_EINVAL: missing or not a
+ * regular file) and errno is open's (ENOENT: missing) or EINVAL. */
+int gi_open_regular(const char *path, int flags, struct stat *st, gi_error *err);
+
+/* Reads a whole file; refuses files larger than max_bytes or not regular. */
 int gi_read_file(const char *path, size_t max_bytes, gi_buf *out, gi_error *err);
 
 /* A fresh temporary name next to `path` (malloc'ed). */
@@ -31,7 +38,6 @@ int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err);
 /* Writes bytes to path atomically (temp + fsync + rename). */
 int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err);
 
-struct stat;
 /* Calls fn for every regular file one level below dir's two-character
  * subdirectories (content-addressed stores: dir/ab/abcd...). Names starting
  * with '.' are skipped. */

@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "gi_fs.h"
@@ -280,9 +281,14 @@ int gi_png_read(const char *path, int *width, int *height, unsigned char **rgb8,
 {
     *rgb8 = NULL;
     *width = *height = 0;
-    FILE *fp = fopen(path, "rbe");
-    if (!fp)
-        return gi_fail(err, errno == ENOENT ? GI_EINVAL : GI_EIO, "%s: %s", path, strerror(errno));
+    int fd = gi_open_regular(path, O_RDONLY, NULL, err);
+    if (fd < 0)
+        return -1;
+    FILE *fp = fdopen(fd, "rb");
+    if (!fp) {
+        close(fd);
+        return gi_fail(err, GI_EIO, "%s: %s", path, strerror(errno));
+    }
     png_msg m = {.path = path, .code = GI_EINVAL};
     int rc = png_decode(fp, &m, width, height, rgb8);
     fclose(fp);

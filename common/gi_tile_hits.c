@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "gi_checked_files.h"
@@ -90,11 +91,16 @@ int gi_tile_hits_read(const char *dir, const gi_tile *t, int spp, uint32_t tri_c
                       gi_tile_hit *hits, gi_error *err)
 {
     char *path = file_name(dir, t, spp);
-    FILE *f = fopen(path, "rb");
+    int fd = gi_open_regular(path, O_RDONLY, NULL, err);
+    FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
     if (!f) {
         int e = errno, rc = 0;
+        if (fd >= 0)
+            close(fd);
         if (e == ENOENT || e == ENOTDIR)
             gi_fail(err, GI_EIO, "%s: missing", path);
+        else if (e == EINVAL) /* as an invalid file, below */
+            gi_fail(err, GI_EPROTO, "%s: not a regular file", path);
         else
             rc = gi_fail(err, GI_EIO, "%s: %s", path, strerror(e));
         free(path);
@@ -104,8 +110,8 @@ int gi_tile_hits_read(const char *dir, const gi_tile *t, int spp, uint32_t tri_c
     uint64_t n = hit_count(t, spp);
     struct stat st;
     const char *why = NULL;
-    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode))
-        why = "not a regular file";
+    if (fstat(fileno(f), &st) != 0)
+        why = "cannot stat it";
     else if ((uint64_t)st.st_size != sizeof h + n * sizeof *hits)
         why = "truncated or wrong size";
     else if (fread(&h, sizeof h, 1, f) != 1)

@@ -37,13 +37,19 @@ static int in_credentials_directory(const char *path)
 
 static int read_secret_file(const char *path, const char *what, gi_buf *out, gi_error *err)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    /* O_NONBLOCK: opening a FIFO waits for a writer, forever. */
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
     if (fd < 0)
         return gi_fail(err, GI_EINVAL, "%s file %s: %s", what, path, strerror(errno));
     struct stat st;
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         close(fd);
         return gi_fail(err, GI_EINVAL, "%s file %s: not a regular file", what, path);
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl < 0 || fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) < 0) {
+        close(fd);
+        return gi_fail(err, GI_EIO, "%s file %s: %s", what, path, strerror(errno));
     }
     /* systemd writes a credential 0400 and, where the file system has ACLs,
      * grants the service's user through one: stat then shows the ACL's mask

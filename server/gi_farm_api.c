@@ -28,6 +28,7 @@
 #include "gi_clock.h"
 #include "gi_farm_impl.h"
 #include "gi_farm_submit.h"
+#include "gi_fs.h"
 #include "gi_log.h"
 #include "gi_net.h"
 
@@ -383,12 +384,10 @@ static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_re
     if (!path)
         return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "job %llu has no output \"%s\"",
                       (unsigned long long)j->id, r->name);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    free(path);
     struct stat st;
-    if (fd < 0 || fstat(fd, &st) != 0) {
-        if (fd >= 0)
-            close(fd);
+    int fd = gi_open_regular(path, O_RDONLY, &st, NULL);
+    free(path);
+    if (fd < 0) {
         return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND,
                       "output \"%s\" of job %llu was not written", r->name,
                       (unsigned long long)j->id);

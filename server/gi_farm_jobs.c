@@ -12,6 +12,7 @@
  * checkpoint are not run again. */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -198,9 +199,13 @@ static void load_log_tail(gi_farm_job *j)
 {
     char path[4200];
     snprintf(path, sizeof path, "%s/log", j->dir);
-    FILE *fp = fopen(path, "re");
-    if (!fp)
+    int fd = gi_open_regular(path, O_RDONLY, NULL, NULL);
+    FILE *fp = fd >= 0 ? fdopen(fd, "r") : NULL;
+    if (!fp) {
+        if (fd >= 0)
+            close(fd);
         return;
+    }
     char line[1400];
     while (fgets(line, sizeof line, fp)) {
         line[strcspn(line, "\n")] = '\0';

@@ -2,6 +2,7 @@
 #include "gi_local_checkpoint.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -139,9 +140,13 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
 char *gi_local_checkpoint_batch_root(const char *path)
 {
     /* The header alone: a checkpoint can be hundreds of MB of sums. */
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    int fd = gi_open_regular(path, O_RDONLY, NULL, NULL);
+    FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
+    if (!f) {
+        if (fd >= 0)
+            close(fd);
         return NULL;
+    }
     char head[16 + GI_HASH_HEX + LOCAL_BATCH_ROOT_MAX];
     size_t n = fread(head, 1, sizeof head, f);
     fclose(f);

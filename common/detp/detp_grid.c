@@ -253,15 +253,19 @@ int detp_grid_map(const char *path, const detp_grid_spec *spec, uint64_t p0, uin
                   gi_error *err)
 {
     memset(g, 0, sizeof *g);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    int fd = gi_open_regular(path, O_RDONLY, &st, err);
     if (fd < 0) {
+        if (errno == EINVAL) { /* not a regular file: as a wrong one */
+            gi_fail(err, GI_EPROTO, "%s: not a grid file", path);
+            return 0;
+        }
         if (errno != ENOENT)
             return gi_fail(err, GI_EIO, "%s: %s", path, strerror(errno));
         gi_fail(err, GI_EIO, "%s: missing", path);
         return 0;
     }
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || (size_t)st.st_size < sizeof(grid_header)) {
+    if ((size_t)st.st_size < sizeof(grid_header)) {
         close(fd);
         gi_fail(err, GI_EPROTO, "%s: not a grid file", path);
         return 0;

@@ -115,23 +115,22 @@ int gi_detp_store_write(const char *path, const gi_detp_store_header *h,
 int gi_detp_store_map(const char *path, gi_detp_store_mapping *m, gi_error *err)
 {
     memset(m, 0, sizeof *m);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    int fd = gi_open_regular(path, O_RDONLY, &st, err);
     if (fd < 0) {
         if (errno == ENOENT || errno == ENOTDIR) {
             gi_fail(err, GI_EIO, "%s: missing", path);
             return 0;
         }
+        if (errno == EINVAL) { /* not a regular file: as a wrong one */
+            gi_fail(err, GI_EPROTO, "%s: not a store file (not a regular file)", path);
+            return 0;
+        }
         return gi_fail(err, GI_EIO, "%s: %s", path, strerror(errno));
-    }
-    struct stat st;
-    if (fstat(fd, &st) != 0) {
-        int e = errno;
-        close(fd);
-        return gi_fail(err, GI_EIO, "%s: %s", path, strerror(e));
     }
     gi_detp_store_header h;
     size_t len = (size_t)st.st_size;
-    if (!S_ISREG(st.st_mode) || len < sizeof h) {
+    if (len < sizeof h) {
         close(fd);
         gi_fail(err, GI_EPROTO, "%s: not a store file (%zu bytes)", path, len);
         return 0;

@@ -1,11 +1,15 @@
 /* Unit tests: RNG, buffers, paths, JSON validation. */
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gi_auth.h"
 #include "gi_buf.h"
 #include "gi_fs.h"
+#include "gi_image.h"
 #include "gi_json.h"
 #include "gi_rng.h"
 #include "gi_test.h"
@@ -169,6 +173,32 @@ GI_TEST(test_atomic_write_and_read_limits)
     GI_CHECK(gi_read_file(path, 4, &b, &err) == -1 && err.code == GI_EINVAL);
     GI_CHECK(gi_write_file_atomic("/nonexistent-dir/x", "a", 1, &err) == -1);
     gi_buf_free(&b);
+}
+
+/* A FIFO named as a journal, checkpoint, image or secret file is refused at
+ * once: open() used to wait for a writer forever. */
+GI_TEST(test_fifo_is_refused_without_blocking)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/fifo", gi_test_tmpdir());
+    unlink(path);
+    GI_REQUIRE(mkfifo(path, 0600) == 0);
+    alarm(20); /* a hang fails the test instead of the whole run */
+    gi_error err;
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_CHECK(gi_read_file(path, 100, &b, &err) == -1 && err.code == GI_EINVAL);
+    GI_CHECK_MSG(strstr(err.msg, path) && strstr(err.msg, "not a regular file"), "%s", err.msg);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &b, &err) != 0);
+    GI_CHECK_MSG(strstr(err.msg, "not a regular file"), "%s", err.msg);
+    int w, h;
+    unsigned char *rgb = NULL;
+    GI_CHECK(gi_png_read(path, &w, &h, &rgb, &err) != 0 && err.code == GI_EINVAL);
+    gi_image img;
+    GI_CHECK(gi_exr_read(path, &img, &err) != 0 && err.code == GI_EINVAL);
+    alarm(0);
+    gi_buf_free(&b);
+    unlink(path);
 }
 
 GI_TEST(test_temp_names_are_told_from_outputs)
