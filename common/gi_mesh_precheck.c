@@ -50,7 +50,14 @@ static int ply_precheck(const char *name, const uint8_t *data, size_t len, gi_er
     char *hdr = gi_xmalloc(hdr_end + 1);
     memcpy(hdr, data, hdr_end);
     hdr[hdr_end] = '\0';
-    int ascii = strstr(hdr, "format ascii") != NULL;
+    /* Word by word, as assimp reads it ("format  ascii 1.0" too). */
+    int ascii = 0;
+    for (const char *s = strstr(hdr, "format"); s; s = strstr(s + 1, "format")) {
+        char w1[64], w2[64];
+        if ((s == hdr || s[-1] == '\n' || s[-1] == '\r') &&
+            sscanf(s, "%63s %63s", w1, w2) == 2 && strcmp(w1, "format") == 0)
+            ascii = strcmp(w2, "ascii") == 0;
+    }
     double need = 0.0, count = 0.0, elem_bytes = 0.0;
     int rc = 0;
     for (char *line = strtok(hdr, "\r\n"); line && rc == 0; line = strtok(NULL, "\r\n")) {
@@ -196,9 +203,12 @@ static int has_extension(const char *name, const char *ext)
 
 int gi_mesh_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err)
 {
-    if (len >= 4 && memcmp(data, "ply", 3) == 0 && (data[3] == '\n' || data[3] == '\r'))
-        return ply_precheck(name, data, len, err);
+    /* assimp picks the OBJ importer by the name first; otherwise its PLY
+     * importer takes any file whose first line starts with "ply" or "PLY"
+     * whatever follows ("ply ", "ply\t", "Ply\r"), so the check does too. */
     if (has_extension(name, ".obj"))
         return obj_precheck(name, data, len, err);
+    if (len >= 3 && strncasecmp((const char *)data, "ply", 3) == 0)
+        return ply_precheck(name, data, len, err);
     return 0;
 }

@@ -598,6 +598,38 @@ GI_TEST(mesh_import_obj_face_indices_in_range)
     }
 }
 
+/* assimp reads a PLY whose first line is "ply" with anything after it; the
+ * size check must see those too (a 205-byte "ply \n" file declaring 2e9
+ * vertices made the import take 2.2 GB). */
+GI_TEST(mesh_precheck_ply_first_lines)
+{
+    static const char *const magic[] = {"ply\n", "ply \n", "ply\t\n", "ply \r\n", "PLY\r\n",
+                                        "ply  \t \n"};
+    for (size_t i = 0; i < GI_ARRAY_LEN(magic); i++) {
+        char text[512];
+        snprintf(text, sizeof text,
+                 "%sformat binary_little_endian 1.0\nelement vertex 2000000000\n"
+                 "property float x\nproperty float y\nproperty float z\nend_header\n"
+                 "0 0 0\n0 1 0\n1 0 0\n",
+                 magic[i]);
+        gi_error err;
+        gi_error_clear(&err);
+        GI_CHECK_MSG(gi_mesh_precheck("big.ply", (const uint8_t *)text, strlen(text), &err) ==
+                             -1 &&
+                         strstr(err.msg, "big.ply") && strstr(err.msg, "declares"),
+                     "first line %zu: %s", i, err.msg);
+        /* Named otherwise, the bytes still go to assimp's PLY reader. */
+        GI_CHECK(gi_mesh_precheck("big.mesh", (const uint8_t *)text, strlen(text), &err) == -1);
+    }
+    /* An ASCII header however spaced is counted as ASCII: this one fits. */
+    static const char ok[] = "ply \r\nformat  ascii 1.0\r\nelement vertex 3\r\n"
+                             "property float x\r\nproperty float y\r\nproperty float z\r\n"
+                             "end_header\r\n0 0 0\n1 0 0\n0 1 0\n";
+    gi_error err;
+    GI_CHECK_MSG(gi_mesh_precheck("ok.ply", (const uint8_t *)ok, sizeof ok - 1, &err) == 0,
+                 "%s", err.msg);
+}
+
 GI_TEST(mesh_import_repeated_does_not_leak)
 {
     /* Run under LSan (ASAN_OPTIONS=detect_leaks=1): successes and failures
