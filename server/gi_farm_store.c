@@ -49,6 +49,22 @@ int gi_farm_store_read(const gi_farm *f, const char *hash, gi_buf *out, gi_error
         return gi_fail(err, GI_EINVAL, "malformed asset hash");
     char *p = gi_farm_store_path(f, hash);
     int rc = gi_read_file(p, GI_ASSET_MAX_BYTES, out, err);
+    if (rc == 0) {
+        /* The name is the hash: a file damaged on disk (a bad sector, an
+         * operator's edit) is caught here, naming it, rather than by every
+         * worker it is sent to. GI_EINVAL: the job fails at once, and no
+         * worker is blamed (blocklisted) for the coordinator's disk. */
+        char hex[GI_HASH_HEX];
+        size_t n = out->len;
+        gi_hash_hex(out->data, n, hex);
+        if (strcmp(hex, hash) != 0) {
+            gi_buf_reset(out);
+            rc = gi_fail(err, GI_EINVAL,
+                         "asset store: %s is damaged (%s: its %zu bytes hash to %.16s...); "
+                         "remove the file and submit the job again to upload it anew",
+                         hash, p, n, hex);
+        }
+    }
     free(p);
     return rc;
 }
