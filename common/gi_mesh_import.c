@@ -13,6 +13,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -288,6 +289,20 @@ static void make_names_unique(gi_mesh_data *out, const uint32_t *file_index)
             }
 }
 
+static int finite_vec(const struct aiVector3D *v)
+{
+    return isfinite(v->x) && isfinite(v->y) && isfinite(v->z);
+}
+
+/* All of a mesh's normals are finite numbers. */
+static int normals_finite(const struct aiMesh *am)
+{
+    for (unsigned v = 0; v < am->mNumVertices; v++)
+        if (!finite_vec(&am->mNormals[v]))
+            return 0;
+    return 1;
+}
+
 static uint32_t mesh_triangles(const struct aiMesh *am)
 {
     uint32_t n = 0;
@@ -310,6 +325,20 @@ static int convert(const struct aiScene *sc, const import_ctx *c, const char *na
         nv += am->mNumVertices;
         nt += t;
         all_normals &= am->mNormals != NULL;
+        /* NaN positions cannot be rendered: refused, naming the vertex
+         * (OBJ "v nan 0 0"; assimp takes it). Bad normals are only
+         * dropped: the scene computes its own then. */
+        for (unsigned v = 0; v < am->mNumVertices; v++)
+            if (!finite_vec(&am->mVertices[v]))
+                return gi_fail(err, GI_EINVAL,
+                               "%s: mesh %u vertex %u is not a finite point (%g %g %g)", name, i,
+                               v, (double)am->mVertices[v].x, (double)am->mVertices[v].y,
+                               (double)am->mVertices[v].z);
+        if (all_normals && !normals_finite(am)) {
+            gi_warn("%s: mesh %u has normals that are not finite; using computed normals",
+                    name, i);
+            all_normals = 0;
+        }
         if (sc->mNumMaterials && am->mMaterialIndex >= sc->mNumMaterials)
             return gi_fail(err, GI_EINVAL, "%s: mesh %u uses material %u of %u", name, i,
                            am->mMaterialIndex, sc->mNumMaterials);

@@ -5,9 +5,11 @@
  * that follow it is refused here, as bad input. Likewise an OBJ face that
  * names a vertex, texture coordinate or normal the file does not have
  * (assimp refuses it, but leaks the meshes it has built when the file has
- * more than one; found by fuzz_mesh), with the line it is on. */
+ * more than one; found by fuzz_mesh), with the line it is on, and an OBJ
+ * vertex that is not a finite point. */
 #include <ctype.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -172,6 +174,35 @@ static int obj_check_refs(const char *name, const obj_line *l, const char *s,
     return 0;
 }
 
+/* A vertex's coordinates must be finite ("v nan 0 0", "v 1e999 0 0" are
+ * taken by assimp); said here with the line. Words that are not numbers are
+ * left to assimp. */
+static int obj_check_point(const char *name, const obj_line *l, const char *s, gi_error *err)
+{
+    for (int k = 0; k < 3; k++) {
+        while (s < l->end && isspace((unsigned char)*s))
+            s++;
+        const char *w = s;
+        while (s < l->end && !isspace((unsigned char)*s))
+            s++;
+        char buf[64];
+        size_t n = (size_t)(s - w);
+        if (n == 0 || n >= sizeof buf)
+            return 0;
+        memcpy(buf, w, n);
+        buf[n] = '\0';
+        char *end;
+        double v = strtod(buf, &end);
+        if (end == buf)
+            return 0;
+        if (!isfinite(v))
+            return gi_fail(err, GI_EINVAL,
+                           "%s: line %zu: vertex coordinate \"%s\" is not a finite number", name,
+                           l->number, buf);
+    }
+    return 0;
+}
+
 static int obj_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err)
 {
     uint64_t total[3] = {0, 0, 0}, sofar[3] = {0, 0, 0};
@@ -187,6 +218,8 @@ static int obj_precheck(const char *name, const uint8_t *data, size_t len, gi_er
     at = 0;
     while (obj_next_line(data, len, &at, &l)) {
         int k = obj_keyword(&l, &args);
+        if (k == 0 && obj_check_point(name, &l, args, err))
+            return -1;
         if (k >= 0 && k < 3)
             sofar[k]++;
         else if (k >= 3 && obj_check_refs(name, &l, args, total, sofar, err))

@@ -1,5 +1,6 @@
 /* Tests for gi_mesh: import through assimp (OBJ+MTL, PLY ascii/binary, glTF
  * .gltf/.glb, malformed files), built-in shapes, normals, append. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -628,6 +629,48 @@ GI_TEST(mesh_precheck_ply_first_lines)
     gi_error err;
     GI_CHECK_MSG(gi_mesh_precheck("ok.ply", (const uint8_t *)ok, sizeof ok - 1, &err) == 0,
                  "%s", err.msg);
+}
+
+/* A vertex that is not a finite point is refused, naming the file and the
+ * vertex (the line, for an OBJ); normals that are not finite are dropped
+ * (the scene computes its own). fuzz_mesh checks both. */
+GI_TEST(mesh_import_refuses_non_finite_points)
+{
+    static const char nan_obj[] = "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n";
+    static const char inf_obj[] = "v 0 0 0\nv 1 0 0\nv 0 1e999 0\nf 1 2 3\n";
+    write_tmp("nan.obj", nan_obj, sizeof nan_obj - 1);
+    write_tmp("inf.obj", inf_obj, sizeof inf_obj - 1);
+    /* The binary quad with its third vertex's y a NaN. */
+    gi_buf b;
+    gi_buf_init(&b);
+    binary_ply(&b);
+    const uint8_t *hdr_end = (const uint8_t *)strstr((const char *)b.data, "end_header\n");
+    GI_REQUIRE(hdr_end != NULL);
+    size_t at = (size_t)(hdr_end - b.data) + 11 + 2 * 24 + 4;
+    const float qnan = NAN;
+    memcpy(b.data + at, &qnan, sizeof qnan);
+    write_tmp("nan.ply", b.data, b.len);
+    gi_buf_free(&b);
+    expect_failure(gi_test_tmpdir(), "nan.obj", GI_EINVAL, "line 2: vertex coordinate \"nan\"");
+    expect_failure(gi_test_tmpdir(), "inf.obj", GI_EINVAL, "line 3: vertex coordinate \"1e999\"");
+    expect_failure(gi_test_tmpdir(), "nan.ply", GI_EINVAL, "is not a finite point");
+    char *dir = data_dir();
+    expect_failure(dir, "nan_vertex.gltf", GI_EINVAL, "is not a finite point");
+    free(dir);
+
+    static const char nan_normals[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan 0 1\n"
+                                      "f 1//1 2//1 3//1\n";
+    write_tmp("nan_normals.obj", nan_normals, sizeof nan_normals - 1);
+    gi_dir_source d;
+    gi_dir_source_init(&d, gi_test_tmpdir());
+    gi_asset_source src = gi_dir_source_as_source(&d);
+    gi_mesh_data m;
+    gi_error err;
+    gi_error_clear(&err);
+    GI_CHECK_MSG(gi_mesh_import(&src, "nan_normals.obj", &m, &err) == 0, "%s", err.msg);
+    GI_CHECK(m.normals == NULL);
+    gi_mesh_data_free(&m);
+    gi_dir_source_free(&d);
 }
 
 GI_TEST(mesh_import_repeated_does_not_leak)
