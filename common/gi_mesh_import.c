@@ -440,6 +440,15 @@ static int convert(const struct aiScene *sc, const import_ctx *c, const char *na
  * and the reading of its error are one critical section. */
 static pthread_mutex_t assimp_lock = PTHREAD_MUTEX_INITIALIZER;
 
+/* assimp's glTF reader drops a face whose index is out of range and says so
+ * only in its log (an OBJ's is refused with its line, gi_mesh_precheck.c):
+ * the message is caught to refuse the file instead. */
+static void on_assimp_log(const char *msg, char *user)
+{
+    if (strstr(msg, "out-of-range indices"))
+        *(int *)(void *)user = 1;
+}
+
 /* assimp's import and convert(), over the files of c (the main one first). */
 static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_error *err)
 {
@@ -454,11 +463,22 @@ static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_
                      aiProcess_PreTransformVertices | aiProcess_SortByPType |
                      aiProcess_ValidateDataStructure;
     char aimsg[600] = "";
+    int dropped = 0;
+    struct aiLogStream log = {on_assimp_log, (char *)(void *)&dropped};
     pthread_mutex_lock(&assimp_lock);
+    aiAttachLogStream(&log);
     const struct aiScene *sc = aiImportFileEx(c->files[0]->name, flags, &io);
     if (!sc)
         snprintf(aimsg, sizeof aimsg, "%s", aiGetErrorString());
+    aiDetachLogStream(&log);
     pthread_mutex_unlock(&assimp_lock);
+    if (sc && dropped) {
+        aiReleaseImport(sc);
+        return gi_fail(err, GI_EINVAL,
+                       "%s: cannot import: a face uses a vertex index out of range (the "
+                       "primitive's indices name vertices its accessors do not have)",
+                       name);
+    }
     if (sc) {
         int rc = convert(sc, c, name, out, err);
         aiReleaseImport(sc);

@@ -512,6 +512,8 @@ GI_TEST(mesh_import_malformed_files)
     char *dir = data_dir();
     expect_failure(dir, "empty.obj", GI_EINVAL, NULL);
     expect_failure(dir, "bad_index.obj", GI_EINVAL, NULL);
+    /* assimp drops the face and keeps the rest; refused as the OBJ is. */
+    expect_failure(dir, "bad_index.gltf", GI_EINVAL, "vertex index out of range");
     expect_failure(dir, "truncated.ply", GI_EINVAL, NULL);
     expect_failure(dir, "missing_bin.gltf", GI_EINVAL, "missing.bin");
     expect_failure(dir, "does_not_exist.obj", GI_EINVAL, NULL);
