@@ -22,6 +22,7 @@
 #include <strings.h>
 #include <poll.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -663,8 +664,56 @@ static int decode_mesh(const gi_buf *b, const char *name, gi_mesh_data *m, gi_er
 }
 
 
+/* AddressSanitizer maps terabytes of shadow memory up front: an
+ * address-space limit would fail its first allocation. */
+#if defined(__SANITIZE_ADDRESS__)
+#define IMPORT_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define IMPORT_UNDER_ASAN 1
+#endif
+#endif
+
+#ifndef IMPORT_UNDER_ASAN
+/* How much memory assimp may take beyond what this process has mapped when
+ * it forks: 2 GiB and 32 bytes per byte of the file, at most the machine's
+ * physical memory. A small glTF whose nodes form a DAG (every node naming
+ * the next twice) makes assimp expand it into gigabytes of meshes. */
+static uint64_t import_memory_budget(size_t bytes)
+{
+    uint64_t budget = ((uint64_t)2 << 30) + 32 * (uint64_t)bytes;
+    long pages = sysconf(_SC_PHYS_PAGES), psize = sysconf(_SC_PAGESIZE);
+    uint64_t phys = pages > 0 && psize > 0 ? (uint64_t)pages * (uint64_t)psize : 0;
+    return phys && phys < budget ? phys : budget;
+}
+
+/* In the child: caps its address space at what it has mapped now plus the
+ * budget (never above a limit it already has: gi-farmd's check process sets
+ * one). Returns the budget, or 0 if no limit was set. */
+static uint64_t limit_import_memory(size_t bytes)
+{
+    unsigned long long vm_pages = 0;
+    FILE *f = fopen("/proc/self/statm", "re");
+    int ok = f && fscanf(f, "%llu", &vm_pages) == 1;
+    if (f)
+        fclose(f);
+    long psize = sysconf(_SC_PAGESIZE);
+    struct rlimit rl;
+    if (!ok || psize <= 0 || getrlimit(RLIMIT_AS, &rl) != 0)
+        return 0;
+    uint64_t budget = import_memory_budget(bytes);
+    rlim_t want = (rlim_t)(vm_pages * (uint64_t)psize + budget);
+    if (rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur <= want)
+        return 0; /* a tighter limit is already there */
+    rl.rlim_cur = want;
+    return setrlimit(RLIMIT_AS, &rl) == 0 ? budget : 0;
+}
+#else
+static uint64_t limit_import_memory(size_t bytes) { return 0; }
+#endif
+
 /* In the child: assimp over files asked of the parent; never returns. */
-static void child_main(int fd, const char *name)
+static void child_main(int fd, const char *name, size_t bytes)
 {
     import_ctx c;
     memset(&c, 0, sizeof c);
@@ -676,7 +725,16 @@ static void child_main(int fd, const char *name)
     gi_error_clear(&e);
     gi_buf b;
     gi_buf_init(&b);
-    int rc = ctx_fetch(&c, name)->ok ? assimp_import(&c, name, &m, &e) : -1;
+    int rc = ctx_fetch(&c, name)->ok ? -2 : -1;
+    uint64_t budget = rc == -2 ? limit_import_memory(bytes) : 0;
+    if (rc == -2)
+        rc = assimp_import(&c, name, &m, &e);
+    /* assimp says "std::bad_alloc"; a failed allocation of ours, GI_ENOMEM. */
+    if (rc && budget && (e.code == GI_ENOMEM || strstr(e.msg, "bad_alloc")))
+        gi_fail(&e, GI_EINVAL,
+                "%s: cannot import: the importer ran out of its memory limit (%.1f GiB for "
+                "its %zu bytes): the file is malformed or too big for this machine",
+                name, (double)budget / (double)(1u << 30), bytes);
     if (rc == 0)
         encode_mesh(&b, &m);
     else
@@ -811,7 +869,7 @@ int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *o
             static const int crash_signals[] = {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
             for (size_t i = 0; i < sizeof crash_signals / sizeof crash_signals[0]; i++)
                 signal(crash_signals[i], SIG_DFL);
-            child_main(sv[1], name);
+            child_main(sv[1], name, main_file->bytes.len);
         }
         why = errno;
         close(sv[1]);
