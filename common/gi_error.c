@@ -2,6 +2,7 @@
 #include "gi_error.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -55,6 +56,12 @@ void gi_error_clear(gi_error *err)
         err->code = GI_OK;
         err->msg[0] = '\0';
     }
+}
+
+const char *gi_fmt_count(char buf[32], double d)
+{
+    snprintf(buf, 32, fabs(d) <= 1e15 ? "%.0f" : "%g", d);
+    return buf;
 }
 
 const char *gi_errcode_name(gi_errcode code)

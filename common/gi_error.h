@@ -39,6 +39,10 @@ int gi_error_prefix(gi_error *err, const char *fmt, ...)
 void gi_error_clear(gi_error *err);
 const char *gi_errcode_name(gi_errcode code);
 
+/* A count or integer for a message: every digit up to 1e15, beyond that
+ * %g ("1e+308", not 309 digits). Returns buf. */
+const char *gi_fmt_count(char buf[32], double d);
+
 /* The code for a failed write to this host's own disk: GI_EHOST for no
  * space, quota, read-only file system or a device error; GI_EIO otherwise. */
 gi_errcode gi_disk_errcode(int errnum);

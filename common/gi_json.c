@@ -232,9 +232,10 @@ int gi_jv_int(gi_jv *v, const cJSON *obj, const char *path, const char *key, int
     if (fabs(d) >= 9007199254740992.0 && (d < (double)lo || d > (double)hi))
         return gi_jv_fail(v, p, "out of range [%lld, %lld] (and integers of 2^53 or more are "
                           "not exact in JSON)", (long long)lo, (long long)hi);
+    char num[32];
     if (d < (double)lo || d > (double)hi)
-        return gi_jv_fail(v, p, "%.0f is out of range [%lld, %lld]", d, (long long)lo,
-                          (long long)hi);
+        return gi_jv_fail(v, p, "%s is out of range [%lld, %lld]", gi_fmt_count(num, d),
+                          (long long)lo, (long long)hi);
     *out = (int64_t)d;
     return 0;
 }

@@ -87,11 +87,12 @@ static int ply_precheck(const char *name, const uint8_t *data, size_t len, gi_er
         return -1;
     /* The last ASCII value needs no separator after it. */
     double have = (double)(len - hdr_end) + (ascii ? 1.0 : 0.0);
+    char num[32];
     if (need > have)
         return gi_fail(err, GI_EINVAL,
-                       "%s: the PLY header declares at least %.0f bytes of elements, but the "
+                       "%s: the PLY header declares at least %s bytes of elements, but the "
                        "file has %zu after its header (truncated or corrupt)",
-                       name, need, len - hdr_end);
+                       name, gi_fmt_count(num, need), len - hdr_end);
     return 0;
 }
 

@@ -113,9 +113,10 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
         return gi_jv_fail(v, "quadrature.initial_path",
                           "%lld is not a power of two (regions are dyadic)", (long long)ipath);
     double count = (double)p->initial[0] * p->initial[1] * pow((double)ipath, (double)(dims - 2));
+    char num[32];
     if (count > MAX_INITIAL_REGIONS)
-        return gi_jv_fail(v, "quadrature.initial_path",
-                          "%.0f initial regions (at most %d)", count, MAX_INITIAL_REGIONS);
+        return gi_jv_fail(v, "quadrature.initial_path", "%s initial regions (at most %d)",
+                          gi_fmt_count(num, count), MAX_INITIAL_REGIONS);
     if (!p->hybrid && spp >= 0)
         return gi_jv_fail(v, "quadrature.mc_spp", "only with \"hybrid\": true");
     if (!p->hybrid && rr >= 0)

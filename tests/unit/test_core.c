@@ -267,7 +267,7 @@ GI_TEST(test_json_errors_name_file_and_field)
     cJSON_Delete(doc);
 
     GI_REQUIRE_OK(parse_doc("{\"n\": 1.5, \"i\": 3, \"s\": \"x\", \"big\": 1e999, "
-                            "\"seed\": 9007199254740993, "
+                            "\"seed\": 9007199254740993, \"huge\": 5000000000000001, "
                             "\"v\": [1, 2], \"o\": {\"k\": true}, \"dup\": 1, \"dup\": 2}",
                             &doc, &err));
     gi_jv v = {"t.json", &err};
@@ -283,6 +283,13 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK_MSG(strstr(err.msg, "t.json: seed: out of range [0, 9007199254740991] (and "
                                "integers of 2^53 or more are not exact in JSON)") != NULL,
                  "%s", err.msg);
+    /* Exact, but printed short: 16 digits of priority help nobody. */
+    GI_CHECK(gi_jv_int(&v, doc, "", "huge", 1, 1, 100, &i) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "t.json: huge: 5e+15 is out of range [1, 100]") != NULL, "%s",
+                 err.msg);
+    char num[32];
+    GI_CHECK(strcmp(gi_fmt_count(num, 1e308), "1e+308") == 0);
+    GI_CHECK(strcmp(gi_fmt_count(num, -123456789012345.0), "-123456789012345") == 0);
     GI_CHECK(gi_jv_int(&v, doc, "", "s", 1, 0, 2, &i) == -1);
     GI_CHECK(strstr(err.msg, "got a string") != NULL);
     GI_CHECK(gi_jv_number(&v, doc, "", "big", 1, -1e300, 1e300, &d) == -1);
@@ -293,10 +300,11 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK(gi_jv_number(&v, doc, "", "missing", 0, 0, 1, &d) == 0 && d == 42);
     gi_vec3 v3;
     GI_CHECK(gi_jv_vec3(&v, doc, "", "v", 1, 0, 1, &v3) == -1);
-    static const char *const allowed[] = {"n", "i", "s", "big", "seed", "v", "o", NULL};
+    static const char *const allowed[] = {"n", "i", "s", "big", "seed", "huge", "v", "o", NULL};
     GI_CHECK(gi_jv_keys(&v, doc, "", allowed) == -1);
     GI_CHECK_MSG(strstr(err.msg, "dup: unknown key") != NULL, "%s", err.msg);
-    static const char *const allowed2[] = {"n", "i", "s", "big", "seed", "v", "o", "dup", NULL};
+    static const char *const allowed2[] = {"n",    "i", "s", "big", "seed",
+                                           "huge", "v", "o", "dup", NULL};
     GI_CHECK(gi_jv_keys(&v, doc, "", allowed2) == -1);
     GI_CHECK_MSG(strstr(err.msg, "dup: key appears twice") != NULL, "%s", err.msg);
     const cJSON *o;
