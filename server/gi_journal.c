@@ -161,11 +161,59 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
     return gi_reader_finish(&rd, err);
 }
 
+static const char *type_name(uint32_t type)
+{
+    switch (type) {
+    case GI_JREC_SUBMIT: return "SUBMIT";
+    case GI_JREC_CHECKPOINT: return "CHECKPOINT";
+    case GI_JREC_END: return "END";
+    case GI_JREC_PURGE: return "PURGE";
+    case GI_JREC_RETRY: return "RETRY";
+    }
+    return "unknown";
+}
+
+/* The record at off. 0: intact, decoded into r (to be freed), *size its
+ * bytes. 1: torn (cut short, or a length past the end). 2: damaged (its CRC
+ * or payload is wrong) though its length fits: *size is what it claims. */
+static int read_record(const uint8_t *data, size_t len, size_t off, gi_jrec *r, size_t *size,
+                       gi_error *err)
+{
+    gi_jrec_init(r, 0, 0);
+    size_t left = len - off;
+    if (left < RECORD_OVERHEAD) {
+        gi_fail(err, GI_EPROTO, "record at byte %zu is torn (%zu bytes)", off, left);
+        return 1;
+    }
+    uint32_t type = gi_le_get_u32(data + off);
+    uint32_t n = gi_le_get_u32(data + off + 4);
+    if (n > GI_JOURNAL_MAX_RECORD || n > left - RECORD_OVERHEAD) {
+        gi_fail(err, GI_EPROTO, "record at byte %zu is torn or damaged (length %u, %zu bytes left)",
+                off, n, left);
+        return 1;
+    }
+    *size = RECORD_OVERHEAD + (size_t)n;
+    uint32_t crc = gi_le_get_u32(data + off + 8 + n);
+    if (crc != gi_crc32c(0, data + off, 8 + (size_t)n)) {
+        gi_fail(err, GI_EPROTO, "record at byte %zu (type %u, %s) fails its CRC", off, type,
+                type_name(type));
+        return 2;
+    }
+    if (decode_payload(type, data + off + 8, n, r, err)) {
+        gi_jrec_free(r);
+        gi_error_prefix(err, "record at byte %zu (type %u, %s)", off, type, type_name(type));
+        return 2;
+    }
+    r->at = off;
+    return 0;
+}
+
 int gi_journal_parse(const uint8_t *data, size_t len,
                      int (*fn)(void *ctx, const gi_jrec *r, gi_error *err), void *ctx,
-                     size_t *valid, gi_error *err)
+                     size_t *valid, size_t *skipped, gi_error *err)
 {
     *valid = 0;
+    *skipped = 0;
     if (len < HEADER_BYTES || memcmp(data, JOURNAL_MAGIC, 4) != 0)
         return gi_fail(err, GI_EPROTO, "not a gi-farm journal (bad header)");
     uint32_t version = gi_le_get_u32(data + 4);
@@ -175,34 +223,34 @@ int gi_journal_parse(const uint8_t *data, size_t len,
     size_t off = HEADER_BYTES;
     *valid = off;
     while (off < len) {
-        size_t left = len - off;
-        if (left < RECORD_OVERHEAD) {
-            gi_fail(err, GI_EPROTO, "record at byte %zu is torn (%zu bytes)", off, left);
-            return 1;
-        }
-        uint32_t type = gi_le_get_u32(data + off);
-        uint32_t n = gi_le_get_u32(data + off + 4);
-        if (n > GI_JOURNAL_MAX_RECORD || n > left - RECORD_OVERHEAD) {
-            gi_fail(err, GI_EPROTO, "record at byte %zu is torn or damaged (length %u, %zu bytes left)",
-                    off, n, left);
-            return 1;
-        }
-        uint32_t crc = gi_le_get_u32(data + off + 8 + n);
-        if (crc != gi_crc32c(0, data + off, 8 + (size_t)n)) {
-            gi_fail(err, GI_EPROTO, "record at byte %zu fails its CRC", off);
-            return 1;
-        }
         gi_jrec r;
-        if (decode_payload(type, data + off + 8, n, &r, err)) {
-            gi_jrec_free(&r);
-            gi_error_prefix(err, "record at byte %zu", off);
+        size_t size = 0;
+        gi_error e;
+        int rc = read_record(data, len, off, &r, &size, &e);
+        if (rc == 2 && off + size < len) {
+            /* A crash tears only the last record: one in the middle that an
+             * intact record follows is bit rot, and only it is lost. */
+            gi_jrec next;
+            size_t next_size;
+            gi_error nerr;
+            if (read_record(data, len, off + size, &next, &next_size, &nerr) == 0) {
+                gi_jrec_free(&next);
+                gi_warn("journal: %s: skipped (the records after it are kept)", e.msg);
+                ++*skipped;
+                off += size;
+                continue;
+            }
+        }
+        if (rc) {
+            if (err)
+                *err = e;
             return 1;
         }
-        int rc = fn(ctx, &r, err);
+        rc = fn(ctx, &r, err);
         gi_jrec_free(&r);
         if (rc)
             return -1;
-        off += RECORD_OVERHEAD + (size_t)n;
+        off += size;
         *valid = off;
     }
     return 0;
@@ -252,20 +300,24 @@ int gi_journal_open(gi_journal *j, const char *path,
         if (gi_write_file_atomic(path, data.data, data.len, err))
             goto fail;
     } else {
-        size_t valid;
+        size_t valid, skipped;
         gi_error perr;
-        int rc = gi_journal_parse(data.data, data.len, fn, ctx, &valid, &perr);
+        int rc = gi_journal_parse(data.data, data.len, fn, ctx, &valid, &skipped, &perr);
         if (rc < 0) {
             if (err)
                 *err = perr;
             gi_error_prefix(err, "%s", path);
             goto fail;
         }
-        if (rc > 0) {
+        if (rc > 0 || skipped) {
             char keep[4200];
             snprintf(keep, sizeof keep, "%s.damaged-%lld", path, (long long)time(NULL));
-            gi_warn("%s: %s; the %zu bytes from there on are ignored (the file is kept as %s)",
-                    path, perr.msg, data.len - valid, keep);
+            if (rc > 0)
+                gi_warn("%s: %s; the %zu bytes from there on are ignored (the file is kept as %s)",
+                        path, perr.msg, data.len - valid, keep);
+            if (skipped)
+                gi_warn("%s: %zu damaged records skipped (the file is kept as %s)", path, skipped,
+                        keep);
             gi_error werr;
             if (gi_write_file_atomic(keep, data.data, data.len, &werr))
                 gi_warn("%s", werr.msg);

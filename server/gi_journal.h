@@ -2,8 +2,8 @@
  * state directory, so a restarted gi-farmd knows every job it had.
  *
  * File layout (little-endian; docs/farm.md, "Journal"):
- *   header   "GIJ1" | u32 version (2; version 1 journals, without RETRY,
- *            are read too)
+ *   header   "GIJ1" | u32 version (3; versions 1 and 2, without RETRY or
+ *            END summaries, are read too)
  *   record   u32 type | u32 length | payload | u32 crc32c(type, length, payload)
  * Records:
  *   SUBMIT      job id, priority, submit time, job file name, job text, manifest
@@ -16,8 +16,9 @@
  *               last checkpoint if it has one
  * Each append is written with one write() and fdatasync'ed before the
  * coordinator acts on it. A crash can only tear the last record; replay
- * stops at the first record that is short or fails its CRC and the journal
- * is then rewritten without it (compaction: one SUBMIT, the last CHECKPOINT
+ * stops at a last record that is short or fails its CRC (a damaged record
+ * followed by an intact one is skipped alone: bit rot) and the journal is
+ * then rewritten without it (compaction: one SUBMIT, the last CHECKPOINT
  * and the END of every job; a retried job is unfinished again, so no RETRY
  * survives it). */
 #ifndef GI_JOURNAL_H
@@ -50,6 +51,7 @@ typedef enum gi_job_end {
 typedef struct gi_jrec {
     gi_jrec_type type;
     uint64_t job_id;
+    size_t at; /* replay: where the record starts in the journal */
     /* SUBMIT */
     uint32_t priority;
     double submitted; /* seconds since the epoch */
@@ -79,13 +81,16 @@ void gi_jrec_encode(const gi_jrec *r, gi_buf *out);
 
 /* Parses journal bytes (header included): calls fn for every intact record
  * in order (the record is freed after fn returns; fn returns 0 to go on).
- * *valid gets the length of the intact prefix. Returns 0 when every byte
- * was a valid record, 1 when the data ends in a torn or damaged record
- * (msg says where and why), -1 when fn failed or the header is not a
+ * A damaged record (bad CRC or payload, plausible length) that an intact
+ * record follows is bit rot, not a torn tail: it is skipped with a warning
+ * naming its offset and type, and counted in *skipped. *valid gets the end
+ * of the last intact record. Returns 0 when the data ends with an intact
+ * record, 1 when it ends in a torn or damaged one (msg says where and why;
+ * what follows it is ignored), -1 when fn failed or the header is not a
  * journal's. */
 int gi_journal_parse(const uint8_t *data, size_t len,
                      int (*fn)(void *ctx, const gi_jrec *r, gi_error *err), void *ctx,
-                     size_t *valid, gi_error *err);
+                     size_t *valid, size_t *skipped, gi_error *err);
 
 typedef struct gi_journal {
     int fd;
@@ -95,9 +100,9 @@ typedef struct gi_journal {
 } gi_journal;
 
 /* Opens (creating if needed) the journal at path and replays it through fn.
- * A torn or damaged tail is reported with gi_warn; the damaged file is kept
- * as <path>.damaged-<unix time> and the caller is expected to rewrite. Sets
- * *damaged to 1 in that case. */
+ * A torn or damaged tail, or damaged records skipped, are reported with
+ * gi_warn; the damaged file is kept as <path>.damaged-<unix time> and the
+ * caller is expected to rewrite. Sets *damaged to 1 in that case. */
 int gi_journal_open(gi_journal *j, const char *path,
                     int (*fn)(void *ctx, const gi_jrec *r, gi_error *err), void *ctx,
                     int *damaged, gi_error *err);

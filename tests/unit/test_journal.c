@@ -85,9 +85,9 @@ GI_TEST(test_journal_records_roundtrip)
     sample(&b, ends);
     seen s;
     memset(&s, 0, sizeof s);
-    size_t valid;
+    size_t valid, skipped;
     gi_error err;
-    GI_REQUIRE(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 0);
+    GI_REQUIRE(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0);
     GI_CHECK(s.n == 4 && valid == b.len);
     GI_CHECK(s.types[0] == GI_JREC_SUBMIT && s.types[1] == GI_JREC_CHECKPOINT &&
              s.types[2] == GI_JREC_END && s.types[3] == GI_JREC_PURGE);
@@ -135,9 +135,9 @@ GI_TEST(test_journal_end_summary)
     gi_jrec_encode(&r, &b);
     gi_jrec got;
     memset(&got, 0, sizeof got);
-    size_t valid;
+    size_t valid, skipped;
     gi_error err;
-    GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &err) == 0);
+    GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &skipped, &err) == 0);
     GI_CHECK(got.has_summary && got.started == 1.6e9 && got.tasks == 96 && got.merged == 96 &&
              got.retries == 2 && got.rays == 123456789 && got.samples == 4096 &&
              got.seconds == 12.5 && got.fraction == 1 && got.frame == 5 && got.frames == 6);
@@ -145,7 +145,8 @@ GI_TEST(test_journal_end_summary)
     b.len = head;
     r.merged = 97;
     gi_jrec_encode(&r, &b);
-    GI_CHECK(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &err) != 0 && valid == head);
+    GI_CHECK(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &skipped, &err) != 0 &&
+             valid == head);
     gi_buf_free(&b);
 }
 
@@ -160,9 +161,9 @@ GI_TEST(test_journal_every_torn_tail)
     for (size_t n = 8; n < b.len; n++) {
         seen s;
         memset(&s, 0, sizeof s);
-        size_t valid;
+        size_t valid, skipped;
         gi_error err;
-        int rc = gi_journal_parse(b.data, n, collect, &s, &valid, &err);
+        int rc = gi_journal_parse(b.data, n, collect, &s, &valid, &skipped, &err);
         int complete = 0;
         size_t want = 8;
         for (int i = 0; i < 4; i++)
@@ -183,16 +184,69 @@ GI_TEST(test_journal_damage_and_bad_header)
     gi_buf_init(&b);
     size_t ends[4];
     sample(&b, ends);
-    b.data[ends[0] + 14] ^= 1; /* a bit of the CHECKPOINT record */
+    /* A bit of the last record: a torn tail, cut there. */
+    b.data[ends[2] + 9] ^= 1;
     seen s;
     memset(&s, 0, sizeof s);
-    size_t valid;
+    size_t valid, skipped;
     gi_error err;
-    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 1);
-    GI_CHECK(s.n == 1 && valid == ends[0]);
-    GI_CHECK(strstr(err.msg, "fails its CRC") != NULL);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 1);
+    GI_CHECK(s.n == 3 && valid == ends[2] && skipped == 0);
+    GI_CHECK_MSG(strstr(err.msg, "fails its CRC") != NULL, "%s", err.msg);
+    /* Damaged records one after the other: the first is not followed by an
+     * intact one, so the tail is cut there. */
+    b.data[ends[1] + 9] ^= 1;
+    memset(&s, 0, sizeof s);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 1);
+    GI_CHECK(s.n == 2 && valid == ends[1] && skipped == 0);
+    b.data[ends[0] + 14] ^= 1;
+    memset(&s, 0, sizeof s);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 1);
+    GI_CHECK(s.n == 1 && valid == ends[0] && skipped == 0);
     b.data[3] = '2';
-    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == -1);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == -1);
+    gi_buf_free(&b);
+}
+
+/* Bit rot in the middle (an intact record right after it) loses that
+ * record only; the first record too. */
+GI_TEST(test_journal_damaged_record_in_the_middle)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    size_t ends[4];
+    sample(&b, ends);
+    size_t starts[4] = {8, ends[0], ends[1], ends[2]};
+    for (int k = 0; k < 3; k++) {
+        for (int at = 0; at < 3; at++) { /* the type, the payload, the CRC */
+            size_t byte = at == 0 ? starts[k] : at == 1 ? starts[k] + 14 : ends[k] - 1;
+            b.data[byte] ^= 0x10;
+            seen s;
+            memset(&s, 0, sizeof s);
+            size_t valid, skipped;
+            gi_error err;
+            int rc = gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err);
+            GI_CHECK_MSG(rc == 0 && skipped == 1 && s.n == 3 && valid == b.len,
+                         "record %d, byte %zu: rc %d, %zu skipped, %d read", k, byte, rc,
+                         skipped, s.n);
+            GI_CHECK(s.types[0] == (k == 0 ? GI_JREC_CHECKPOINT : GI_JREC_SUBMIT));
+            GI_CHECK(s.types[2] == GI_JREC_PURGE);
+            b.data[byte] ^= 0x10;
+        }
+    }
+    /* Through the file: kept aside, reported as damage (the caller compacts). */
+    char path[512];
+    snprintf(path, sizeof path, "%s/journal-rot", gi_test_tmpdir());
+    b.data[starts[1] + 14] ^= 1;
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(path, b.data, b.len, &err));
+    gi_journal j;
+    seen s;
+    memset(&s, 0, sizeof s);
+    int damaged;
+    GI_REQUIRE_OK(gi_journal_open(&j, path, collect, &s, &damaged, &err));
+    GI_CHECK(damaged && s.n == 3 && s.types[1] == GI_JREC_END && j.size == b.len);
+    gi_journal_close(&j);
     gi_buf_free(&b);
 }
 
@@ -253,17 +307,18 @@ GI_TEST(test_journal_retry_record_and_versions)
     gi_jrec_encode(&r, &b);
     seen s;
     memset(&s, 0, sizeof s);
-    size_t valid;
+    size_t valid, skipped;
     gi_error err;
-    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 0);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0);
     GI_CHECK(s.n == 4 && s.types[3] == GI_JREC_RETRY && s.ids[3] == 7 && valid == b.len);
     for (uint8_t v = 2; v <= 3; v++) { /* RETRY records; END summaries; this build's */
         b.data[4] = v;
         memset(&s, 0, sizeof s);
-        GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == 0 && s.n == 4);
+        GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0 &&
+                 s.n == 4);
     }
     b.data[4] = 4; /* a later build's */
-    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &err) == -1);
+    GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == -1);
     GI_CHECK_MSG(strstr(err.msg, "version 4 is not supported") != NULL, "%s", err.msg);
     gi_buf_free(&b);
 }
