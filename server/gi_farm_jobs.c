@@ -72,8 +72,10 @@ static gi_farm_job *job_new(gi_farm *f, uint64_t id)
         f->jobs = gi_xrealloc(f->jobs, f->job_cap * sizeof *f->jobs);
     }
     f->jobs[f->job_count++] = j;
+    /* Never past GI_JOB_ID_MAX: at the last id, submissions are refused
+     * (next_free_id) instead of wrapping to ids of jobs that exist. */
     if (id >= f->next_job_id)
-        f->next_job_id = id + 1;
+        f->next_job_id = id < GI_JOB_ID_MAX ? id + 1 : GI_JOB_ID_MAX;
     return j;
 }
 
@@ -519,6 +521,16 @@ static size_t unfinished_jobs(const gi_farm *f)
     return n;
 }
 
+/* The id for a new job: next_job_id, or past it while that id is taken (at
+ * the last id). 0 when none is left. */
+static uint64_t next_free_id(gi_farm *f)
+{
+    for (uint64_t id = f->next_job_id; id && id <= GI_JOB_ID_MAX; id++)
+        if (!gi_farm_job_find(f, id))
+            return id;
+    return 0;
+}
+
 gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
                                 gi_manifest *manifest, uint32_t priority, gi_error *err)
 {
@@ -556,11 +568,15 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
         else
             e->size = size;
     }
+    uint64_t id = rc ? 0 : next_free_id(f);
+    if (rc == 0 && !id)
+        rc = gi_fail(err, GI_ENOMEM, "the farm has no job id left (the last is %llu): "
+                     "set up a new state directory", (unsigned long long)GI_JOB_ID_MAX);
     if (rc) {
         gi_job_free(&parsed);
         return NULL;
     }
-    gi_farm_job *j = job_new(f, f->next_job_id);
+    gi_farm_job *j = job_new(f, id);
     j->priority = priority;
     j->submitted = gi_farm_wallnow();
     j->file = gi_xstrdup(file);

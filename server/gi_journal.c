@@ -104,6 +104,10 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
     gi_reader rd;
     gi_reader_init(&rd, p, n, "journal record");
     gi_jrec_init(r, (gi_jrec_type)type, gi_get_u64(&rd));
+    /* Ids are JSON numbers in the API, and the next id is one more. */
+    if (!rd.failed && (r->job_id < 1 || r->job_id > GI_JOB_ID_MAX))
+        return gi_fail(err, GI_EPROTO, "journal record: job id %llu out of range",
+                       (unsigned long long)r->job_id);
     switch (type) {
     case GI_JREC_SUBMIT:
         r->priority = gi_get_u32(&rd);

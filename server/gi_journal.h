@@ -32,6 +32,9 @@
 #include "gi_error.h"
 
 #define GI_JOURNAL_MAX_RECORD (64u << 20) /* a SUBMIT holds a job (<= 16 MiB) and its manifest */
+/* Job ids are in [1, GI_JOB_ID_MAX]: the API's JSON numbers are exact up
+ * to 2^53. A record with another id is damage. */
+#define GI_JOB_ID_MAX ((UINT64_C(1) << 53) - 1)
 
 typedef enum gi_jrec_type {
     GI_JREC_SUBMIT = 1,

@@ -250,6 +250,43 @@ GI_TEST(test_journal_damaged_record_in_the_middle)
     gi_buf_free(&b);
 }
 
+/* Job ids are in [1, 2^53 - 1]: the API's JSON numbers, and the next id
+ * never wraps. A record with another id is damage. */
+GI_TEST(test_journal_job_id_range)
+{
+    static const struct {
+        uint64_t id;
+        int ok;
+    } cases[] = {{0, 0}, {1, 1}, {GI_JOB_ID_MAX, 1}, {GI_JOB_ID_MAX + 1, 0}, {UINT64_MAX, 0}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_buf_put(&b, "GIJ1", 4);
+        gi_buf_put_u32(&b, 3);
+        gi_jrec r;
+        gi_jrec_init(&r, GI_JREC_RETRY, cases[c].id);
+        r.when = 1.7e9;
+        gi_jrec_encode(&r, &b);
+        size_t first = b.len;
+        gi_jrec_init(&r, GI_JREC_PURGE, 5);
+        gi_jrec_encode(&r, &b);
+        seen s;
+        memset(&s, 0, sizeof s);
+        size_t valid, skipped;
+        gi_error err;
+        /* In the middle: skipped; last: a damaged tail. */
+        int rc = gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err);
+        GI_CHECK_MSG(rc == 0 && skipped == !cases[c].ok && s.n == 1 + cases[c].ok,
+                     "id %llu: rc %d, %zu skipped", (unsigned long long)cases[c].id, rc, skipped);
+        memset(&s, 0, sizeof s);
+        rc = gi_journal_parse(b.data, first, collect, &s, &valid, &skipped, &err);
+        GI_CHECK(rc == !cases[c].ok && s.n == cases[c].ok);
+        if (!cases[c].ok)
+            GI_CHECK_MSG(strstr(err.msg, "out of range") != NULL, "%s", err.msg);
+        gi_buf_free(&b);
+    }
+}
+
 GI_TEST(test_journal_file_append_replay_rewrite)
 {
     char path[512];
