@@ -446,6 +446,49 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
     return 0;
 }
 
+/* A directory name that is a job id ("17"), or 0. */
+static uint64_t dir_job_id(const char *name)
+{
+    uint64_t id = 0;
+    if (name[0] < '1' || name[0] > '9' || strlen(name) > 16)
+        return 0;
+    for (const char *c = name; *c; c++) {
+        if (*c < '0' || *c > '9')
+            return 0;
+        id = 10 * id + (uint64_t)(*c - '0');
+    }
+    return id <= GI_JOB_ID_MAX ? id : 0;
+}
+
+/* Job directories the journal does not know (it was lost, cut or damaged)
+ * keep their ids: a new job given one would adopt the old job's checkpoint
+ * and outputs. New ids start after the highest. */
+static void skip_leftover_ids(gi_farm *f)
+{
+    DIR *d = opendir(f->jobs_dir);
+    if (!d)
+        return;
+    uint64_t top = 0;
+    size_t left = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        uint64_t id = dir_job_id(e->d_name);
+        if (!id || gi_farm_job_find(f, id))
+            continue;
+        left++;
+        if (id > top)
+            top = id;
+    }
+    closedir(d);
+    if (!left)
+        return;
+    if (top >= f->next_job_id)
+        f->next_job_id = top < GI_JOB_ID_MAX ? top + 1 : GI_JOB_ID_MAX;
+    gi_warn("%s: %zu job directories the journal does not know (up to %llu; a lost or damaged "
+            "journal?): kept, not reused; new jobs start at id %llu",
+            f->jobs_dir, left, (unsigned long long)top, (unsigned long long)f->next_job_id);
+}
+
 int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
 {
     char path[4200];
@@ -453,6 +496,7 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
     int damaged;
     if (gi_journal_open(&f->journal, path, replay_one, f, &damaged, err))
         return -1;
+    skip_leftover_ids(f);
     size_t unfinished = 0;
     for (size_t i = 0; i < f->job_count; i++) {
         gi_farm_job *j = f->jobs[i];
@@ -521,13 +565,23 @@ static size_t unfinished_jobs(const gi_farm *f)
     return n;
 }
 
-/* The id for a new job: next_job_id, or past it while that id is taken (at
- * the last id). 0 when none is left. */
+/* The id for a new job: next_job_id, or past it while that id is taken (by
+ * a job, or by a directory left in jobs/ since start-up). 0 when none is
+ * left. */
 static uint64_t next_free_id(gi_farm *f)
 {
-    for (uint64_t id = f->next_job_id; id && id <= GI_JOB_ID_MAX; id++)
-        if (!gi_farm_job_find(f, id))
-            return id;
+    for (uint64_t id = f->next_job_id; id && id <= GI_JOB_ID_MAX; id++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%llu", f->jobs_dir, (unsigned long long)id);
+        struct stat st;
+        if (gi_farm_job_find(f, id))
+            continue;
+        if (lstat(path, &st) == 0) {
+            gi_warn("%s is in the way of a new job: kept, the id is skipped", path);
+            continue;
+        }
+        return id;
+    }
     return 0;
 }
 
