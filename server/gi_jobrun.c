@@ -301,9 +301,24 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
 #define CHECKPOINT_MAGIC 0x4B434947u /* "GICK" */
 /* 2: tasks carry their affinity; 3: the current frame's start (its
  * progress survives a restart); 4: a CRC-32C of everything before it at the
- * end (a damaged checkpoint used to resume into wrong outputs). Older
- * versions are still read. */
-#define CHECKPOINT_VERSION 4u
+ * end (a damaged checkpoint used to resume into wrong outputs); 5: the
+ * job's identity after the method's name (a farm that lost its journal gave
+ * a new job the id, and so the checkpoint, of an old one). Older versions
+ * are still read. */
+#define CHECKPOINT_VERSION 5u
+
+void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX])
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put_str(&b, job->text);
+    for (size_t i = 0; i < job->manifest.count; i++) {
+        gi_buf_put_str(&b, job->manifest.entries[i].name);
+        gi_buf_put_str(&b, job->manifest.entries[i].hash);
+    }
+    gi_hash_hex(b.data, b.len, out);
+    gi_buf_free(&b);
+}
 
 double gi_jobrun_checkpoint_interval(double every_s, double last_s)
 {
@@ -320,6 +335,9 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     gi_buf_put_u32(out, CHECKPOINT_MAGIC);
     gi_buf_put_u32(out, CHECKPOINT_VERSION);
     gi_buf_put_str(out, job->method->name);
+    char id[GI_HASH_HEX];
+    gi_jobrun_identity(job, id);
+    gi_buf_put_str(out, id);
     gi_buf_put_u64(out, jr->task_count);
     gi_buf_put_u64(out, jr->merge_next);
     gi_buf_put_u64(out, jr->retries);
@@ -377,6 +395,16 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
                        job->file, job->method->name, CHECKPOINT_VERSION);
     }
     free(method);
+    if (version >= 5) {
+        char want[GI_HASH_HEX];
+        gi_jobrun_identity(job, want);
+        char *id = gi_get_str(&r, GI_HASH_HEX);
+        int other = !id || strcmp(id, want) != 0;
+        free(id);
+        if (other)
+            return gi_fail(err, GI_EPROTO, "%s: a checkpoint of another job (its text or the "
+                           "files its scene reads differ)", job->file);
+    }
     uint64_t count = gi_get_u64(&r), merged = gi_get_u64(&r);
     jr->retries = gi_get_u64(&r);
     jr->stats.rays = gi_get_u64(&r);

@@ -97,13 +97,18 @@ static inline gi_jobrun_task *gi_jobrun_task_at(const gi_jobrun *jr, uint64_t id
 
 static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
 
+/* What a job's results depend on: BLAKE2b-256 (hex) of its text and of the
+ * name and hash of every file its scene read. Checkpoints carry it. */
+void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX]);
+
 /* Checkpoints. The checkpoint holds the merge position, every task not yet
  * merged (id, kind, attempt, cost, payload), the statistics, and the
  * method's state (method->save). Results received but not yet merged are
  * not in it: their tasks run again after a restore. */
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
 /* Rebuilds the run of `job` (parsed and loaded again from the same text and
- * assets) from a checkpoint, in place of gi_jobrun_start. */
+ * assets) from a checkpoint, in place of gi_jobrun_start. A checkpoint of
+ * another job (another identity, version 5 on) is refused. */
 int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err);
 /* Seconds between periodic checkpoints: every_s, or 20 times as long as the
  * last one took (serialized by the loop, then written by a thread) if that

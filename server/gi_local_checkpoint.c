@@ -25,26 +25,11 @@ char *gi_local_checkpoint_path(const gi_job *job)
     return path;
 }
 
-/* What the results depend on: the job's text and the bytes of every file
- * its scene read (by their hashes). */
-static void identity(const gi_job *job, char out[GI_HASH_HEX])
-{
-    gi_buf b;
-    gi_buf_init(&b);
-    gi_buf_put_str(&b, job->text);
-    for (size_t i = 0; i < job->manifest.count; i++) {
-        gi_buf_put_str(&b, job->manifest.entries[i].name);
-        gi_buf_put_str(&b, job->manifest.entries[i].hash);
-    }
-    gi_hash_hex(b.data, b.len, out);
-    gi_buf_free(&b);
-}
-
 int gi_local_checkpoint_encode(const gi_jobrun *jr, const char *batch_root, gi_buf *out,
                                gi_error *err)
 {
     char id[GI_HASH_HEX];
-    identity(jr->job, id);
+    gi_jobrun_identity(jr->job, id);
     gi_buf_put_u32(out, LOCAL_CHECKPOINT_MAGIC);
     gi_buf_put_u32(out, LOCAL_CHECKPOINT_VERSION);
     gi_buf_put_str(out, id);
@@ -108,7 +93,7 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
     gi_reader r;
     char *id, *root;
     char want[GI_HASH_HEX];
-    identity(job, want);
+    gi_jobrun_identity(job, want);
     int rc = 0;
     if (read_header(b.data, b.len, path, &r, &id, &root))
         rc = gi_fail(err, GI_EINVAL,

@@ -4,9 +4,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_crc32c.h"
 #include "gi_jobrun.h"
 #include "gi_rng.h"
 #include "gi_test.h"
+
+#define HASH_A "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"
+#define HASH_B "bbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbb"
 
 #define FAKE_TASKS 40
 
@@ -303,6 +307,58 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     }
     memset(&job, 0, sizeof job);
     job.method = &fake_method;
+    GI_CHECK_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_buf_free(&ck);
+}
+
+/* A checkpoint carries its job's identity (version 5): a job of other text
+ * or other files does not resume it (a farm that lost its journal gave a
+ * new job an old job's id, and its checkpoint); version 4, without the
+ * identity, still restores. */
+GI_TEST(test_jobrun_checkpoint_of_another_job_is_refused)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    job.text = gi_xstrdup("{\"seed\": 1}");
+    gi_manifest_put(&job.manifest, "scene.json", HASH_A, 10);
+    drive(&jr, 20);
+    gi_buf ck;
+    gi_buf_init(&ck);
+    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    static const struct {
+        const char *text, *hash;
+        int ok;
+    } cases[] = {{"{\"seed\": 1}", HASH_A, 1}, {"{\"seed\": 2}", HASH_A, 0},
+                 {"{\"seed\": 1}", HASH_B, 0}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        memset(&job, 0, sizeof job);
+        job.method = &fake_method;
+        job.text = gi_xstrdup(cases[c].text);
+        gi_manifest_put(&job.manifest, "scene.json", cases[c].hash, 10);
+        int rc = gi_jobrun_restore(&jr, &job, &ck, &err);
+        GI_CHECK_MSG(cases[c].ok ? rc == 0 : rc == -1 && strstr(err.msg, "another job"),
+                     "case %zu: rc %d (%s)", c, rc, rc ? err.msg : "");
+        if (rc == 0)
+            GI_CHECK(jr.merge_next > 0);
+        gi_jobrun_free(&jr);
+        gi_job_free(&job);
+    }
+    /* The same as version 4: no identity (after the method's name), its own CRC. */
+    size_t id_at = 8 + 4 + strlen(fake_method.name), id_len = 4 + GI_HASH_HEX - 1;
+    GI_REQUIRE(ck.len > id_at + id_len + 4 && gi_le_get_u32(ck.data + id_at) == GI_HASH_HEX - 1);
+    memmove(ck.data + id_at, ck.data + id_at + id_len, ck.len - id_at - id_len);
+    ck.len -= id_len;
+    gi_le_put_u32(ck.data + 4, 4);
+    gi_le_put_u32(ck.data + ck.len - 4, gi_crc32c(0, ck.data, ck.len - 4));
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    job.text = gi_xstrdup("{\"seed\": 2}");
     GI_CHECK_OK(gi_jobrun_restore(&jr, &job, &ck, &err));
     gi_jobrun_free(&jr);
     gi_job_free(&job);
