@@ -315,7 +315,11 @@ int gi_journal_open(gi_journal *j, const char *path,
         }
         if (rc > 0 || skipped) {
             char keep[4200];
-            snprintf(keep, sizeof keep, "%s.damaged-%lld", path, (long long)time(NULL));
+            long long now = (long long)time(NULL);
+            snprintf(keep, sizeof keep, "%s.damaged-%lld", path, now);
+            /* Two damaged starts in a second must not lose the first copy. */
+            for (int k = 2; access(keep, F_OK) == 0 && k < 1000; k++)
+                snprintf(keep, sizeof keep, "%s.damaged-%lld.%d", path, now, k);
             if (rc > 0)
                 gi_warn("%s: %s; the %zu bytes from there on are ignored (the file is kept as %s)",
                         path, perr.msg, data.len - valid, keep);

@@ -51,6 +51,7 @@ start_farmd "$S" "$TMP/farmd2.log" -- $OPTS $PORTS
 grep -q "record at byte 8 is torn or damaged" "$TMP/farmd2.log" || fail "the cut was not reported"
 grep -q "2 job directories the journal does not know" "$TMP/farmd2.log" ||
     fail "the job directories left were not reported"
+[ "$(ls "$S"/journal.damaged-* | wc -l)" = 2 ] || fail "a damaged journal's copy was lost"
 id=$("$GI" submit "$TMP/c.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit c"; }
 [ "$id" = 3 ] || fail "the new job got id $id, the id of a job directory left"
 wait_state 3 running 60
