@@ -839,6 +839,11 @@ int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
     gi_jrec_init(&r, GI_JREC_PURGE, j->id);
     if (gi_journal_append(&f->journal, &r, err))
         return -1;
+    /* Its files in the asset store go with it, unless another job names
+     * the same bytes: its published data first, while its own uploads
+     * (which the published data may include) still count as named, so that
+     * these go only with their grace period, below. */
+    uint64_t freed = published_release(f, j);
     remove_tree(j->dir);
     if (j->keeps_batches)
         gi_farm_sched_job_over(f, j->id); /* a failed one's were kept for a retry */
@@ -848,9 +853,7 @@ int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
             f->job_count--;
             break;
         }
-    /* Its files in the asset store go with it, unless another job names
-     * the same bytes. */
-    uint64_t freed = gi_farm_store_release(f, &j->manifest, 1) + published_release(f, j);
+    freed += gi_farm_store_release(f, &j->manifest, 1);
     gi_info("job %llu purged: %llu bytes of the asset store freed", (unsigned long long)j->id,
             (unsigned long long)freed);
     job_free(j);
