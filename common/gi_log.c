@@ -16,6 +16,22 @@ static struct {
 
 void gi_log_json(int on) { log_state.json = on; }
 
+static __thread gi_log_hook hook_fn;
+static __thread void *hook_ctx;
+static __thread int in_hook;
+
+void gi_log_hook_set(gi_log_hook fn, void *ctx)
+{
+    hook_fn = fn;
+    hook_ctx = ctx;
+}
+
+void gi_log_hook_get(gi_log_hook *fn, void **ctx)
+{
+    *fn = hook_fn;
+    *ctx = hook_ctx;
+}
+
 /* s as a JSON string (quoted) into out, cut to fit. */
 static void json_string(char *out, size_t n, const char *s)
 {
@@ -93,7 +109,8 @@ int gi_log_enabled(gi_log_level level)
 
 void gi_log(gi_log_level level, const char *fmt, ...)
 {
-    if (!gi_log_enabled(level))
+    int hooked = hook_fn && !in_hook && level <= GI_LOG_WARN;
+    if (!gi_log_enabled(level) && !hooked)
         return;
     static const char *names[] = {"error", "warning", "info", "debug"};
     char line[2048];
@@ -101,7 +118,13 @@ void gi_log(gi_log_level level, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
-    emit(names[level], line);
+    if (gi_log_enabled(level))
+        emit(names[level], line);
+    if (hooked) {
+        in_hook = 1;
+        hook_fn(hook_ctx, level, line);
+        in_hook = 0;
+    }
 }
 
 void gi_say(const char *fmt, ...)

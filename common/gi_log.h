@@ -10,6 +10,12 @@ void gi_log_init(const char *program);
 void gi_log_set_level(gi_log_level level);
 int gi_log_enabled(gi_log_level level);
 void gi_log(gi_log_level level, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* While set (on this thread), warnings and errors are also handed to fn,
+ * whatever GI_LOG says: gi-farmd sends a method's warnings about a job to
+ * that job's log. fn's own logging does not come back to it. NULL unsets. */
+typedef void (*gi_log_hook)(void *ctx, gi_log_level level, const char *msg);
+void gi_log_hook_set(gi_log_hook fn, void *ctx);
+void gi_log_hook_get(gi_log_hook *fn, void **ctx);
 /* A message for the user: "program: message". */
 void gi_say(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* JSON lines instead of text (--progress json): every log line becomes

@@ -246,6 +246,8 @@ void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why);
 void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* The same for what an operator must see: logged as a warning. */
 void gi_farm_job_warn(gi_farm_job *j, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Routes this thread's warnings to j's log as well (NULL: stop). */
+void gi_farm_job_logging(gi_farm_job *j);
 void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
                             const char *worker, const char *msg);
 /* Timers: checker deadlines and periodic checkpoints. */

@@ -137,7 +137,8 @@ static void push_log_line(gi_farm_job *j, char *line)
     }
 }
 
-static void job_log(gi_farm_job *j, int warn, const char *fmt, va_list ap)
+/* echo: also to gi-farmd's own log (a line already there is not). */
+static void job_log(gi_farm_job *j, int warn, int echo, const char *fmt, va_list ap)
 {
     char msg[1200];
     vsnprintf(msg, sizeof msg, fmt, ap);
@@ -149,10 +150,16 @@ static void job_log(gi_farm_job *j, int warn, const char *fmt, va_list ap)
     char line[1300];
     snprintf(line, sizeof line, "%s %s", stamp, msg);
     push_log_line(j, gi_xstrdup(line));
-    if (warn)
+    /* The echo must not come back through a hook routing warnings here. */
+    gi_log_hook fn;
+    void *ctx;
+    gi_log_hook_get(&fn, &ctx);
+    gi_log_hook_set(NULL, NULL);
+    if (echo && warn)
         gi_warn("job %llu: %s", (unsigned long long)j->id, msg);
-    else
+    else if (echo)
         gi_info("job %llu: %s", (unsigned long long)j->id, msg);
+    gi_log_hook_set(fn, ctx);
     /* The log file outlives restarts; the in-memory ring is its tail. */
     char path[4200];
     snprintf(path, sizeof path, "%s/log", j->dir);
@@ -167,7 +174,7 @@ void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    job_log(j, 0, fmt, ap);
+    job_log(j, 0, 1, fmt, ap);
     va_end(ap);
 }
 
@@ -175,8 +182,29 @@ void gi_farm_job_warn(gi_farm_job *j, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    job_log(j, 1, fmt, ap);
+    job_log(j, 1, 1, fmt, ap);
     va_end(ap);
+}
+
+static void job_log_line(gi_farm_job *j, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    job_log(j, 1, 0, fmt, ap);
+    va_end(ap);
+}
+
+/* gi_log_hook: a warning of the code working on a job (its method, its
+ * scene: a coarse bake, a mesh's broken normals) goes to the job's log,
+ * where whoever submitted it looks, not only to gi-farmd's. */
+static void to_job_log(void *ctx, gi_log_level level, const char *msg)
+{
+    job_log_line(ctx, "%s: %s", level == GI_LOG_ERROR ? "error" : "warning", msg);
+}
+
+void gi_farm_job_logging(gi_farm_job *j)
+{
+    gi_log_hook_set(j ? to_job_log : NULL, j);
 }
 
 void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
@@ -914,16 +942,14 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
     }
     gi_error err;
     gi_error_clear(&err);
-    if (load_for_run(f, j, &err)) {
-        gi_farm_job_fail(f, j, &err);
-        return;
-    }
-    int resumed = restore(f, j, &err);
+    gi_farm_job_logging(j);
+    int resumed = load_for_run(f, j, &err) ? -1 : restore(f, j, &err);
+    int rc = resumed < 0 ? -1 : resumed ? 0 : gi_jobrun_start(&j->jr, &j->job, &err);
+    gi_farm_job_logging(NULL);
     if (resumed < 0) {
         gi_farm_job_fail(f, j, &err);
         return;
     }
-    int rc = resumed ? 0 : gi_jobrun_start(&j->jr, &j->job, &err);
     j->loaded = 1;
     if (rc) {
         gi_farm_job_fail(f, j, &err);

@@ -487,7 +487,9 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
     size_t bytes = r.data.len;
     double m0 = j->jr.merge_seconds, f0 = j->jr.finish_seconds;
     uint64_t b0 = j->jr.merged_bytes;
+    gi_farm_job_logging(j); /* the merge's and finish's warnings */
     gi_jobrun_complete(&j->jr, l.task_id, l.attempt, &r.data, &r.stats);
+    gi_farm_job_logging(NULL);
     gi_buf_free(&r.data);
     double dm = j->jr.merge_seconds - m0, df = j->jr.finish_seconds - f0;
     uint64_t db = j->jr.merged_bytes - b0;

@@ -1,7 +1,8 @@
 # The coordinator's asset store shrinks: a purged job's uploads go with it
 # unless another job names the same bytes (or they were uploaded or named
 # too recently: a job may be on its way), and data a job published for its
-# tasks goes when the job is done.
+# tasks goes when the job is done. (And a method's warnings reach the job's
+# log.)
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -31,6 +32,9 @@ backdate() { find "$TMP/state/assets" -type f -exec touch -d '2 hours ago' {} +;
 
 a=$(run "$TMP/pt.json")
 b=$(run "$TMP/detp.json")
+# A method's warning about a job reaches the job's log (detp's coarse discs).
+api "/api/v1/jobs/$b" | grep -q "warning: detp: detp: the discs' radius is .*: a coarse bake" ||
+    { api "/api/v1/jobs/$b"; fail "the method's warning is not in the job's log"; }
 # The scene is the only upload (both jobs name it); b's published data is gone.
 [ "$(store_files)" = 1 ] || { find "$TMP/state/assets" -type f; fail "store after two jobs"; }
 bytes=$(metric gi_farm_asset_store_bytes)
