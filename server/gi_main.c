@@ -13,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "gi_args.h"
 #include "gi_blas_threads.h"
 #include "gi_client.h"
@@ -29,7 +31,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
             "                          [--checkpoint S] [--resume]\n"
-            "       gi validate JOB.json\n"
+            "       gi validate JOB.json | SCENE\n"
             "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images]\n"
             "                 [--workers N] [--threads N]\n"
             "       gi methods\n"
@@ -42,7 +44,8 @@ static void usage(FILE *out)
             "          A checkpoint, DIR/.NAME.checkpoint, is written when the render is\n"
             "          stopped and every S seconds (30; 0: only then); --resume continues it\n"
             "          (an animation's photon batches are kept under $TMPDIR for it)\n"
-            "validate  checks a job and its scene without rendering\n"
+            "validate  checks a job and its scene without rendering (or a scene alone: a scene\n"
+            "          JSON, OBJ, PLY or glTF file)\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
             "          (in DIR): PLY and report per emission set; --images renders the camera\n"
             "methods   lists the rendering methods\n"
@@ -209,12 +212,56 @@ static int cmd_render(int argc, char **argv)
     return status;
 }
 
+/* A scene rather than a job: a bare mesh file, or JSON with "objects". */
+static int is_scene_file(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (!dot || strcmp(dot, ".json") != 0)
+        return 1;
+    gi_buf b;
+    gi_buf_init(&b);
+    int scene = 0;
+    if (gi_read_file(path, (size_t)64 << 20, &b, NULL) == 0) {
+        cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
+        scene = cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "objects") &&
+                !cJSON_GetObjectItemCaseSensitive(doc, "method");
+        cJSON_Delete(doc);
+    }
+    gi_buf_free(&b);
+    return scene;
+}
+
+/* gi validate SCENE: the scene alone, as every method loads it. */
+static int validate_scene(const char *path)
+{
+    char *dir = gi_dirname(path);
+    gi_dir_source ds;
+    gi_dir_source_init(&ds, dir);
+    gi_asset_source src = gi_dir_source_as_source(&ds);
+    const char *slash = strrchr(path, '/');
+    gi_scene s;
+    gi_error err;
+    int rc = gi_scene_load(&src, slash ? slash + 1 : path, &s, &err);
+    if (rc) {
+        fprintf(stderr, "gi: %s\n", err.msg);
+    } else {
+        printf("%s: ok (scene: %u objects, %u triangles, %u emissive)\n", path, s.object_count,
+               s.triangle_count, s.light_count);
+        gi_scene_free(&s);
+    }
+    gi_dir_source_free(&ds);
+    free(dir);
+    return rc ? gi_error_exit_status(&err) : 0;
+}
+
 static int cmd_validate(int argc, char **argv)
 {
     if (argc != 3) {
         usage(stderr);
         return 2;
     }
+    if (is_scene_file(argv[2]))
+        return validate_scene(argv[2]);
     gi_error err;
     gi_job job;
     int rc = gi_job_load(argv[2], &job, &err);

@@ -1,4 +1,4 @@
-# The command line: validate, methods, --help, JSON progress, the summary, a bare
+# The command line: validate (a job, a scene alone), methods, --help, JSON progress, the summary, a bare
 # OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, and an
 # interrupted render leaving no output.
 . "$(dirname "$0")/lib.sh"
@@ -10,6 +10,18 @@ JOB
 "$GI" validate "$TMP/obj.json" >"$TMP/validate.txt" || fail "validate"
 grep -q "ok (pt, scene two_materials.obj: 1 objects, 3 triangles, 1 emissive)" "$TMP/validate.txt" ||
     { cat "$TMP/validate.txt"; fail "validate output"; }
+# A scene alone: a bare mesh, a scene JSON; a bad one is refused (exit 2).
+"$GI" validate "$TMP/two_materials.obj" | grep -q "two_materials.obj: ok (scene: 1 objects, 3 triangles, 1 emissive)" ||
+    fail "validate a bare mesh"
+"$GI" validate "$SRC/scenes/cornell-box/scene.json" | grep -q "ok (scene: 8 objects, 32 triangles, 2 emissive)" ||
+    fail "validate a scene"
+printf '{"objects": [{"name": "a", "material": "x", "quad": {"size": [1, 1]}}]}' >"$TMP/bad-scene.json"
+set +e
+"$GI" validate "$TMP/bad-scene.json" 2>"$TMP/bad-scene.log"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q 'material "x" is not defined' "$TMP/bad-scene.log" ||
+    { cat "$TMP/bad-scene.log"; fail "a bad scene: exit $rc"; }
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
