@@ -257,7 +257,7 @@ int gi_mkdirs(const char *dir, gi_error *err)
             continue;
         *s = '\0';
         if (mkdir(p, 0755) != 0 && errno != EEXIST) {
-            gi_fail(err, GI_EIO, "%s: mkdir: %s", p, strerror(errno));
+            gi_fail(err, gi_disk_errcode(errno), "%s: mkdir: %s", p, strerror(errno));
             free(p);
             return -1;
         }
@@ -265,7 +265,7 @@ int gi_mkdirs(const char *dir, gi_error *err)
     }
     int rc = 0;
     if (*p && mkdir(p, 0755) != 0 && errno != EEXIST)
-        rc = gi_fail(err, GI_EIO, "%s: mkdir: %s", p, strerror(errno));
+        rc = gi_fail(err, gi_disk_errcode(errno), "%s: mkdir: %s", p, strerror(errno));
     free(p);
     return rc;
 }

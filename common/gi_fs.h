@@ -46,7 +46,7 @@ void gi_fs_walk_fanout(const char *dir,
                                   const struct stat *st),
                        void *ctx);
 
-/* mkdir -p. */
+/* mkdir -p; a full or read-only disk is GI_EHOST (gi_disk_errcode). */
 int gi_mkdirs(const char *dir, gi_error *err);
 /* An output directory made (mkdir -p) and proved writable by creating and
  * removing a file in it, so that a render finds out before it runs, not

@@ -7,6 +7,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 static struct {
     const char *program;
     gi_log_level level;
@@ -32,26 +34,6 @@ void gi_log_hook_get(gi_log_hook *fn, void **ctx)
     *ctx = hook_ctx;
 }
 
-/* s as a JSON string (quoted) into out, cut to fit. */
-static void json_string(char *out, size_t n, const char *s)
-{
-    size_t k = 0;
-    out[k++] = '"';
-    for (; *s && k + 8 < n; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') {
-            out[k++] = '\\';
-            out[k++] = (char)c;
-        } else if (c < 0x20) {
-            k += (size_t)snprintf(out + k, n - k, "\\u%04x", c);
-        } else {
-            out[k++] = (char)c;
-        }
-    }
-    out[k++] = '"';
-    out[k] = '\0';
-}
-
 /* One line out: text, or the JSON event (level NULL: a message). */
 static void emit(const char *level, const char *text)
 {
@@ -62,16 +44,20 @@ static void emit(const char *level, const char *text)
             fprintf(stderr, "%s: %s\n", log_state.program, text);
         return;
     }
-    char prog[256], msg[8192];
-    json_string(prog, sizeof prog, log_state.program);
-    json_string(msg, sizeof msg, text);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "event", level ? "log" : "message");
     if (level)
-        fprintf(stderr, "{\"event\":\"log\",\"level\":\"%s\",\"program\":%s,\"pid\":%ld,"
-                        "\"message\":%s}\n",
-                level, prog, (long)getpid(), msg);
-    else
-        fprintf(stderr, "{\"event\":\"message\",\"program\":%s,\"message\":%s}\n", prog, msg);
+        cJSON_AddStringToObject(o, "level", level);
+    cJSON_AddStringToObject(o, "program", log_state.program);
+    if (level)
+        cJSON_AddNumberToObject(o, "pid", (double)getpid());
+    cJSON_AddStringToObject(o, "message", text);
+    char *line = cJSON_PrintUnformatted(o);
+    if (line)
+        fprintf(stderr, "%s\n", line);
     fflush(stderr);
+    cJSON_free(line);
+    cJSON_Delete(o);
 }
 
 static void log_read_env(void)

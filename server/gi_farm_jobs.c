@@ -1056,10 +1056,24 @@ static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why)
 /* The checkpoint being written is in place (written) or not: the data it
  * needs from the store becomes the job's published set, and what only the
  * checkpoint before needed goes; else what it alone stored goes. */
+static int same_hashes(const gi_manifest *a, const gi_manifest *b)
+{
+    if (a->count != b->count)
+        return 0;
+    for (size_t i = 0; i < a->count; i++)
+        if (!gi_manifest_has_hash(b, a->entries[i].hash))
+            return 0;
+    return 1;
+}
+
 static void checkpoint_published(gi_farm *f, gi_farm_job *j, int written)
 {
     gi_manifest gone = j->ckpt_w_published;
     gi_manifest_init(&j->ckpt_w_published);
+    if (written && same_hashes(&gone, &j->published)) {
+        gi_manifest_free(&gone); /* most checkpoints: no file to sync, nothing to free */
+        return;
+    }
     gi_error err;
     if (written && published_save(j, &gone, &err) != 0) {
         gi_warn("job %llu: %s (the asset store keeps the data of older checkpoints)",

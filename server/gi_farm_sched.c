@@ -430,6 +430,16 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
     gi_farm_job_settle(f, j);
 }
 
+/* A worker's FAIL, or a result its method refused: the provisional charge
+ * goes back, the host's failures count, the task fails. */
+static void answer_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l,
+                          const gi_error *e)
+{
+    charge(j, -l->est_s);
+    host_failure(f, c, e);
+    task_failed(f, c, j, l, e);
+}
+
 /* The lease a RESULT or FAIL answers, taken from the connection, and its
  * running job (NULL if the job has ended). Returns 0, or -1 when the
  * connection does not hold that lease: the answer is late (counted). */
@@ -461,11 +471,8 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         return;
     }
     if (gi_jobrun_check_result(&j->jr, l.task_id, &r.data, &err)) {
-        /* A worker's wrong answer: its task fails, the host's failures count. */
-        gi_buf_free(&r.data);
-        charge(j, -l.est_s);
-        host_failure(f, c, &err);
-        task_failed(f, c, j, &l, &err);
+        gi_buf_free(&r.data); /* a wrong answer: as if the worker had failed it */
+        answer_failed(f, c, j, &l, &err);
         return;
     }
     if (c->host) {
@@ -518,9 +525,7 @@ void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
     gi_farm_job *j;
     if (answered(f, c, "failure", m.job_id, m.task_id, m.attempt, &l, &j) || !j)
         return;
-    charge(j, -l.est_s);
-    host_failure(f, c, &m.error);
-    task_failed(f, c, j, &l, &m.error);
+    answer_failed(f, c, j, &l, &m.error);
 }
 
 void gi_farm_sched_heartbeat(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *hb)

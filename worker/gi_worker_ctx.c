@@ -1,7 +1,6 @@
 /* gi_worker_ctx: loading a job in a worker process and running its tasks. */
 #include "gi_worker_ctx.h"
 
-#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -75,11 +74,8 @@ int gi_worker_batch_dir(gi_worker_ctx *ctx, const char **dir, gi_error *err)
     /* Children race to create it: mkdir -p takes EEXIST as success. Every
      * time: the host removes it when the job ends, and the same job may
      * come back (a retry, an id the coordinator gave again). */
-    if (gi_mkdirs(ctx->batch_dir, err)) {
-        if (err) /* gi_mkdirs leaves mkdir's errno: a full disk is the host's */
-            err->code = gi_disk_errcode(errno);
+    if (gi_mkdirs(ctx->batch_dir, err)) /* GI_EHOST on a full disk: the host's */
         return gi_error_prefix(err, "batch directory");
-    }
     *dir = ctx->batch_dir;
     return 0;
 }

@@ -148,6 +148,25 @@ static void read_timing(gi_reader *r, double *seconds, uint64_t *rays)
     *rays += gi_get_u64(r);
 }
 
+/* An image tile's task and result: its tile, its timing (into *seconds and
+ * *rays) and its pixels, which point into result. */
+static int tile_result(const gi_job *job, const gi_task *t, const gi_buf *result, gi_tile *tile,
+                       double *seconds, uint64_t *rays, gi_buf *px, gi_error *err)
+{
+    gi_reader pr;
+    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
+    if (gi_tile_read(&pr, job->width, job->height, tile, err))
+        return -1;
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp tile result");
+    read_timing(&r, seconds, rays);
+    if (r.failed)
+        return gi_fail(err, GI_EPROTO, "detp tile %llu: truncated result",
+                       (unsigned long long)t->id);
+    *px = (gi_buf){(uint8_t *)r.p, r.left, r.left};
+    return 0;
+}
+
 /* The [a, b) range of a visibility or reference task's payload. */
 static int merge_range(const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim, gi_error *err)
 {
@@ -208,16 +227,10 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
         return detp_anim_merge(st, t, result, err);
     case DETP_TASK_TILE:
     case DETP_TASK_ANIM_TILE: {
-        gi_reader pr;
-        gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
         gi_tile tile;
-        if (gi_tile_read(&pr, job->width, job->height, &tile, err))
+        gi_buf px;
+        if (tile_result(job, t, result, &tile, &st->sec_image, &st->rays_image, &px, err))
             return -1;
-        read_timing(&r, &st->sec_image, &st->rays_image);
-        if (r.failed)
-            return gi_fail(err, GI_EPROTO, "detp tile %llu: truncated result",
-                           (unsigned long long)t->id);
-        gi_buf px = {(uint8_t *)r.p, r.left, r.left};
         return gi_tile_merge(&st->img, &tile, &px, err);
     }
     }
@@ -318,15 +331,13 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
 {
     if (t->kind != DETP_TASK_TILE && t->kind != DETP_TASK_ANIM_TILE)
         return 0;
-    gi_reader pr;
-    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
     gi_tile tile;
-    if (gi_tile_read(&pr, job->width, job->height, &tile, err))
+    gi_buf px;
+    double seconds = 0;
+    uint64_t rays = 0;
+    if (tile_result(job, t, result, &tile, &seconds, &rays, &px, err))
         return -1;
-    const size_t timing = 16; /* seconds and rays, before the pixels */
-    if (result->len < timing)
-        return gi_fail(err, GI_EPROTO, "truncated");
-    return gi_tile_check_finite(&tile, result->data + timing, result->len - timing, err);
+    return gi_tile_check_finite(&tile, px.data, px.len, err);
 }
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
