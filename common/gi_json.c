@@ -347,3 +347,13 @@ int gi_jv_member_array(gi_jv *v, const cJSON *obj, const char *path, const char 
     *out = item;
     return 0;
 }
+
+void gi_json_print_line(FILE *out, cJSON *o)
+{
+    char *text = cJSON_PrintUnformatted(o);
+    if (text)
+        fprintf(out, "%s\n", text);
+    fflush(out);
+    cJSON_free(text);
+    cJSON_Delete(o);
+}

@@ -9,6 +9,7 @@
 #define GI_JSON_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #include <cjson/cJSON.h>
 
@@ -19,6 +20,10 @@ typedef struct gi_jv {
     const char *file; /* named in every message */
     gi_error *err;
 } gi_jv;
+
+/* o as one line of JSON on out (flushed: a program reads it as it comes);
+ * takes o over. */
+void gi_json_print_line(FILE *out, cJSON *o);
 
 /* Parses text (not necessarily NUL-terminated) and reports the line and
  * column of a syntax error. The root must be an object. */

@@ -7,7 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include <cjson/cJSON.h>
+#include "gi_json.h"
 
 static struct {
     const char *program;
@@ -52,12 +52,7 @@ static void emit(const char *level, const char *text)
     if (level)
         cJSON_AddNumberToObject(o, "pid", (double)getpid());
     cJSON_AddStringToObject(o, "message", text);
-    char *line = cJSON_PrintUnformatted(o);
-    if (line)
-        fprintf(stderr, "%s\n", line);
-    fflush(stderr);
-    cJSON_free(line);
-    cJSON_Delete(o);
+    gi_json_print_line(stderr, o);
 }
 
 static void log_read_env(void)

@@ -201,16 +201,6 @@ void gi_progress_end(gi_progress *p)
     }
 }
 
-static void print_event(FILE *out, cJSON *o)
-{
-    char *text = cJSON_PrintUnformatted(o);
-    if (text)
-        fprintf(out, "%s\n", text);
-    fflush(out);
-    cJSON_free(text);
-    cJSON_Delete(o);
-}
-
 void gi_progress_json_output(FILE *out, const char *job, const char *kind, const char *path)
 {
     cJSON *o = cJSON_CreateObject();
@@ -218,7 +208,7 @@ void gi_progress_json_output(FILE *out, const char *job, const char *kind, const
     cJSON_AddStringToObject(o, "job", job);
     cJSON_AddStringToObject(o, "kind", kind);
     cJSON_AddStringToObject(o, "path", path);
-    print_event(out, o);
+    gi_json_print_line(out, o);
 }
 
 void gi_progress_json_end(FILE *out, const char *job, const char *state, double elapsed_s,
@@ -231,5 +221,5 @@ void gi_progress_json_end(FILE *out, const char *job, const char *state, double 
     cJSON_AddNumberToObject(o, "elapsed_s", floor(elapsed_s * 1000.0 + 0.5) / 1000.0);
     if (error)
         cJSON_AddStringToObject(o, "error", error);
-    print_event(out, o);
+    gi_json_print_line(out, o);
 }

@@ -9,8 +9,8 @@
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
 cornell_job "$TMP/a.json" 1 32 32 16
-cornell_job "$TMP/b.json" 5 64 48 256
-cornell_job "$TMP/c.json" 9 64 48 256
+cornell_job "$TMP/b.json" 5 64 48 1024
+cornell_job "$TMP/c.json" 9 64 48 1024
 sed -i 's/img.exr/old-a.exr/' "$TMP/a.json"
 sed -i 's/img.exr/old-b.exr/' "$TMP/b.json"
 OPTS="--heartbeat 0.2 --lease 2 --dead 10 --checkpoint 0.2"

@@ -4,11 +4,12 @@
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 need_netns
-cornell_job "$TMP/job.json" 5 96 96 384
+cornell_job "$TMP/job.json" 5 96 96 384 64
 netns_farm "gik$$" --heartbeat 0.5 --lease 5 --dead 20
 id=$($FARM_EXEC "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
 wait_merged "$id" 10
-# Kill it while it holds a lease (on a loaded machine it can be between tasks).
+# Kill it while it holds a lease (on a loaded machine it can be between tasks;
+# tasks of 64 spp a pass keep it inside one most of the time).
 n=0
 until [ "$(api /api/v1/workers | tr '{' '\n' | grep '"name":"host2"' |
     sed -n 's/.*"tasks_leased":\([0-9]*\).*/\1/p')" -gt 0 ] 2>/dev/null; do
