@@ -83,14 +83,23 @@ static char *data_dir(void)
     return gi_path_join(gi_test_srcdir(), "tests/data/meshes");
 }
 
-/* Imports tests/data/meshes/<file> through a gi_dir_source. */
+/* Imports root/file through a directory source the caller frees. */
+static int import_from(const char *root, const char *file, gi_dir_source *d, gi_mesh_data *m,
+                       gi_error *err)
+{
+    gi_dir_source_init(d, root);
+    gi_asset_source src = gi_dir_source_as_source(d);
+    gi_error_clear(err);
+    return gi_mesh_import(&src, file, m, err);
+}
+
+/* Imports tests/data/meshes/<file>. */
 static int import_data(const char *file, gi_dir_source *d, gi_mesh_data *m, gi_error *err)
 {
     char *dir = data_dir();
-    gi_dir_source_init(d, dir);
+    int rc = import_from(dir, file, d, m, err);
     free(dir);
-    gi_asset_source src = gi_dir_source_as_source(d);
-    return gi_mesh_import(&src, file, m, err);
+    return rc;
 }
 
 /* Writes bytes to <tmpdir>/<name>, creating directories. */
@@ -348,10 +357,8 @@ GI_TEST(mesh_import_ply_binary)
     write_tmp("binary.ply", b.data, b.len);
     gi_buf_free(&b);
     gi_dir_source d;
-    gi_dir_source_init(&d, gi_test_tmpdir());
-    gi_asset_source src = gi_dir_source_as_source(&d);
     gi_mesh_data m;
-    int rc = gi_mesh_import(&src, "binary.ply", &m, &err);
+    int rc = import_from(gi_test_tmpdir(), "binary.ply", &d, &m, &err);
     GI_CHECK_OK(rc);
     if (rc == 0) {
         GI_CHECK(m.vertex_count == 4);
@@ -390,10 +397,8 @@ GI_TEST(mesh_import_glb)
     write_tmp("quad.glb", glb.data, glb.len);
     gi_buf_free(&glb);
     gi_dir_source d;
-    gi_dir_source_init(&d, gi_test_tmpdir());
-    gi_asset_source src = gi_dir_source_as_source(&d);
     gi_mesh_data m;
-    int rc = gi_mesh_import(&src, "quad.glb", &m, &err);
+    int rc = import_from(gi_test_tmpdir(), "quad.glb", &d, &m, &err);
     GI_CHECK_OK(rc);
     if (rc == 0)
         check_transformed_quad(&m);
@@ -464,10 +469,8 @@ GI_TEST(mesh_import_drops_points_and_lines)
                               "f 1 2 3\nl 4 5\np 4\n";
     write_tmp("mixed.obj", obj, sizeof obj - 1);
     gi_dir_source d;
-    gi_dir_source_init(&d, gi_test_tmpdir());
-    gi_asset_source src = gi_dir_source_as_source(&d);
     gi_mesh_data m;
-    int rc = gi_mesh_import(&src, "mixed.obj", &m, &err);
+    int rc = import_from(gi_test_tmpdir(), "mixed.obj", &d, &m, &err);
     GI_CHECK_OK(rc);
     if (rc == 0) {
         GI_CHECK(m.triangle_count == 1);
@@ -486,11 +489,8 @@ static void expect_failure(const char *root, const char *file, gi_errcode code,
 {
     gi_error err;
     gi_dir_source d;
-    gi_dir_source_init(&d, root);
-    gi_asset_source src = gi_dir_source_as_source(&d);
     gi_mesh_data m;
-    gi_error_clear(&err);
-    int rc = gi_mesh_import(&src, file, &m, &err);
+    int rc = import_from(root, file, &d, &m, &err);
     GI_CHECK_MSG(rc == -1, "%s: import succeeded", file);
     if (rc == -1) {
         GI_CHECK_MSG(err.code == code, "%s: code %s, want %s (%s)", file,
@@ -589,13 +589,10 @@ GI_TEST(mesh_import_obj_face_indices_in_range)
             continue;
         }
         gi_dir_source d;
-        gi_dir_source_init(&d, gi_test_tmpdir());
-        gi_asset_source src = gi_dir_source_as_source(&d);
         gi_mesh_data m;
         gi_error err;
-        gi_error_clear(&err);
-        GI_CHECK_MSG(gi_mesh_import(&src, "refs.obj", &m, &err) == 0, "case %zu: %s", i,
-                     err.msg);
+        GI_CHECK_MSG(import_from(gi_test_tmpdir(), "refs.obj", &d, &m, &err) == 0,
+                     "case %zu: %s", i, err.msg);
         gi_mesh_data_free(&m);
         gi_dir_source_free(&d);
     }
@@ -664,12 +661,10 @@ GI_TEST(mesh_import_refuses_non_finite_points)
                                       "f 1//1 2//1 3//1\n";
     write_tmp("nan_normals.obj", nan_normals, sizeof nan_normals - 1);
     gi_dir_source d;
-    gi_dir_source_init(&d, gi_test_tmpdir());
-    gi_asset_source src = gi_dir_source_as_source(&d);
     gi_mesh_data m;
     gi_error err;
-    gi_error_clear(&err);
-    GI_CHECK_MSG(gi_mesh_import(&src, "nan_normals.obj", &m, &err) == 0, "%s", err.msg);
+    GI_CHECK_MSG(import_from(gi_test_tmpdir(), "nan_normals.obj", &d, &m, &err) == 0, "%s",
+                 err.msg);
     GI_CHECK(m.normals == NULL);
     gi_mesh_data_free(&m);
     gi_dir_source_free(&d);
