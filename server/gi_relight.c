@@ -197,8 +197,8 @@ static int relight(const relight_args *a, gi_error *err)
            "per set (slowest %.2f ms, %d thread%s); factorization loaded in %.1f ms\n",
            job.name, em.count, em.count == 1 ? "" : "s", f.n, f.k, total, total / em.count, worst,
            a->threads, a->threads == 1 ? "" : "s", t_load);
-    rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "report"),
-                              job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,
+    rc = gi_rad_relight_write(a->out, gi_job_output(&job, "ply"), gi_job_output(&job, "glb"),
+                              gi_job_output(&job, "report"), job.name, job.exposure, &info, &md, &f, &em, E, B, si, print_written,
                               NULL, err);
 done:
     free(fpath);

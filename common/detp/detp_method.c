@@ -537,7 +537,7 @@ static void detp_release(gi_job *job)
     job->state = job->params = NULL;
 }
 
-static const char *const detp_outputs[] = {"exr", "png", "ply", "bin", "json", NULL};
+static const char *const detp_outputs[] = {"exr", "png", "ply", "glb", "bin", "json", NULL};
 
 const gi_method gi_method_detp = {
     .name = "detp",

@@ -10,6 +10,7 @@
 #include "detp_method.h"
 #include "gi_fs.h"
 #include "gi_outputs.h"
+#include "gi_glb.h"
 #include "gi_ply.h"
 
 /* The binary float file: a 24-byte header - "GIVTXF32", u32 version (1),
@@ -53,6 +54,22 @@ static int write_ply(gi_job *job, const detp_vertex_data *v, gi_error *err)
                           s->indices, job->exposure, err);
     if (rc == 0)
         gi_job_note_output(job, "ply", path);
+    free(path);
+    return rc;
+}
+
+static int write_glb(gi_job *job, const detp_vertex_data *v, gi_error *err)
+{
+    const char *file = gi_job_output(job, "glb");
+    if (!file)
+        return 0;
+    const gi_scene *s = &job->scene;
+    const gi_vertex_bake bake = {s->vertex_count, s->positions, s->normals, v->radiance,
+                                 v->irradiance,   s->triangle_count, s->indices, job->exposure};
+    char *path = gi_job_output_path(job, file);
+    int rc = gi_glb_write(path, &bake, err);
+    if (rc == 0)
+        gi_job_note_output(job, "glb", path);
     free(path);
     return rc;
 }
@@ -216,7 +233,7 @@ static cJSON *report(const gi_job *job, const detp_state *st, const detp_vertex_
 int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
                        gi_error *err)
 {
-    if (write_ply(job, v, err) || write_bin(job, st, v, err))
+    if (write_ply(job, v, err) || write_glb(job, v, err) || write_bin(job, st, v, err))
         return -1;
     if (!gi_job_output(job, "json"))
         return 0;

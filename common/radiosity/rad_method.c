@@ -77,13 +77,13 @@ double gi_rad_patch_area(const gi_scene *s, uint32_t patches)
 static int check_output_names(const gi_job *job, gi_jv *v)
 {
     const gi_rad_params *p = job->params;
-    static const char *const kinds[] = {"factorization", "ply", "exr", "png", "report"};
-    gi_rad_output_file outs[5];
+    static const char *const kinds[] = {"factorization", "ply", "glb", "exr", "png", "report"};
+    gi_rad_output_file outs[6];
     int n = 0;
-    for (int k = 0; k < 5; k++) {
+    for (int k = 0; k < 6; k++) {
         const char *file = gi_job_output(job, kinds[k]);
         if (file)
-            outs[n++] = (gi_rad_output_file){kinds[k], file, NULL, k >= 1 && k <= 3};
+            outs[n++] = (gi_rad_output_file){kinds[k], file, NULL, k >= 1 && k <= 4};
     }
     char msg[512];
     if (gi_rad_outputs_distinct(outs, n, &p->emissions, msg, sizeof msg))
@@ -652,11 +652,15 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
     }
     size_t n3 = 3 * (size_t)st->f->n;
     for (uint32_t i = 0; i < st->em->count; i++) {
-        char *path = output_path(job, st, "ply", i);
-        if (path) {
-            int rc = gi_rad_ply_write(path, st->md, st->B + i * n3, job->exposure, err);
+        static const char *const vertex_kinds[] = {"ply", "glb"};
+        for (int k = 0; k < 2; k++) {
+            char *path = output_path(job, st, vertex_kinds[k], i);
+            if (!path)
+                continue;
+            int rc = gi_rad_vertex_output_write(path, vertex_kinds[k], st->md, st->B + i * n3,
+                                                job->exposure, err);
             if (rc == 0)
-                gi_job_note_output(job, "ply", path);
+                gi_job_note_output(job, vertex_kinds[k], path);
             free(path);
             if (rc)
                 return -1;
@@ -665,7 +669,7 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
             continue;
         static const char *const kinds[] = {"exr", "png"};
         for (int k = 0; k < 2; k++) {
-            path = output_path(job, st, kinds[k], i);
+            char *path = output_path(job, st, kinds[k], i);
             if (!path)
                 continue;
             int rc = k == 0 ? gi_exr_write(path, &st->images[i], err)
@@ -924,7 +928,8 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
     return gi_fail(err, GI_EPROTO, "radiosity: unknown task kind %u", t->kind);
 }
 
-static const char *const rad_outputs[] = {"exr", "png", "ply", "report", "factorization", NULL};
+static const char *const rad_outputs[] = {"exr",    "png",           "ply", "glb",
+                                           "report", "factorization", NULL};
 
 const gi_method gi_method_radiosity = {
     .name = "radiosity",

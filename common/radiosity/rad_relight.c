@@ -8,6 +8,7 @@
 
 #include "gi_clock.h"
 #include "gi_fs.h"
+#include "gi_glb.h"
 #include "gi_ply.h"
 
 void gi_rad_solve_opts_default(gi_rad_solve_opts *o)
@@ -51,16 +52,44 @@ int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
     return 0;
 }
 
-int gi_rad_ply_write(const char *path, const gi_rad_model *md, const float *B, double exposure,
-                     gi_error *err)
+/* A vertex's normal: its elements are coplanar (gi_rad_vertices shares a
+ * vertex only among them), so any one of them gives it. */
+static gi_vec3 *vertex_normals(const gi_rad_vertices *v, uint32_t n, gi_error *err)
 {
-    float *vv = gi_try_malloc(3 * (size_t)md->vertices.count * sizeof *vv, err, "PLY output");
+    gi_vec3 *nrm = gi_try_calloc(v->count, sizeof *nrm, err, "vertex normals");
+    if (!nrm)
+        return NULL;
+    for (uint32_t e = 0; e < n; e++) {
+        const uint32_t *c = &v->corner[3 * (size_t)e];
+        gi_vec3 g = gi_triangle_normal(v->positions[c[0]], v->positions[c[1]],
+                                       v->positions[c[2]]);
+        for (int k = 0; k < 3; k++)
+            if (gi_dot(nrm[c[k]], nrm[c[k]]) == 0.0f)
+                nrm[c[k]] = g;
+    }
+    for (uint32_t i = 0; i < v->count; i++) /* only on elements without area */
+        if (gi_dot(nrm[i], nrm[i]) == 0.0f)
+            nrm[i] = gi_v3(0.0f, 1.0f, 0.0f);
+    return nrm;
+}
+
+int gi_rad_vertex_output_write(const char *path, const char *kind, const gi_rad_model *md,
+                               const float *B, double exposure, gi_error *err)
+{
+    const gi_rad_vertices *vx = &md->vertices;
+    float *vv = gi_try_malloc(3 * (size_t)vx->count * sizeof *vv, err, "per-vertex output");
     if (!vv)
         return -1;
-    int rc = gi_rad_vertex_values(&md->vertices, md->n, md->area, B, vv, err);
-    if (rc == 0)
-        rc = gi_ply_write(path, md->vertices.count, md->vertices.positions, vv, md->n,
-                          md->vertices.corner, exposure, err);
+    int rc = gi_rad_vertex_values(vx, md->n, md->area, B, vv, err);
+    if (rc == 0 && strcmp(kind, "ply") == 0) {
+        rc = gi_ply_write(path, vx->count, vx->positions, vv, md->n, vx->corner, exposure, err);
+    } else if (rc == 0) {
+        gi_vec3 *nrm = vertex_normals(vx, md->n, err);
+        const gi_vertex_bake bake = {vx->count, vx->positions, nrm,        vv,
+                                     NULL,      md->n,         vx->corner, exposure};
+        rc = nrm ? gi_glb_write(path, &bake, err) : -1;
+        free(nrm);
+    }
     free(vv);
     return rc;
 }
@@ -199,34 +228,38 @@ int gi_rad_outputs_distinct(const gi_rad_output_file *outs, int count, const gi_
     return rc;
 }
 
-int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
-                         double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
+int gi_rad_relight_write(const char *dir, const char *ply, const char *glb, const char *report,
+                         const char *job, double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
                          const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
                          const float *B, const gi_rad_solve_info *si,
                          void (*note)(void *user, const char *kind, const char *path), void *user,
                          gi_error *err)
 {
-    gi_rad_output_file outs[2];
+    gi_rad_output_file outs[3];
     int count = 0;
     if (ply)
         outs[count++] = (gi_rad_output_file){"ply", ply, NULL, 1};
+    if (glb)
+        outs[count++] = (gi_rad_output_file){"glb", glb, NULL, 1};
     if (report)
         outs[count++] = (gi_rad_output_file){"report", report, "relight", 0};
     char msg[512];
     if (gi_rad_outputs_distinct(outs, count, em, msg, sizeof msg))
         return gi_fail(err, GI_EINVAL, "%s: %s", dir, msg);
     size_t n3 = 3 * (size_t)f->n;
-    for (uint32_t i = 0; ply && i < em->count; i++) {
-        char *name = gi_rad_output_name(ply, em->items[i].name);
-        char *path = gi_path_join(dir, name);
-        int rc = gi_rad_ply_write(path, md, B + i * n3, exposure, err);
-        if (rc == 0 && note)
-            note(user, "ply", path);
-        free(name);
-        free(path);
-        if (rc)
-            return -1;
-    }
+    for (int o = 0; o < count; o++)
+        for (uint32_t i = 0; outs[o].per_set && i < em->count; i++) {
+            char *name = gi_rad_output_name(outs[o].file, em->items[i].name);
+            char *path = gi_path_join(dir, name);
+            int rc = gi_rad_vertex_output_write(path, outs[o].kind, md, B + i * n3, exposure,
+                                                err);
+            if (rc == 0 && note)
+                note(user, outs[o].kind, path);
+            free(name);
+            free(path);
+            if (rc)
+                return -1;
+        }
     if (!report)
         return 0;
     cJSON *doc = gi_rad_report_new(info, f);

@@ -45,9 +45,10 @@ int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
                            const gi_rad_emissions *em, const gi_rad_solve_opts *o, float *E,
                            float *B, gi_rad_solve_info *info, gi_error *err);
 
-/* Per-vertex radiance of a solution (B, n x 3) as PLY. */
-int gi_rad_ply_write(const char *path, const gi_rad_model *md, const float *B, double exposure,
-                     gi_error *err);
+/* Per-vertex radiance of a solution (B, n x 3) as the per-vertex output
+ * `kind`: "ply" or "glb". */
+int gi_rad_vertex_output_write(const char *path, const char *kind, const gi_rad_model *md,
+                               const float *B, double exposure, gi_error *err);
 
 /* Summary of one solution for a JSON report: name, emitted flux, radiosity
  * statistics, solver figures. */
@@ -64,11 +65,13 @@ void gi_rad_report_add_solutions(cJSON *doc, const gi_rad_model *md, const gi_ra
 int gi_rad_write_json(const char *path, const cJSON *doc, gi_error *err);
 
 /* The outputs of a relight, into `dir`: per set, "<ply stem>-<set>.ply"
- * (when ply is not NULL), and one report "<report stem>-relight.json"
- * (when report is not NULL; `job` names the job in it). note() (may be
- * NULL) hears of every file written. For `gi relight`. Refuses (GI_EINVAL,
- * nothing written) names that land on one file (gi_rad_outputs_distinct). */
-int gi_rad_relight_write(const char *dir, const char *ply, const char *report, const char *job,
+ * and "<glb stem>-<set>.glb" (when ply, glb are not NULL), and one report
+ * "<report stem>-relight.json" (when report is not NULL; `job` names the job
+ * in it). note() (may be NULL) hears of every file written. For `gi relight`.
+ * Refuses (GI_EINVAL, nothing written) names that land on one file
+ * (gi_rad_outputs_distinct). */
+int gi_rad_relight_write(const char *dir, const char *ply, const char *glb, const char *report,
+                         const char *job,
                          double exposure, const gi_rad_file_info *info, const gi_rad_model *md,
                          const gi_rad_factor *f, const gi_rad_emissions *em, const float *E,
                          const float *B, const gi_rad_solve_info *si,

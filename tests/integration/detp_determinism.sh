@@ -1,5 +1,5 @@
 # detp: the same job with 1, 2 and 3 pool workers gives byte-identical
-# outputs (image, PLY, binary vertex file); pool children killed in the
+# outputs (image, PLY, glTF, binary vertex file); pool children killed in the
 # middle of photon batches and image tiles (fault hook, and a real SIGKILL
 # from outside) change nothing.
 . "$(dirname "$0")/lib.sh"
@@ -10,14 +10,15 @@ write_job "$TMP/job.json" <<JOB
   "seed": 7,
   "image": {"width": 48, "height": 40},
   "detp": {"photons": 60000, "batch": 5000, "subdivide": 40, "tile": 16, "image_spp": 2},
-  "outputs": {"exr": "img.exr", "ply": "v.ply", "bin": "v.bin", "json": "report.json"}
+  "outputs": {"exr": "img.exr", "ply": "v.ply", "glb": "v.glb", "bin": "v.bin",
+              "json": "report.json"}
 }
 JOB
 for w in 1 2 3; do
     "$GI" render "$TMP/job.json" --workers $w --out "$TMP/w$w" --progress none >"$TMP/w$w.log" 2>&1 ||
         { cat "$TMP/w$w.log"; fail "render with $w workers"; }
 done
-for f in img.exr v.ply v.bin; do
+for f in img.exr v.ply v.glb v.bin; do
     cmp "$TMP/w1/$f" "$TMP/w2/$f" || fail "$f: 1 vs 2 workers differ"
     cmp "$TMP/w1/$f" "$TMP/w3/$f" || fail "$f: 1 vs 3 workers differ"
 done
@@ -32,7 +33,7 @@ if cmp -s "$TMP/w1/v.bin" "$TMP/s8/v.bin"; then fail "seed does not change the r
 GI_FAULT_CRASH_TASK="2,9:0,14:0,14:1" "$GI" render "$TMP/job.json" --workers 2 --out "$TMP/hook" \
     --progress none >"$TMP/hook.log" 2>&1 || { cat "$TMP/hook.log"; fail "render with crashes"; }
 grep -q "4 retried (4 worker crashes)" "$TMP/hook.log" || { cat "$TMP/hook.log"; fail "crashes not reported"; }
-for f in img.exr v.ply v.bin; do
+for f in img.exr v.ply v.glb v.bin; do
     cmp "$TMP/w1/$f" "$TMP/hook/$f" || fail "$f differs after injected crashes"
 done
 
@@ -42,7 +43,7 @@ sed -e 's/"photons": 60000/"photons": 3000000/' -e 's/"batch": 5000/"batch": 100
 "$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long-ref" --progress none >/dev/null 2>&1 ||
     fail "long reference"
 render_killing_a_child "$TMP/long.json" "$TMP/long-kill" 0.4
-for f in img.exr v.ply v.bin; do
+for f in img.exr v.ply v.glb v.bin; do
     cmp "$TMP/long-ref/$f" "$TMP/long-kill/$f" || fail "$f differs after kill -9"
 done
 echo ok
