@@ -65,6 +65,7 @@ static double render(const gi_pt_tracer *tr, const gi_camera_frame *cam, int w, 
     double sum = 0;
     enum { TILE = 32 };
     gi_pt_path *paths = malloc((size_t)TILE * TILE * spp * sizeof *paths);
+    gi_pt_wavefront wf = {0};
     for (int ty = 0; ty < w; ty += TILE)
         for (int tx = 0; tx < w; tx += TILE) {
             size_t n = 0;
@@ -77,11 +78,12 @@ static double render(const gi_pt_tracer *tr, const gi_camera_frame *cam, int w, 
                         gi_vec3 d = gi_camera_dir(cam, (float)x + jx, (float)y + jy);
                         gi_pt_path_start(&paths[n++], cam->origin, d, &rng);
                     }
-            gi_pt_trace_paths(tr, paths, n);
+            gi_pt_trace_paths(tr, &wf, paths, n);
             for (size_t i = 0; i < n; i++)
                 sum += paths[i].L.x + paths[i].L.y + paths[i].L.z;
         }
     free(paths);
+    gi_pt_wavefront_free(&wf);
     return sum;
 }
 

@@ -77,11 +77,25 @@ void gi_pt_path_start(gi_pt_path *P, gi_vec3 org, gi_vec3 dir, const gi_rng *rng
 /* Handles the vertex where the path's ray hit (h): emission, next-event
  * estimation, the next ray. Returns GI_PT_SHADOW | GI_PT_CONTINUE flags. */
 int gi_pt_vertex(const gi_pt_tracer *tr, gi_pt_path *P, const gi_hit *h, gi_pt_shadow *sh);
+/* The scratch arrays of gi_pt_trace_paths, kept from one call to the next:
+ * allocated afresh for every task they were megabytes that glibc handed back
+ * to the kernel and faulted in again, page by page (~8% of a pt render). */
+typedef struct gi_pt_wavefront {
+    size_t cap;
+    uint32_t *live, *owner;
+    gi_hit *hits;
+    uint8_t *hit_ok;
+    gi_pt_shadow *sh;
+} gi_pt_wavefront; /* zero-initialized is empty */
+
+void gi_pt_wavefront_free(gi_pt_wavefront *wf);
+
 /* Advances n paths to their ends breadth first: all rays of a bounce, then
  * all shading (a batch of vertices at a time, stage by stage), then all
  * shadow rays. Same result bits as gi_pt_radiance per path; independent
- * paths give the CPU room to overlap their latencies. */
-void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n);
+ * paths give the CPU room to overlap their latencies. wf grows to n. */
+void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_wavefront *wf, gi_pt_path *paths,
+                       size_t n);
 
 void gi_pt_params_default(gi_pt_params *p);
 

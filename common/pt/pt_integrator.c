@@ -1,6 +1,7 @@
 /* pt_integrator: the path tracing estimator (see pt.h). */
 #include <float.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "gi_bsdf.h"
 #include "gi_light.h"
@@ -257,12 +258,38 @@ gi_vec3 gi_pt_irradiance(const gi_pt_tracer *tr, gi_vec3 p, gi_vec3 n, gi_rng *r
  * window, little enough to stay in the first-level cache. */
 #define PT_SHADE_BATCH 32
 
-void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n)
+/* Grows wf to hold n paths' scratch (the old contents need not survive). */
+static void wavefront_reserve(gi_pt_wavefront *wf, size_t n)
 {
-    uint32_t *live = gi_xmalloc(n * sizeof *live), *owner = gi_xmalloc(n * sizeof *owner);
-    gi_hit *hits = gi_xmalloc(n * sizeof *hits);
-    uint8_t *hit_ok = gi_xmalloc(n);
-    gi_pt_shadow *sh = gi_xmalloc(n * sizeof *sh);
+    if (n <= wf->cap)
+        return;
+    gi_pt_wavefront_free(wf);
+    wf->live = gi_xmalloc(n * sizeof *wf->live);
+    wf->owner = gi_xmalloc(n * sizeof *wf->owner);
+    wf->hits = gi_xmalloc(n * sizeof *wf->hits);
+    wf->hit_ok = gi_xmalloc(n);
+    wf->sh = gi_xmalloc(n * sizeof *wf->sh);
+    wf->cap = n;
+}
+
+void gi_pt_wavefront_free(gi_pt_wavefront *wf)
+{
+    free(wf->live);
+    free(wf->owner);
+    free(wf->hits);
+    free(wf->hit_ok);
+    free(wf->sh);
+    memset(wf, 0, sizeof *wf);
+}
+
+void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_wavefront *wf, gi_pt_path *paths,
+                       size_t n)
+{
+    wavefront_reserve(wf, n);
+    uint32_t *live = wf->live, *owner = wf->owner;
+    gi_hit *hits = wf->hits;
+    uint8_t *hit_ok = wf->hit_ok;
+    gi_pt_shadow *sh = wf->sh;
     pt_shade shade[PT_SHADE_BATCH];
     uint32_t opened[PT_SHADE_BATCH];
     size_t nlive = n;
@@ -300,9 +327,4 @@ void gi_pt_trace_paths(const gi_pt_tracer *tr, gi_pt_path *paths, size_t n)
         }
         nlive = next;
     }
-    free(live);
-    free(owner);
-    free(hits);
-    free(hit_ok);
-    free(sh);
 }

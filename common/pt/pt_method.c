@@ -121,6 +121,32 @@ static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_erro
 /* Paths advanced together in pt_run (bounds the scratch memory). */
 #define PT_WAVEFRONT 16384
 
+/* A pool process's memory for its tasks' paths, kept across tasks (in
+ * ctx->method_state): see gi_pt_wavefront. */
+typedef struct pt_worker {
+    gi_pt_path *paths; /* PT_WAVEFRONT */
+    gi_pt_wavefront wf;
+} pt_worker;
+
+static void pt_worker_free(void *state)
+{
+    pt_worker *w = state;
+    free(w->paths);
+    gi_pt_wavefront_free(&w->wf);
+    free(w);
+}
+
+static pt_worker *pt_worker_get(gi_worker_ctx *ctx)
+{
+    if (!ctx->method_state) {
+        pt_worker *w = gi_xcalloc(1, sizeof *w);
+        w->paths = gi_xmalloc(PT_WAVEFRONT * sizeof *w->paths);
+        ctx->method_state = w;
+        ctx->method_state_free = pt_worker_free;
+    }
+    return ctx->method_state;
+}
+
 static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_job *job = &ctx->job;
@@ -134,7 +160,8 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     uint32_t tw = tl.tile.x1 - tl.tile.x0, ns = tl.s1 - tl.s0;
     size_t npix = (size_t)tw * (tl.tile.y1 - tl.tile.y0), total = npix * ns;
     double *acc = gi_xcalloc(npix * PT_VALUES_PER_PIXEL, sizeof *acc);
-    gi_pt_path *paths = gi_xmalloc((total < PT_WAVEFRONT ? total : PT_WAVEFRONT) * sizeof *paths);
+    pt_worker *w = pt_worker_get(ctx);
+    gi_pt_path *paths = w->paths;
     /* Path j is sample s0 + j % ns of pixel j / ns: each pixel's samples are
      * added in sample order whatever the chunking. */
     for (size_t first = 0; first < total; first += PT_WAVEFRONT) {
@@ -149,7 +176,7 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
             gi_vec3 dir = gi_camera_dir(&cam, (float)x + jx, (float)y + jy);
             gi_pt_path_start(&paths[j], cam.origin, dir, &rng);
         }
-        gi_pt_trace_paths(&tr, paths, n);
+        gi_pt_trace_paths(&tr, &w->wf, paths, n);
         for (size_t j = 0; j < n; j++) {
             double *a = &acc[PT_VALUES_PER_PIXEL * ((first + j) / ns)];
             gi_vec3 L = paths[j].L;
@@ -162,7 +189,6 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     }
     ctx->stats.samples = total;
     gi_buf_put_f64s(result, acc, npix * PT_VALUES_PER_PIXEL);
-    free(paths);
     free(acc);
     return 0;
 }

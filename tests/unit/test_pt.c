@@ -104,7 +104,9 @@ GI_TEST(test_paths_traced_together_match_one_at_a_time_bit_for_bit)
             gi_pt_path_start(&paths[i], org, dir, &rng);
             single[i] = gi_pt_radiance(&tr, org, dir, &rng);
         }
-        gi_pt_trace_paths(&tr, paths, N);
+        gi_pt_wavefront wf = {0};
+        gi_pt_trace_paths(&tr, &wf, paths, N);
+        gi_pt_wavefront_free(&wf);
         int differ = 0, nonzero = 0;
         for (int i = 0; i < N; i++) {
             differ += memcmp(&paths[i].L, &single[i], sizeof single[i]) != 0;
