@@ -32,6 +32,12 @@ int gi_rad_strata_init(gi_rad_strata *st, uint32_t rays, gi_error *err)
     st->m = m;
     st->rays = rays;
     st->sub = gi_xmalloc((size_t)rays * 6 * sizeof *st->sub);
+    st->cell = gi_xmalloc((size_t)rays * 2 * sizeof *st->cell);
+    for (uint32_t c = 0; c < rays; c++) {
+        st->cell[2 * c] = (float)(c % m);
+        st->cell[2 * c + 1] = (float)(c / m);
+    }
+    st->inv_m = 1.0f / (float)m;
     /* Cell (i, j) of the (s, t) grid with i + j <= m - 1 holds a lower
      * triangle, and an upper one when i + j <= m - 2: m^2 in all. */
     float inv = 1.0f / (float)m;
@@ -55,6 +61,7 @@ int gi_rad_strata_init(gi_rad_strata *st, uint32_t rays, gi_error *err)
 void gi_rad_strata_free(gi_rad_strata *st)
 {
     free(st->sub);
+    free(st->cell);
     memset(st, 0, sizeof *st);
 }
 
@@ -101,9 +108,9 @@ void gi_rad_element_ray(const gi_rad_element_rays *er, uint32_t j, gi_vec3 *org,
     /* A cosine-distributed direction in direction stratum perm(j)
      * (Malley: a uniform disc point lifted to the hemisphere; unit length
      * by construction). */
-    uint32_t cell = er->perm[j];
-    float inv = 1.0f / (float)st->m, x, y;
-    gi_sample_disc(((float)(cell % st->m) + u3) * inv, ((float)(cell / st->m) + u4) * inv, &x, &y);
+    const float *cell = &st->cell[2 * (size_t)er->perm[j]];
+    float inv = st->inv_m, x, y;
+    gi_sample_disc((cell[0] + u3) * inv, (cell[1] + u4) * inv, &x, &y);
     float z = sqrtf(gi_maxf(0.0f, 1.0f - x * x - y * y));
     *dir = gi_add(gi_add(gi_scale(er->t, x), gi_scale(er->b, y)), gi_scale(er->n, z));
     *org = gi_rt_offset(p, er->n, *dir);

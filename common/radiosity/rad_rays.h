@@ -32,6 +32,10 @@
 typedef struct gi_rad_strata {
     uint32_t m, rays; /* rays = m * m */
     float *sub;       /* rays x 6: (s, t) of each point stratum's corners, in [0, 1] */
+    /* rays x 2: column and row (c % m, c / m) of direction stratum c, and
+     * 1 / m: a table instead of two divisions per ray. */
+    float *cell;
+    float inv_m;
 } gi_rad_strata;
 
 /* rays must be a perfect square in [1, GI_RAD_MAX_RAYS]. */
