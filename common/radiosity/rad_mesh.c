@@ -148,8 +148,10 @@ void gi_rad_mesh_element_corners(const gi_rad_mesh *m, const gi_scene *s, uint32
 }
 
 /* One step down: the child containing the point, and the point's
- * coordinates in it (the children's corners are those of lattice_child). */
-static unsigned descend(double b[3])
+ * coordinates in it (the children's corners are those of lattice_child).
+ * Inlined so that b stays in registers: as a call, b went through memory at
+ * every level of every form-factor ray. */
+static inline __attribute__((always_inline)) unsigned descend(double b[3])
 {
     if (b[0] >= 0.5) {
         b[0] = 2.0 * b[0] - 1.0, b[1] *= 2.0, b[2] *= 2.0;
