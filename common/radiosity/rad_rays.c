@@ -79,6 +79,7 @@ void gi_rad_element_rays_init(gi_rad_element_rays *er, const gi_rad_strata *st,
     gi_onb(er->n, &er->t, &er->b);
     er->seed = seed;
     er->stream = RAD_STREAM_TAG | e;
+    er->stream_key = gi_rng_stream_key(gi_rng_seed_key(seed), er->stream);
     er->perm = perm;
     for (uint32_t j = 0; j < st->rays; j++)
         perm[j] = j;
@@ -96,7 +97,7 @@ void gi_rad_element_ray(const gi_rad_element_rays *er, uint32_t j, gi_vec3 *org,
 {
     const gi_rad_strata *st = er->st;
     gi_rng rng;
-    gi_rng_init(&rng, er->seed, er->stream, j);
+    gi_rng_init_stream(&rng, er->stream_key, j); /* = gi_rng_init(seed, stream, j) */
     float u1 = gi_rng_float(&rng), u2 = gi_rng_float(&rng);
     float u3 = gi_rng_float(&rng), u4 = gi_rng_float(&rng);
     /* A uniform point in point stratum j (square-root map), in (s, t). */

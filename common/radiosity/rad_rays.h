@@ -49,6 +49,7 @@ typedef struct gi_rad_element_rays {
     gi_vec3 p0, e1, e2; /* corner a, b - a, c - a */
     gi_vec3 n, t, b;    /* unit front normal and a basis around it */
     uint64_t seed, stream;
+    uint64_t stream_key; /* gi_rng_stream_key of the two: rays start from it */
     uint32_t *perm; /* rays entries, caller's storage */
 } gi_rad_element_rays;
 
