@@ -12,6 +12,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "gi_log.h"
+
 int gi_open_regular(const char *path, int flags, struct stat *st, gi_error *err)
 {
     /* O_NONBLOCK: opening a FIFO to read waits for a writer, forever. */
@@ -216,6 +218,37 @@ int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_erro
     int rc = gi_commit_file(tmp, path, err);
     free(tmp);
     return rc;
+}
+
+int gi_append_whole(const char *path, const void *data, size_t len, gi_error *err)
+{
+    int fd = open(path, O_WRONLY | O_APPEND | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0) {
+        int e = errno;
+        if (fd >= 0)
+            close(fd);
+        return gi_fail(err, gi_disk_errcode(e), "%s: %s", path, strerror(e));
+    }
+    const unsigned char *p = data;
+    size_t left = len;
+    while (left) {
+        ssize_t n = write(fd, p, left);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            int e = n < 0 ? errno : ENOSPC;
+            if (ftruncate(fd, st.st_size) != 0)
+                gi_warn("%s: cannot cut off a short write: %s", path, strerror(errno));
+            close(fd);
+            return gi_fail(err, gi_disk_errcode(e), "%s: write: %s", path, strerror(e));
+        }
+        p += n;
+        left -= (size_t)n;
+    }
+    if (close(fd) != 0)
+        return gi_fail(err, gi_disk_errcode(errno), "%s: close: %s", path, strerror(errno));
+    return 0;
 }
 
 void gi_fs_walk_fanout(const char *dir,

@@ -38,6 +38,11 @@ int gi_temp_finish(const char *tmp, const char *path, int rc, gi_error *err);
 /* Writes bytes to path atomically (temp + fsync + rename). */
 int gi_write_file_atomic(const char *path, const void *data, size_t len, gi_error *err);
 
+/* Appends bytes to path (created if missing) whole or not at all: a write
+ * cut short (a full disk) is cut back off, so the file never ends in half
+ * a record. A full or read-only disk is GI_EHOST (gi_disk_errcode). */
+int gi_append_whole(const char *path, const void *data, size_t len, gi_error *err);
+
 /* Calls fn for every regular file one level below dir's two-character
  * subdirectories (content-addressed stores: dir/ab/abcd...). Names starting
  * with '.' are skipped. */

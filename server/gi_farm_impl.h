@@ -40,6 +40,7 @@ const char *gi_fj_state_name(gi_fj_state s);
 
 #define GI_FJ_LOG_KEEP 64    /* log lines kept in memory per job */
 #define GI_FJ_ERRORS_KEEP 32 /* task errors kept per job */
+#define GI_FJ_LOG_PENDING_MAX (256 * 1024)
 
 typedef struct gi_fj_task_error {
     double when;
@@ -116,6 +117,11 @@ typedef struct gi_farm_job {
 
     char *log[GI_FJ_LOG_KEEP];
     int log_start, log_count;
+    /* Lines not yet in <dir>/log (its disk was full), appended with the
+     * next line or tick that finds room; beyond GI_FJ_LOG_PENDING_MAX bytes,
+     * lines are only counted, and the file says how many it lacks. */
+    gi_buf log_pending;
+    uint64_t log_dropped;
     gi_fj_task_error errors[GI_FJ_ERRORS_KEEP];
     int err_start, err_count;
 } gi_farm_job;

@@ -64,6 +64,7 @@ static gi_farm_job *job_new(gi_farm *f, uint64_t id)
     gi_manifest_init(&j->published);
     gi_manifest_init(&j->ckpt_w_published);
     gi_buf_init(&j->check_msg);
+    gi_buf_init(&j->log_pending);
     size_t n = strlen(f->jobs_dir) + 32;
     j->dir = gi_xmalloc(n);
     snprintf(j->dir, n, "%s/%llu", f->jobs_dir, (unsigned long long)id);
@@ -113,6 +114,7 @@ static void job_free(gi_farm_job *j)
     gi_manifest_free(&j->published);
     gi_manifest_free(&j->ckpt_w_published);
     gi_buf_free(&j->check_msg);
+    gi_buf_free(&j->log_pending);
     for (int i = 0; i < j->log_count; i++)
         free(j->log[(j->log_start + i) % GI_FJ_LOG_KEEP]);
     free(j);
@@ -135,6 +137,26 @@ static void push_log_line(gi_farm_job *j, char *line)
     } else {
         j->log[(j->log_start + j->log_count++) % GI_FJ_LOG_KEEP] = line;
     }
+}
+
+/* Appends the lines not yet in the job's log file, if its disk has room
+ * (whole lines: a cut one is cut back off). gi-farmd's own log has them
+ * meanwhile. */
+static void log_flush(gi_farm_job *j)
+{
+    if (!j->log_pending.len && !j->log_dropped)
+        return;
+    if (j->log_dropped) {
+        char note[128];
+        int n = snprintf(note, sizeof note, "(%llu more lines lost here: the disk was full)\n",
+                         (unsigned long long)j->log_dropped);
+        gi_buf_put(&j->log_pending, note, (size_t)n);
+        j->log_dropped = 0;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/log", j->dir);
+    if (gi_append_whole(path, j->log_pending.data, j->log_pending.len, NULL) == 0)
+        j->log_pending.len = 0;
 }
 
 /* echo: also to gi-farmd's own log (a line already there is not). */
@@ -161,13 +183,13 @@ static void job_log(gi_farm_job *j, int warn, int echo, const char *fmt, va_list
         gi_info("job %llu: %s", (unsigned long long)j->id, msg);
     gi_log_hook_set(fn, ctx);
     /* The log file outlives restarts; the in-memory ring is its tail. */
-    char path[4200];
-    snprintf(path, sizeof path, "%s/log", j->dir);
-    FILE *fp = fopen(path, "ae");
-    if (fp) {
-        fprintf(fp, "%s\n", line);
-        fclose(fp);
+    if (j->log_pending.len + strlen(line) < GI_FJ_LOG_PENDING_MAX) {
+        gi_buf_put(&j->log_pending, line, strlen(line));
+        gi_buf_put(&j->log_pending, "\n", 1);
+    } else {
+        j->log_dropped++;
     }
+    log_flush(j);
 }
 
 void gi_farm_job_log(gi_farm_job *j, const char *fmt, ...)
@@ -1159,6 +1181,7 @@ void gi_farm_jobs_tick(gi_farm *f)
         if (j->state == GI_FJ_CHECKING)
             gi_farm_check_deadline(f, j, now);
         checkpoint_if_due(f, j, now, 0);
+        log_flush(j);
     }
     if (f->journal.records > COMPACT_AFTER_RECORDS) {
         gi_error err;
@@ -1176,8 +1199,10 @@ void gi_farm_jobs_checkpoint_all(gi_farm *f)
 
 void gi_farm_jobs_free(gi_farm *f)
 {
-    for (size_t i = 0; i < f->job_count; i++)
+    for (size_t i = 0; i < f->job_count; i++) {
+        log_flush(f->jobs[i]); /* a last try */
         job_free(f->jobs[i]);
+    }
     free(f->jobs);
     f->jobs = NULL;
     f->job_count = f->job_cap = 0;

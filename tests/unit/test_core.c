@@ -2,6 +2,7 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -172,6 +173,36 @@ GI_TEST(test_atomic_write_and_read_limits)
     GI_CHECK(b.len == 5 && memcmp(b.data, "hello", 5) == 0);
     GI_CHECK(gi_read_file(path, 4, &b, &err) == -1 && err.code == GI_EINVAL);
     GI_CHECK(gi_write_file_atomic("/nonexistent-dir/x", "a", 1, &err) == -1);
+    gi_buf_free(&b);
+}
+
+/* An append the disk cuts short (here a file size limit, as a full disk
+ * would) leaves the file as it was, not ending in half a record. */
+GI_TEST(test_append_whole_or_nothing)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/append.log", gi_test_tmpdir());
+    unlink(path);
+    gi_error err;
+    GI_REQUIRE_OK(gi_append_whole(path, "line 1\n", 7, &err));
+    pid_t kid = fork();
+    GI_REQUIRE(kid >= 0);
+    if (kid == 0) {
+        signal(SIGXFSZ, SIG_IGN);
+        struct rlimit lim = {.rlim_cur = 10, .rlim_max = RLIM_INFINITY};
+        int cut = setrlimit(RLIMIT_FSIZE, &lim) == 0 &&
+                  gi_append_whole(path, "line 2 is long\n", 15, &err) == -1;
+        _exit(cut ? 0 : 1);
+    }
+    int status;
+    GI_REQUIRE(waitpid(kid, &status, 0) == kid);
+    GI_CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    GI_REQUIRE_OK(gi_append_whole(path, "line 3\n", 7, &err));
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_REQUIRE_OK(gi_read_file(path, 100, &b, &err));
+    GI_CHECK_MSG(b.len == 14 && memcmp(b.data, "line 1\nline 3\n", 14) == 0, "%.*s",
+                 (int)b.len, (const char *)b.data);
     gi_buf_free(&b);
 }
 

@@ -1,0 +1,50 @@
+# The coordinator's own disk turns read-only (or full) under a running job:
+# the job's log lines written meanwhile (its failed checkpoint) reach its
+# log file once the disk takes writes again, whole, instead of being lost;
+# the job goes on and ends with the image `gi render` gives.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+[ "$(id -u)" = 0 ] || skip "a read-only disk needs root (a tmpfs in a mount namespace)"
+command -v unshare >/dev/null 2>&1 && command -v nsenter >/dev/null 2>&1 ||
+    skip "unshare and nsenter (util-linux) are not installed"
+mkdir -p "$TMP/probe"
+unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0"' "$TMP/probe" 2>/dev/null ||
+    skip "cannot mount a tmpfs in a mount namespace here"
+# own_disk DIR COMMAND...: COMMAND with a tmpfs of its own mounted on DIR.
+cat >"$TMP/own_disk.sh" <<'EOF'
+dir=$1
+shift
+exec unshare -m sh -c 'mount -t tmpfs -o size=16m tmpfs "$0" && exec "$@"' "$dir" "$@"
+EOF
+make_secrets
+cornell_job "$TMP/job.json" 5 64 64 512 8
+mkdir -p "$TMP/state/jobs"
+LOG="$TMP/farmd.log"
+start_farmd "$TMP/state" "$LOG" sh "$TMP/own_disk.sh" "$TMP/state/jobs" -- \
+    --heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+# The jobs directory as gi-farmd sees it (its mount namespace).
+JOBS=/proc/$FARMD_PID/root$TMP/state/jobs
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit"; }
+wait_merged "$id" 4 checkpoint
+nsenter -t "$FARMD_PID" -m mount -o remount,ro "$TMP/state/jobs" || fail "remount read-only"
+wait_log "$LOG" "job $id: checkpoint failed (the job goes on): .*Read-only file system"
+kill -STOP "$WORKER_PID" $(pgrep -P "$WORKER_PID") # the job waits while we look
+! grep -q "checkpoint failed" "$JOBS/$id/log" || fail "a read-only disk took a log line"
+nsenter -t "$FARMD_PID" -m mount -o remount,rw "$TMP/state/jobs" || fail "remount read-write"
+n=0
+until grep -q "checkpoint failed (the job goes on): .*Read-only file system" "$JOBS/$id/log"; do
+    n=$((n + 1))
+    [ $n -lt 100 ] || { cat "$JOBS/$id/log"; fail "the job's log line was lost"; }
+    sleep 0.1
+done
+kill -CONT "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+wait_state "$id" done 120
+grep -vq '^20[0-9][0-9]-[0-9][0-9]-[0-9][0-9]T' "$JOBS/$id/log" &&
+    { cat "$JOBS/$id/log"; fail "a line of the job's log is cut"; }
+grep -q "checkpoint [0-9]* written: checkpoints work again" "$JOBS/$id/log" ||
+    { cat "$JOBS/$id/log"; fail "the log does not say checkpoints work again"; }
+"$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out/img.exr" || fail "the image differs from gi render"
+stop_farmd "$LOG"
+echo ok
