@@ -70,6 +70,11 @@ typedef struct gi_method {
      * checkpoint without redoing merged work (gi_jobrun_checkpoint). */
     int (*save)(const gi_job *job, gi_buf *out, gi_error *err);
     int (*load)(gi_job *job, gi_reader *in, gi_error *err);
+    /* Optional: after finish failed writing the outputs (a full disk, a
+     * path in the way), 1 if job->state still holds everything finish needs
+     * to write the same outputs again, so that a checkpoint taken now
+     * resumes into writing them instead of rendering again. NULL: never. */
+    int (*can_finish_again)(const gi_job *job);
     /* Optional: fills *out after plan, load and each finish (NULL: a still
      * whose tasks are all planned up front). */
     void (*progress)(const gi_job *job, gi_job_progress *out);

@@ -43,7 +43,10 @@ const char *gi_fj_state_name(gi_fj_state s)
 }
 
 static void start_checkers(gi_farm *f);
+static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err);
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait);
+static void checkpoint_published(gi_farm *f, gi_farm_job *j, int written);
+static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why);
 static void published_load(gi_farm_job *j);
 
 static int terminal(const gi_farm_job *j)
@@ -923,9 +926,35 @@ static int load_for_run(gi_farm *f, gi_farm_job *j, gi_error *err)
     return 0;
 }
 
-/* Restores the run from the job's checkpoint file: 1 if restored, 0 if
- * there is none or it is unusable (then the job is loaded afresh), -1 if
- * the job cannot be loaded again. */
+/* The job failed writing its outputs, its whole result in its checkpoint. */
+static void result_kept(const gi_farm_job *j, gi_error *e)
+{
+    gi_error was = *e;
+    gi_fail(e, was.code, "%s; the whole result is kept in checkpoint %llu: a retry only writes "
+            "the outputs", was.msg, (unsigned long long)j->ckpt_seq);
+}
+
+/* The run failed writing its outputs with its whole result merged: the
+ * result goes into a checkpoint now, so that `gi retry` renders nothing
+ * again. Without one (a full state disk), the retry starts from the last. */
+static void keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
+{
+    checkpoint_finish(f, j, 1);
+    uint64_t seq = j->ckpt_seq;
+    gi_error err;
+    if (checkpoint_start(f, j, &err)) {
+        checkpoint_published(f, j, 0);
+        checkpoint_outcome(f, j, err.msg);
+    }
+    checkpoint_finish(f, j, 1);
+    if (j->ckpt_seq > seq) /* in place (even if its journal record failed) */
+        result_kept(j, e);
+}
+
+/* Restores the run from the job's checkpoint file: 1 if restored (failed,
+ * with err, if its outputs still cannot be written), 0 if there is none or
+ * it is unusable (then the job is loaded afresh), -1 if the job cannot be
+ * loaded again. */
 static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
 {
     char *ck = checkpoint_path(j);
@@ -944,6 +973,12 @@ static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
         char *ap = affinity_path(j);
         gi_farm_affinity_load(f, j, ap);
         free(ap);
+        return 1;
+    }
+    if (j->jr.failed && gi_jobrun_finish_retryable(&j->jr)) {
+        /* A whole result, restored, whose outputs still cannot be written:
+         * the run fails (jr.failed) and the checkpoint stays as it is. */
+        result_kept(j, err);
         return 1;
     }
     /* A checkpoint that does not restore costs its work, not the job. The
@@ -966,7 +1001,9 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
     gi_error_clear(&err);
     gi_farm_job_logging(j);
     int resumed = load_for_run(f, j, &err) ? -1 : restore(f, j, &err);
-    int rc = resumed < 0 ? -1 : resumed ? 0 : gi_jobrun_start(&j->jr, &j->job, &err);
+    int rc = resumed < 0  ? -1
+             : resumed ? (j->jr.failed ? -1 : 0)
+                       : gi_jobrun_start(&j->jr, &j->job, &err);
     gi_farm_job_logging(NULL);
     if (resumed < 0) {
         gi_farm_job_fail(f, j, &err);
@@ -1003,6 +1040,8 @@ void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
         return;
     if (j->jr.failed) {
         gi_error e = j->jr.error;
+        if (gi_jobrun_finish_retryable(&j->jr))
+            keep_result(f, j, &e);
         gi_farm_job_fail(f, j, &e);
         return;
     }

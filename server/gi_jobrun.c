@@ -223,6 +223,14 @@ static int advance(gi_jobrun *jr)
     }
 }
 
+int gi_jobrun_finish_retryable(const gi_jobrun *jr)
+{
+    const gi_method *m = jr->job->method;
+    return jr->failed && (jr->error.code == GI_EIO || jr->error.code == GI_EHOST) &&
+           jr->merge_next == jr->task_count && m->save && m->can_finish_again &&
+           m->can_finish_again(jr->job);
+}
+
 int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
                            gi_error *err)
 {

@@ -97,6 +97,12 @@ static inline gi_jobrun_task *gi_jobrun_task_at(const gi_jobrun *jr, uint64_t id
 
 static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || jr->failed; }
 
+/* The run failed only writing its outputs (GI_EIO, GI_EHOST: a full disk,
+ * a path in the way) with every task merged, and the method can finish
+ * again: a checkpoint of it now keeps the whole result, and a run resumed
+ * from that writes the outputs without rendering anything again. */
+int gi_jobrun_finish_retryable(const gi_jobrun *jr);
+
 /* What a job's results depend on: BLAKE2b-256 (hex) of its text and of the
  * name and hash of every file its scene read. Checkpoints carry it. */
 void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX]);

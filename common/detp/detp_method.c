@@ -388,6 +388,15 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return rc;
 }
 
+/* A still's failed write leaves its phase and image as they were, and
+ * finish writes them again. An animation's frame images are written while
+ * the next frame runs and are gone when that write fails: not retried. */
+static int detp_can_finish_again(const gi_job *job)
+{
+    const detp_state *st = job->state;
+    return !st->anim && st->phase != DETP_PHASE_DONE;
+}
+
 /* A frame after 0 over frame 0, in bake time: k * (frame 0's share of
  * segments from the mobile) + c. Fitted to the Cornell box with a sphere
  * of radius 1.25%, 2.5%, 10% and 20% of its width (bench/detp_anim.sh;
@@ -555,5 +564,6 @@ const gi_method gi_method_detp = {
     .save = detp_save,
     .load = detp_load,
     .progress = detp_progress,
+    .can_finish_again = detp_can_finish_again,
     .release = detp_release,
 };

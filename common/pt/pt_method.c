@@ -287,6 +287,13 @@ static int pt_load(gi_job *job, gi_reader *in, gi_error *err)
     return 0;
 }
 
+/* finish only reads the sums: it can always write the image again. */
+static int pt_can_finish_again(const gi_job *job)
+{
+    (void)job;
+    return 1;
+}
+
 static void pt_release(gi_job *job)
 {
     pt_state *st = job->state;
@@ -315,5 +322,6 @@ const gi_method gi_method_pt = {
     .finish = pt_finish,
     .save = pt_save,
     .load = pt_load,
+    .can_finish_again = pt_can_finish_again,
     .release = pt_release,
 };

@@ -372,6 +372,14 @@ int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return write_outputs(job, st, err);
 }
 
+/* The outputs are written once the phase is DONE, from the image and the
+ * counts a checkpoint holds: a failed write can be made again. */
+int gi_quad_can_finish_again(const gi_job *job)
+{
+    const quad_state *st = job->state;
+    return st->phase == PHASE_DONE;
+}
+
 /* The refinement's rounds still to plan, as what max_evals has left. */
 void gi_quad_progress(const gi_job *job, gi_job_progress *out)
 {

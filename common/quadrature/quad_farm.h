@@ -61,6 +61,7 @@ int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err);
 int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
                   gi_error *err);
 int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err);
+int gi_quad_can_finish_again(const gi_job *job);
 void gi_quad_progress(const gi_job *job, gi_job_progress *out);
 int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err);
 int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err);

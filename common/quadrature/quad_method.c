@@ -27,5 +27,6 @@ const gi_method gi_method_quadrature = {
     .save = gi_quad_save,
     .load = gi_quad_load,
     .progress = gi_quad_progress,
+    .can_finish_again = gi_quad_can_finish_again,
     .release = gi_quad_release,
 };

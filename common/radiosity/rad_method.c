@@ -727,6 +727,14 @@ static int rad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return 0;
 }
 
+/* A failed write leaves the phase as it was: finish builds (from the counts)
+ * and writes again. */
+static int rad_can_finish_again(const gi_job *job)
+{
+    const rad_state *st = job->state;
+    return st->phase != PHASE_DONE;
+}
+
 /* The image tiles the form factors are followed by, before they are planned. */
 static void rad_progress(const gi_job *job, gi_job_progress *out)
 {
@@ -947,5 +955,6 @@ const gi_method gi_method_radiosity = {
     .save = rad_save,
     .load = rad_load,
     .progress = rad_progress,
+    .can_finish_again = rad_can_finish_again,
     .release = rad_release,
 };
