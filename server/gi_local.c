@@ -212,14 +212,15 @@ static int default_workers(void)
 
 /* The end of a render (its pool stopped, if it had one): a finished job's
  * checkpoint removed; one stopped from outside (interrupted, its pool
- * failing) checkpointed so that --resume continues it, its batch root kept
- * for it if that holds anything; one failed on a write left with its last
+ * failing), or failed writing its outputs with its whole result merged,
+ * checkpointed so that --resume continues it, its batch root kept for it if
+ * that holds anything; one failed on another write left with its last
  * checkpoint and the batch root that names. Frees the run and ckpt. */
 static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
                      gi_local_summary *summary, int rc, gi_error *err)
 {
     gi_job *job = lr->job;
-    int keep_batches = 0;
+    int keep_batches = 0, saved = 0;
     if (err && lr->jr.failed && lr->jr.error.code == GI_EHOST && lr->batch_root &&
         strstr(err->msg, lr->batch_root)) {
         gi_error e = *err;
@@ -232,11 +233,12 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
         /* none */
     } else if (rc == 0) {
         unlink(ckpt);
-    } else if (!lr->jr.failed && job->method->save) {
+    } else if ((!lr->jr.failed || gi_jobrun_finish_retryable(&lr->jr)) && job->method->save) {
         gi_error cerr;
         keep_batches = lr->batch_root && dir_has_entries(lr->batch_root);
         const char *root = keep_batches ? lr->batch_root : NULL;
-        if (gi_local_checkpoint_write(&lr->jr, root, ckpt, &cerr) == 0) {
+        saved = gi_local_checkpoint_write(&lr->jr, root, ckpt, &cerr) == 0;
+        if (saved) {
             if (err) {
                 gi_progress_at at;
                 gi_jobrun_progress(&lr->jr, gi_now(), &at);
@@ -254,8 +256,9 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
             if (err)
                 gi_warn("%s", cerr.msg);
         }
-    } else if (lr->jr.failed && (lr->jr.error.code == GI_EIO || lr->jr.error.code == GI_EHOST) &&
-               lr->ckpt_ours) {
+    }
+    if (checkpoints && rc != 0 && !saved && lr->jr.failed &&
+        (lr->jr.error.code == GI_EIO || lr->jr.error.code == GI_EHOST) && lr->ckpt_ours) {
         /* A write failed (a full disk, a path in the way): the last
          * checkpoint, taken with every output before it on disk, still
          * holds the work up to it, and with it the batches it names. */

@@ -109,9 +109,14 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
          * copied: a big image's checkpoint is hundreds of MB. */
         const gi_buf rest = {b.data + (b.len - r.left), r.left, 0};
         gi_error e;
-        if (gi_jobrun_restore(jr, job, &rest, &e))
-            rc = gi_fail(err, e.code == GI_EPROTO ? GI_EINVAL : e.code,
-                         "%s: %s; run without --resume to start over", path, e.msg);
+        if (gi_jobrun_restore(jr, job, &rest, &e) != 0) {
+            if (gi_jobrun_finish_retryable(jr)) /* not "start over": that would lose it */
+                rc = gi_fail(err, e.code, "%s; the whole result stays in %s: once that is "
+                             "fixed, --resume writes the outputs", e.msg, path);
+            else
+                rc = gi_fail(err, e.code == GI_EPROTO ? GI_EINVAL : e.code,
+                             "%s: %s; run without --resume to start over", path, e.msg);
+        }
     }
     gi_buf_free(&b);
     if (rc) {

@@ -10,7 +10,10 @@
 # stopped one removes the batches that one kept, and a render removes the
 # batch roots of renders stopped over 3 days ago, and at once those of
 # renders killed before any checkpoint. SIGHUP stops a render as SIGINT
-# does. Then a pt still, interrupted and resumed the same way.
+# does. Then a pt still, interrupted and resumed the same way, and one
+# whose image cannot be written: its whole result is checkpointed, a
+# resume with the way still blocked fails again and keeps it, and once the
+# way is clear a resume only writes the image.
 . "$(dirname "$0")/lib.sh"
 mkdir -p "$TMP/tmp"
 export TMPDIR="$TMP/tmp"
@@ -193,4 +196,20 @@ grep -q "photon batches" "$TMP/pt.log" && fail "a stopped pt render spoke of pho
 "$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt" --progress none --resume \
     >"$TMP/pt-resume.log" 2>&1 || { cat "$TMP/pt-resume.log"; fail "pt resume"; }
 cmp "$TMP/pt-ref/pt.exr" "$TMP/pt/pt.exr" || fail "pt: the resumed image differs"
-echo "detp animation resumed after SIGINT and SIGKILL, pt after SIGINT: identical outputs"
+mkdir -p "$TMP/pt-blocked/pt.exr"
+blocked() { # blocked RUN PATTERN [--resume]: the render fails on its image, saying PATTERN
+    st=0
+    "$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt-blocked" --progress none \
+        ${3:-} >"$TMP/pt-$1.log" 2>&1 || st=$?
+    [ $st -eq 1 ] && grep -q "pt.exr: rename: .*$2" "$TMP/pt-$1.log" ||
+        { cat "$TMP/pt-$1.log"; fail "pt blocked ($1): exit $st"; }
+}
+blocked first "work done (100%) is kept in .*--resume. continues"
+blocked again "the whole result stays in .*--resume writes the outputs" --resume
+rmdir "$TMP/pt-blocked/pt.exr"
+"$GI_RELEASE" render "$TMP/pt.json" --workers 2 --out "$TMP/pt-blocked" --progress none --resume \
+    >"$TMP/pt-unblocked.log" 2>&1 || { cat "$TMP/pt-unblocked.log"; fail "pt resume, unblocked"; }
+grep -q "resuming from .* (100% done)" "$TMP/pt-unblocked.log" || fail "pt rendered again"
+cmp "$TMP/pt-ref/pt.exr" "$TMP/pt-blocked/pt.exr" || fail "pt: the image written on resume differs"
+echo "detp animation resumed after SIGINT and SIGKILL, pt after SIGINT and a failed write: identical"
+
