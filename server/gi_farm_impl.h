@@ -69,6 +69,10 @@ typedef struct gi_farm_job {
     int keeps_batches;        /* gi_job.keeps_batches */
     char *dir; /* <state>/jobs/<id> */
     gi_error error; /* why it failed */
+    /* Ended, but its END record is not in the journal yet (a full disk):
+     * appended again at every tick; until then its checkpoint stays, for a
+     * restart would run it again. */
+    int end_pending;
 
     /* Checker. */
     pid_t check_pid;

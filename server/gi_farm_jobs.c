@@ -48,6 +48,7 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait);
 static void checkpoint_published(gi_farm *f, gi_farm_job *j, int written);
 static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why);
 static void published_load(gi_farm_job *j);
+static void end_journaled(gi_farm *f, gi_farm_job *j);
 
 static int terminal(const gi_farm_job *j)
 {
@@ -337,16 +338,6 @@ static void list_written_outputs(gi_farm_job *j)
 
 /* ---- journal ----------------------------------------------------------- */
 
-static int journal(gi_farm *f, const gi_jrec *r)
-{
-    gi_error err;
-    if (gi_journal_append(&f->journal, r, &err)) {
-        gi_error_log("journal: %s", err.msg);
-        return -1;
-    }
-    return 0;
-}
-
 static void submit_record(const gi_farm_job *j, gi_jrec *r)
 {
     gi_jrec_init(r, GI_JREC_SUBMIT, j->id);
@@ -412,6 +403,9 @@ static int compact(gi_farm *f, gi_error *err)
     int rc = gi_journal_rewrite(&f->journal, ptrs, n, err);
     free(ptrs);
     free(recs); /* every string was borrowed */
+    for (size_t i = 0; rc == 0 && i < f->job_count; i++)
+        if (f->jobs[i]->end_pending) /* its END is in the rewritten journal */
+            end_journaled(f, f->jobs[i]);
     return rc;
 }
 
@@ -791,6 +785,35 @@ static uint64_t published_release(gi_farm *f, gi_farm_job *j)
     return freed;
 }
 
+/* The job's END is in the journal: a done job's checkpoint and published
+ * data are no longer needed (a failed or cancelled job's stay for a retry). */
+static void end_journaled(gi_farm *f, gi_farm_job *j)
+{
+    j->end_pending = 0;
+    if (j->state != GI_FJ_DONE)
+        return;
+    char *ck = checkpoint_path(j);
+    unlink(ck); /* nothing left to resume */
+    free(ck);
+    published_release(f, j);
+}
+
+/* Appends the END of a job whose END could not be journaled when it ended:
+ * 0 once it is there (or was), -1 while the journal still refuses it. */
+static int end_flush(gi_farm *f, gi_farm_job *j)
+{
+    if (!j->end_pending)
+        return 0;
+    gi_jrec r;
+    end_record(j, &r);
+    gi_error err;
+    if (gi_journal_append(&f->journal, &r, &err))
+        return -1;
+    gi_farm_job_log(j, "its end is journaled now");
+    end_journaled(f, j);
+    return 0;
+}
+
 static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
 {
     checkpoint_finish(f, j, 1); /* journaled before the END */
@@ -807,14 +830,16 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
     }
     gi_jrec r;
     end_record(j, &r);
-    journal(f, &r);
+    gi_error err;
     run_free(j);
-    if (state == GI_FJ_DONE) {
-        char *ck = checkpoint_path(j);
-        unlink(ck); /* nothing left to resume */
-        free(ck);
-        published_release(f, j);
-    } /* a failed or cancelled job's stays for gi_farm_job_retry */
+    if (gi_journal_append(&f->journal, &r, &err) == 0) {
+        end_journaled(f, j);
+        return;
+    }
+    j->end_pending = 1;
+    gi_farm_job_warn(j, "its end cannot be journaled (%s): tried again every tick; until then "
+                     "a restarted coordinator would run it again from its checkpoint, kept "
+                     "for that", err.msg);
 }
 
 void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
@@ -846,6 +871,10 @@ int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err)
     if (unfinished_jobs(f) >= f->cfg.max_jobs)
         return gi_fail(err, GI_ENOMEM, "the farm already has %u unfinished jobs (its limit)",
                        f->cfg.max_jobs);
+    /* A RETRY before the END it undoes would be undone by it on replay. */
+    if (end_flush(f, j))
+        return gi_fail(err, GI_EIO, "job %llu's end is not journaled yet (the coordinator's "
+                       "disk is full?): try again later", (unsigned long long)j->id);
     gi_jrec r;
     gi_jrec_init(&r, GI_JREC_RETRY, j->id);
     r.when = gi_farm_wallnow();
@@ -1221,6 +1250,7 @@ void gi_farm_jobs_tick(gi_farm *f)
             gi_farm_check_deadline(f, j, now);
         checkpoint_if_due(f, j, now, 0);
         log_flush(j);
+        end_flush(f, j);
     }
     if (f->journal.records > COMPACT_AFTER_RECORDS) {
         gi_error err;
@@ -1240,6 +1270,7 @@ void gi_farm_jobs_free(gi_farm *f)
 {
     for (size_t i = 0; i < f->job_count; i++) {
         log_flush(f->jobs[i]); /* a last try */
+        end_flush(f, f->jobs[i]);
         job_free(f->jobs[i]);
     }
     free(f->jobs);

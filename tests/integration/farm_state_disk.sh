@@ -1,13 +1,19 @@
 # The coordinator's own disk turns read-only (or full) under a running job:
-# the job's log lines written meanwhile (its failed checkpoint) reach its
-# log file once the disk takes writes again, whole, instead of being lost;
-# the job goes on and ends with the image `gi render` gives.
+# 1. the job's log lines written meanwhile (its failed checkpoint) reach its
+#    log file once the disk takes writes again, whole, instead of being
+#    lost; the job goes on and ends with the image `gi render` gives.
+# 2. a job that ends while the journal refuses its END record (immutable
+#    here, as a full disk would) keeps its checkpoint until the END is
+#    journaled, at a later tick; a coordinator killed then knows it done.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 [ "$(id -u)" = 0 ] || skip "a read-only disk needs root (a tmpfs in a mount namespace)"
 command -v unshare >/dev/null 2>&1 && command -v nsenter >/dev/null 2>&1 ||
     skip "unshare and nsenter (util-linux) are not installed"
 mkdir -p "$TMP/probe"
+touch "$TMP/probe.imm"
+chattr +i "$TMP/probe.imm" 2>/dev/null && chattr -i "$TMP/probe.imm" ||
+    skip "chattr +i does not work here"
 unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0"' "$TMP/probe" 2>/dev/null ||
     skip "cannot mount a tmpfs in a mount namespace here"
 # own_disk DIR COMMAND...: COMMAND with a tmpfs of its own mounted on DIR.
@@ -46,5 +52,32 @@ grep -q "checkpoint [0-9]* written: checkpoints work again" "$JOBS/$id/log" ||
     { cat "$JOBS/$id/log"; fail "the log does not say checkpoints work again"; }
 "$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out/img.exr" || fail "the image differs from gi render"
+stop_farmd "$LOG"
+kill -9 "$WORKER_PID"
+
+# 2. The END of a job refused by the journal.
+S2="$TMP/state2"
+trap 'chattr -i "$S2/journal" 2>/dev/null; farm_cleanup' EXIT
+OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
+# shellcheck disable=SC2086
+start_farmd "$S2" "$LOG" -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/worker2.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 2"; }
+wait_merged "$id" 4 checkpoint
+chattr +i "$S2/journal"
+wait_state "$id" done 120
+[ -e "$S2/jobs/$id/checkpoint" ] || fail "a done job whose end is not journaled lost its checkpoint"
+api "/api/v1/jobs/$id" | grep -q "its end cannot be journaled" || fail "the job's log does not say so"
+chattr -i "$S2/journal"
+wait_log "$LOG" "job $id: its end is journaled now"
+[ ! -e "$S2/jobs/$id/checkpoint" ] || fail "the checkpoint stayed once the end was journaled"
+kill -9 "$FARMD_PID"
+wait "$FARMD_PID" 2>/dev/null || true
+# shellcheck disable=SC2086
+start_farmd "$S2" "$LOG" -- $OPTS $PORTS
+[ "$(jstate "$id")" = done ] || { api "/api/v1/jobs/$id"; fail "the restart forgot the job's end"; }
+"$GI" fetch "$id" --out "$TMP/out2" >/dev/null || fail "fetch 2"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out2/img.exr" || fail "job 2's image differs from gi render"
 stop_farmd "$LOG"
 echo ok
