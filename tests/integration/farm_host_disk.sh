@@ -5,17 +5,7 @@
 # disk (retrying on the same disk cannot help) and says why.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
-[ "$(id -u)" = 0 ] || skip "a full disk needs root (a tmpfs in a mount namespace)"
-command -v unshare >/dev/null 2>&1 || skip "unshare (util-linux) is not installed"
-mkdir -p "$TMP/probe"
-unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0"' "$TMP/probe" 2>/dev/null ||
-    skip "cannot mount a tmpfs in a mount namespace here"
-# full_disk DIR COMMAND...: COMMAND with a 64 KiB tmpfs mounted on DIR.
-cat >"$TMP/full_disk.sh" <<'EOF'
-dir=$1
-shift
-exec unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0" && exec "$@"' "$dir" "$@"
-EOF
+need_own_disk 64k
 mkdir -p "$TMP/full"
 
 write_job "$TMP/job.json" <<JOB
@@ -32,7 +22,7 @@ JOB
 
 # gi render with its batches on the full disk: one attempt, a clear error.
 set +e
-TMPDIR="$TMP/full" sh "$TMP/full_disk.sh" "$TMP/full" "$GI" render "$TMP/job.json" --workers 1 \
+TMPDIR="$TMP/full" sh "$TMP/own_disk.sh" "$TMP/full" "$GI" render "$TMP/job.json" --workers 1 \
     --out "$TMP/local" --progress none >"$TMP/local.log" 2>&1
 rc=$?
 set -e
@@ -45,7 +35,7 @@ make_secrets
 LOG="$TMP/farmd.log"
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 3 \
     --max-attempts 2
-start_worker "$TMP/full.log" sh "$TMP/full_disk.sh" "$TMP/full" -- --connect "$WADDR" --procs 1 \
+start_worker "$TMP/full.log" sh "$TMP/own_disk.sh" "$TMP/full" -- --connect "$WADDR" --procs 1 \
     --cache "$TMP/c1" --batch-dir "$TMP/full" --name full
 wait_workers 1
 id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"

@@ -7,21 +7,11 @@
 #    journaled, at a later tick; a coordinator killed then knows it done.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
-[ "$(id -u)" = 0 ] || skip "a read-only disk needs root (a tmpfs in a mount namespace)"
-command -v unshare >/dev/null 2>&1 && command -v nsenter >/dev/null 2>&1 ||
-    skip "unshare and nsenter (util-linux) are not installed"
-mkdir -p "$TMP/probe"
+need_own_disk 16m
+command -v nsenter >/dev/null 2>&1 || skip "nsenter (util-linux) is not installed"
 touch "$TMP/probe.imm"
 chattr +i "$TMP/probe.imm" 2>/dev/null && chattr -i "$TMP/probe.imm" ||
     skip "chattr +i does not work here"
-unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0"' "$TMP/probe" 2>/dev/null ||
-    skip "cannot mount a tmpfs in a mount namespace here"
-# own_disk DIR COMMAND...: COMMAND with a tmpfs of its own mounted on DIR.
-cat >"$TMP/own_disk.sh" <<'EOF'
-dir=$1
-shift
-exec unshare -m sh -c 'mount -t tmpfs -o size=16m tmpfs "$0" && exec "$@"' "$dir" "$@"
-EOF
 make_secrets
 cornell_job "$TMP/job.json" 5 64 64 512 8
 mkdir -p "$TMP/state/jobs"

@@ -218,3 +218,20 @@ wait_merged() {
     done
     [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
 }
+
+# need_own_disk SIZE: root and a tmpfs in a mount namespace, or exits 77
+# (skipped). Writes $TMP/own_disk.sh: `sh $TMP/own_disk.sh DIR COMMAND...`
+# runs COMMAND with a tmpfs of SIZE of its own on DIR (a disk to fill up or
+# turn read-only under it).
+need_own_disk() {
+    [ "$(id -u)" = 0 ] || skip "a disk of its own needs root (a tmpfs in a mount namespace)"
+    command -v unshare >/dev/null 2>&1 || skip "unshare (util-linux) is not installed"
+    mkdir -p "$TMP/probe"
+    unshare -m sh -c 'mount -t tmpfs -o size=64k tmpfs "$0"' "$TMP/probe" 2>/dev/null ||
+        skip "cannot mount a tmpfs in a mount namespace here"
+    cat >"$TMP/own_disk.sh" <<EOF
+dir=\$1
+shift
+exec unshare -m sh -c 'mount -t tmpfs -o size=$1 tmpfs "\$0" && exec "\$@"' "\$dir" "\$@"
+EOF
+}
