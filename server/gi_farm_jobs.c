@@ -1018,6 +1018,22 @@ static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
     return load_for_run(f, j, err) ? -1 : 0;
 }
 
+/* The checkpoint file restored is not the one the journal last recorded
+ * (the coordinator stopped between the file's rename and its record, or the
+ * journal refused the record): it is journaled now, as the next in
+ * sequence, so that its number is not given to another. */
+static void checkpoint_adopted(gi_farm *f, gi_farm_job *j)
+{
+    j->ckpt_seq++;
+    gi_jrec r;
+    ckpt_record(j, &r);
+    gi_error err;
+    if (gi_journal_append(&f->journal, &r, &err))
+        gi_warn("job %llu: %s", (unsigned long long)j->id, err.msg);
+    gi_farm_job_log(j, "its checkpoint file is newer than the journal's record of it: taken as "
+                    "checkpoint %llu", (unsigned long long)j->ckpt_seq);
+}
+
 void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
 {
     if (j->state != GI_FJ_CHECKING)
@@ -1049,9 +1065,12 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
         j->started = gi_farm_wallnow();
     j->run_t0 = gi_now();
     j->ckpt_last = j->run_t0;
+    uint64_t journaled = j->ckpt_merged;
     j->ckpt_merged = j->jr.merge_next;
     j->ckpt_done_cost = j->jr.cost_done;
     if (resumed) {
+        if (j->jr.merge_next != journaled)
+            checkpoint_adopted(f, j);
         j->resumed_merged = j->jr.merge_next;
         gi_farm_job_log(j, "resumed from checkpoint %llu: %llu of %llu tasks already merged",
                         (unsigned long long)j->ckpt_seq, (unsigned long long)j->jr.merge_next,
