@@ -73,6 +73,10 @@ typedef struct gi_farm_job {
      * appended again at every tick; until then its checkpoint stays, for a
      * restart would run it again. */
     int end_pending;
+    /* Monotonic time to try writing the outputs again; 0: not waiting. Its
+     * run failed only writing them, and no checkpoint could keep its
+     * result either (the same full disk): the result waits in memory. */
+    double outputs_retry_at;
 
     /* Checker. */
     pid_t check_pid;

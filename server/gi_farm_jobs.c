@@ -424,6 +424,7 @@ static void reopen(gi_farm_job *j)
     j->leases = j->lease_expiries = j->result_bytes = j->merged_bytes = 0;
     j->host_disk_errors = 0;
     j->merge_s = j->finish_s = 0.0;
+    j->outputs_retry_at = 0;
 }
 
 static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
@@ -965,8 +966,8 @@ static void result_kept(const gi_farm_job *j, gi_error *e)
 
 /* The run failed writing its outputs with its whole result merged: the
  * result goes into a checkpoint now, so that `gi retry` renders nothing
- * again. Without one (a full state disk), the retry starts from the last. */
-static void keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
+ * again. 1 if it is in place. */
+static int keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
 {
     checkpoint_finish(f, j, 1);
     uint64_t seq = j->ckpt_seq;
@@ -976,8 +977,45 @@ static void keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
         checkpoint_outcome(f, j, err.msg);
     }
     checkpoint_finish(f, j, 1);
-    if (j->ckpt_seq > seq) /* in place (even if its journal record failed) */
-        result_kept(j, e);
+    if (j->ckpt_seq == seq)
+        return 0;
+    result_kept(j, e); /* in place (even if its journal record failed) */
+    return 1;
+}
+
+/* The run failed: the job fails, unless only its outputs could not be
+ * written and no checkpoint can keep its result either (a full disk): then
+ * the result waits in memory, and the tick tries the outputs again. */
+static void run_failed(gi_farm *f, gi_farm_job *j)
+{
+    gi_error e = j->jr.error;
+    if (gi_jobrun_finish_retryable(&j->jr) && !keep_result(f, j, &e)) {
+        if (!j->outputs_retry_at)
+            gi_farm_job_warn(j, "its outputs cannot be written (%s), nor a checkpoint of its "
+                             "result: it waits in memory, and they are tried again every %g s "
+                             "(`gi cancel` gives up)", e.msg, f->cfg.checkpoint_s);
+        j->outputs_retry_at = gi_now() + f->cfg.checkpoint_s;
+        return;
+    }
+    j->outputs_retry_at = 0;
+    gi_farm_job_fail(f, j, &e);
+}
+
+/* A job waiting for room to write its outputs tries again. */
+static void outputs_retry(gi_farm *f, gi_farm_job *j, double now)
+{
+    if (j->state != GI_FJ_RUNNING || !j->outputs_retry_at || now < j->outputs_retry_at)
+        return;
+    gi_farm_job_logging(j);
+    int rc = gi_jobrun_finish_again(&j->jr);
+    gi_farm_job_logging(NULL);
+    if (rc) {
+        run_failed(f, j);
+        return;
+    }
+    j->outputs_retry_at = 0;
+    gi_farm_job_log(j, "its outputs are written now");
+    gi_farm_job_settle(f, j);
 }
 
 /* Restores the run from the job's checkpoint file: 1 if restored (failed,
@@ -1087,10 +1125,8 @@ void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
     if (j->state != GI_FJ_RUNNING || !gi_jobrun_done(&j->jr))
         return;
     if (j->jr.failed) {
-        gi_error e = j->jr.error;
-        if (gi_jobrun_finish_retryable(&j->jr))
-            keep_result(f, j, &e);
-        gi_farm_job_fail(f, j, &e);
+        if (!j->outputs_retry_at) /* else the tick tries its outputs again */
+            run_failed(f, j);
         return;
     }
     list_written_outputs(j);
@@ -1243,6 +1279,8 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 {
     if (!checkpoint_finish(f, j, force) || j->state != GI_FJ_RUNNING)
         return;
+    if (j->outputs_retry_at && !force)
+        return; /* its outputs' retries try a checkpoint as well (keep_result) */
     double every = gi_jobrun_checkpoint_interval(f->cfg.checkpoint_s, j->ckpt_cost_s);
     if (!force && now - j->ckpt_last < every)
         return;
@@ -1268,6 +1306,7 @@ void gi_farm_jobs_tick(gi_farm *f)
         if (j->state == GI_FJ_CHECKING)
             gi_farm_check_deadline(f, j, now);
         checkpoint_if_due(f, j, now, 0);
+        outputs_retry(f, j, now);
         log_flush(j);
         end_flush(f, j);
     }

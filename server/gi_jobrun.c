@@ -231,6 +231,15 @@ int gi_jobrun_finish_retryable(const gi_jobrun *jr)
            m->can_finish_again(jr->job);
 }
 
+int gi_jobrun_finish_again(gi_jobrun *jr)
+{
+    if (!gi_jobrun_finish_retryable(jr))
+        return -1;
+    jr->failed = 0;
+    gi_error_clear(&jr->error);
+    return advance(jr);
+}
+
 int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
                            gi_error *err)
 {

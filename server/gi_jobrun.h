@@ -102,6 +102,9 @@ static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || j
  * again: a checkpoint of it now keeps the whole result, and a run resumed
  * from that writes the outputs without rendering anything again. */
 int gi_jobrun_finish_retryable(const gi_jobrun *jr);
+/* Calls finish again on such a run (the outputs may find room now): 0 if
+ * it is finished, -1 if it failed again (or was not such a run). */
+int gi_jobrun_finish_again(gi_jobrun *jr);
 
 /* What a job's results depend on: BLAKE2b-256 (hex) of its text and of the
  * name and hash of every file its scene read. Checkpoints carry it. */

@@ -2,7 +2,10 @@
 # 1. the job's log lines written meanwhile (its failed checkpoint) reach its
 #    log file once the disk takes writes again, whole, instead of being
 #    lost; the job goes on and ends with the image `gi render` gives.
-# 2. a job that ends while the journal refuses its END record (immutable
+# 2. a job that ends on a full disk, where neither its outputs nor a
+#    checkpoint of its result fit, waits in memory and writes them once
+#    there is room, instead of failing (a retry would render again).
+# 3. a job that ends while the journal refuses its END record (immutable
 #    here, as a full disk would) keeps its checkpoint until the END is
 #    journaled, at a later tick; a coordinator killed then knows it done.
 . "$(dirname "$0")/lib.sh"
@@ -42,10 +45,24 @@ grep -q "checkpoint [0-9]* written: checkpoints work again" "$JOBS/$id/log" ||
     { cat "$JOBS/$id/log"; fail "the log does not say checkpoints work again"; }
 "$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out/img.exr" || fail "the image differs from gi render"
+
+# 2. A full disk at the job's end.
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || fail "submit 2"
+wait_merged "$id" 4 checkpoint
+kill -STOP "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+dd if=/dev/zero of="$JOBS/fill" bs=64k 2>/dev/null && fail "16 MiB did not fill up"
+kill -CONT "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+wait_log "$LOG" "job $id: its outputs cannot be written (.*No space left on device.*), nor"
+[ "$(jstate "$id")" = running ] || { api "/api/v1/jobs/$id"; fail "the job did not wait for room"; }
+rm "$JOBS/fill"
+wait_state "$id" done 60
+api "/api/v1/jobs/$id" | grep -q "its outputs are written now" || fail "the log does not say so"
+"$GI" fetch "$id" --out "$TMP/out2" >/dev/null || fail "fetch 2"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out2/img.exr" || fail "job 2's image differs from gi render"
 stop_farmd "$LOG"
 kill -9 "$WORKER_PID"
 
-# 2. The END of a job refused by the journal.
+# 3. The END of a job refused by the journal.
 S2="$TMP/state2"
 trap 'chattr -i "$S2/journal" 2>/dev/null; farm_cleanup' EXIT
 OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
@@ -53,12 +70,12 @@ OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
 start_farmd "$S2" "$LOG" -- $OPTS
 PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker2.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
-id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 2"; }
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || fail "submit 3"
 wait_merged "$id" 4 checkpoint
 chattr +i "$S2/journal"
 wait_state "$id" done 120
 [ -e "$S2/jobs/$id/checkpoint" ] || fail "a done job whose end is not journaled lost its checkpoint"
-api "/api/v1/jobs/$id" | grep -q "its end cannot be journaled" || fail "the job's log does not say so"
+api "/api/v1/jobs/$id" | grep -q "its end cannot be journaled" || fail "the log does not say so"
 chattr -i "$S2/journal"
 wait_log "$LOG" "job $id: its end is journaled now"
 [ ! -e "$S2/jobs/$id/checkpoint" ] || fail "the checkpoint stayed once the end was journaled"
@@ -67,7 +84,7 @@ wait "$FARMD_PID" 2>/dev/null || true
 # shellcheck disable=SC2086
 start_farmd "$S2" "$LOG" -- $OPTS $PORTS
 [ "$(jstate "$id")" = done ] || { api "/api/v1/jobs/$id"; fail "the restart forgot the job's end"; }
-"$GI" fetch "$id" --out "$TMP/out2" >/dev/null || fail "fetch 2"
-cmp "$TMP/job.json.ref/img.exr" "$TMP/out2/img.exr" || fail "job 2's image differs from gi render"
+"$GI" fetch "$id" --out "$TMP/out3" >/dev/null || fail "fetch 3"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "job 3's image differs from gi render"
 stop_farmd "$LOG"
 echo ok

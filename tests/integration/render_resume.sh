@@ -211,5 +211,5 @@ rmdir "$TMP/pt-blocked/pt.exr"
     >"$TMP/pt-unblocked.log" 2>&1 || { cat "$TMP/pt-unblocked.log"; fail "pt resume, unblocked"; }
 grep -q "resuming from .* (100% done)" "$TMP/pt-unblocked.log" || fail "pt rendered again"
 cmp "$TMP/pt-ref/pt.exr" "$TMP/pt-blocked/pt.exr" || fail "pt: the image written on resume differs"
-echo "detp animation resumed after SIGINT and SIGKILL, pt after SIGINT and a failed write: identical"
+echo "detp animation resumed after SIGINT and SIGKILL, pt after SIGINT and a failed write: same"
 
