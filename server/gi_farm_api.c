@@ -17,6 +17,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <microhttpd.h>
+#include <netinet/in.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,17 +70,89 @@ typedef struct api_req {
  * ever. */
 typedef struct gi_api_conn {
     int fd;
+    struct sockaddr_storage addr; /* the client's; port ignored */
     double since;   /* when it began to wait for a request's head */
     int in_request; /* a head has come, the answer has not gone */
     int cut;        /* shut down already */
     struct gi_api_conn *prev, *next;
 } gi_api_conn;
 
+/* API connections in all and from one address (keep_a_slot_free). */
+#define API_CONNS_MAX 256u
+#define API_CONNS_PER_ADDRESS 64u
+/* MHD's limits are higher by this much, for connections cut but not closed yet. */
+#define API_CONNS_CUT_ROOM 64u
+
 static gi_api_conn *api_conn_of(struct MHD_Connection *conn)
 {
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
     return ci ? ci->socket_context : NULL;
+}
+
+static void cut(gi_api_conn *c, uint64_t *counter)
+{
+    shutdown(c->fd, SHUT_RDWR);
+    c->cut = 1;
+    (*counter)++;
+}
+
+static void remember_address(gi_api_conn *c, const struct sockaddr *sa)
+{
+    if (sa->sa_family == AF_INET)
+        memcpy(&c->addr, sa, sizeof(struct sockaddr_in));
+    else if (sa->sa_family == AF_INET6)
+        memcpy(&c->addr, sa, sizeof(struct sockaddr_in6));
+}
+
+/* The same client host (the port aside), as MHD's limit per address counts. */
+static int same_host(const struct sockaddr_storage *a, const struct sockaddr_storage *b)
+{
+    if (a->ss_family != b->ss_family)
+        return 0;
+    if (a->ss_family == AF_INET)
+        return memcmp(&((const struct sockaddr_in *)a)->sin_addr,
+                      &((const struct sockaddr_in *)b)->sin_addr, sizeof(struct in_addr)) == 0;
+    if (a->ss_family == AF_INET6)
+        return memcmp(&((const struct sockaddr_in6 *)a)->sin6_addr,
+                      &((const struct sockaddr_in6 *)b)->sin6_addr,
+                      sizeof(struct in6_addr)) == 0;
+    return 1;
+}
+
+/* When the new connection fills its address's slots or all of them, the
+ * connection waiting longest for a request head (idle: nothing sent yet, or
+ * between two requests) gives its slot up, so that the next client gets in;
+ * with none idle, the new one over the limit is closed. Otherwise a client
+ * opening connections and sending nothing, again as each was cut after
+ * --api-head-seconds, would hold every slot of its address (on loopback:
+ * every local client's) or, from a few addresses, all of them. MHD's own
+ * limits are higher: the connections cut here are only closed when MHD
+ * next runs. */
+static void keep_a_slot_free(gi_farm *f, gi_api_conn *fresh)
+{
+    unsigned all = 0, here = 0;
+    gi_api_conn *oldest = NULL, *oldest_here = NULL;
+    for (gi_api_conn *c = f->api_conns; c; c = c->next) {
+        if (c->cut)
+            continue;
+        int mine = same_host(&c->addr, &fresh->addr);
+        all++;
+        here += mine;
+        if (c == fresh || c->in_request || c->fd < 0)
+            continue;
+        if (!oldest || c->since < oldest->since)
+            oldest = c;
+        if (mine && (!oldest_here || c->since < oldest_here->since))
+            oldest_here = c;
+    }
+    gi_api_conn *shed = NULL;
+    if (here >= API_CONNS_PER_ADDRESS)
+        shed = oldest_here ? oldest_here : here > API_CONNS_PER_ADDRESS ? fresh : NULL;
+    else if (all >= API_CONNS_MAX)
+        shed = oldest ? oldest : all > API_CONNS_MAX ? fresh : NULL;
+    if (shed && shed->fd >= 0)
+        cut(shed, &f->m.api_conns_shed);
 }
 
 static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
@@ -92,12 +165,16 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
         const union MHD_ConnectionInfo *ci =
             MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
         c->fd = ci ? ci->connect_fd : -1;
+        ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+        if (ci && ci->client_addr)
+            remember_address(c, ci->client_addr);
         c->since = gi_now();
         c->next = f->api_conns;
         if (c->next)
             c->next->prev = c;
         f->api_conns = c;
         *socket_context = c;
+        keep_a_slot_free(f, c);
     } else if (c) {
         if (c->prev)
             c->prev->next = c->next;
@@ -116,11 +193,8 @@ static void cut_slow_connections(gi_farm *f)
 {
     double now = gi_now();
     for (gi_api_conn *c = f->api_conns; c; c = c->next)
-        if (!c->in_request && !c->cut && c->fd >= 0 && now - c->since > f->cfg.api_head_s) {
-            shutdown(c->fd, SHUT_RDWR);
-            c->cut = 1;
-            f->m.api_slow_closed++;
-        }
+        if (!c->in_request && !c->cut && c->fd >= 0 && now - c->since > f->cfg.api_head_s)
+            cut(c, &f->m.api_slow_closed);
 }
 
 /* ---- helpers ------------------------------------------------------------- */
@@ -702,10 +776,11 @@ int gi_farm_api_start(gi_farm *f, gi_error *err)
         MHD_USE_EPOLL | MHD_USE_ERROR_LOG, 0, NULL, NULL, on_request, f,
         MHD_OPTION_EXTERNAL_LOGGER, on_mhd_log, f, MHD_OPTION_LISTEN_SOCKET, f->api_fd,
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, f, MHD_OPTION_NOTIFY_CONNECTION,
-        on_connection, f, MHD_OPTION_CONNECTION_LIMIT, 256u,
-        MHD_OPTION_PER_IP_CONNECTION_LIMIT, 64u, MHD_OPTION_CONNECTION_TIMEOUT, 60u,
-        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK,
-        unescape_keeping_nul, NULL, MHD_OPTION_END);
+        on_connection, f, MHD_OPTION_CONNECTION_LIMIT, API_CONNS_MAX + API_CONNS_CUT_ROOM,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, API_CONNS_PER_ADDRESS + API_CONNS_CUT_ROOM,
+        MHD_OPTION_CONNECTION_TIMEOUT, 60u, MHD_OPTION_CONNECTION_MEMORY_LIMIT,
+        (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK, unescape_keeping_nul, NULL,
+        MHD_OPTION_END);
     if (!f->mhd) {
         close(f->api_fd);
         f->api_fd = -1;

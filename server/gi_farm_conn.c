@@ -36,6 +36,8 @@
  * not starve the others. */
 #define READ_BUDGET ((size_t)8 << 20)
 #define CLOSE_GRACE_S 2.0
+/* Connections authenticating at once. */
+#define HANDSHAKES_MAX 64
 
 static gi_frame_limits handshake_limits(void)
 {
@@ -83,6 +85,51 @@ void gi_farm_conn_send(gi_farm_conn *c, uint16_t type, const gi_buf *payload, in
     gi_outq_push(&c->out, type, payload, compress);
 }
 
+/* Open connections (closed ones wait for the loop to reap them). */
+static size_t open_connections(const gi_farm *f)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < f->conn_count; i++)
+        n += f->conns[i]->fd >= 0;
+    return n;
+}
+
+/* When HANDSHAKES_MAX connections have not authenticated yet, the oldest
+ * of them (a worker's handshake takes a round trip) makes way for the new
+ * one. Otherwise a peer without the secret, opening that many connections
+ * again as each timed out, would keep every worker from joining. */
+static void make_room_for_a_handshake(gi_farm *f)
+{
+    size_t n = 0;
+    gi_farm_conn *oldest = NULL;
+    for (size_t i = 0; i < f->conn_count; i++) {
+        gi_farm_conn *c = f->conns[i];
+        if (c->fd < 0 || (c->state != GI_FC_HELLO && c->state != GI_FC_AUTH))
+            continue;
+        n++;
+        if (!oldest || c->connected < oldest->connected)
+            oldest = c;
+    }
+    if (n < HANDSHAKES_MAX)
+        return;
+    /* Closed at once, and logged at most every 10 s: a peer reconnecting
+     * as fast as it can would otherwise write a line per connection. */
+    double now = gi_now();
+    f->m.workers_refused++;
+    f->m.handshakes_displaced++;
+    if (now - f->displaced_logged_at >= 10.0) {
+        gi_warn("refused unauthenticated peer (%s): no handshake after %.1f s, and a newer "
+                "connection needed its place (%d handshakes at most; %llu such refusals "
+                "since this was last logged)",
+                oldest->peer, now - oldest->connected, HANDSHAKES_MAX,
+                (unsigned long long)(f->m.handshakes_displaced - f->displaced_logged));
+        f->displaced_logged_at = now;
+        f->displaced_logged = f->m.handshakes_displaced;
+    }
+    close(oldest->fd);
+    oldest->fd = -1;
+}
+
 int gi_farm_conn_accept(gi_farm *f)
 {
     for (;;) {
@@ -96,10 +143,13 @@ int gi_farm_conn_accept(gi_farm *f)
         }
         char peer[80];
         gi_net_peer(fd, peer, sizeof peer);
-        /* Room for every allowed worker plus some handshakes in progress. */
-        if (f->conn_count >= (size_t)f->cfg.max_workers + 16) {
+        make_room_for_a_handshake(f);
+        /* Room for every allowed worker, the handshakes in progress and
+         * connections flushing their last frames. */
+        size_t open = open_connections(f);
+        if (open >= (size_t)f->cfg.max_workers + 2 * HANDSHAKES_MAX) {
             gi_warn("refused worker connection from %s: %zu connections open (limit %u workers)",
-                    peer, f->conn_count, f->cfg.max_workers);
+                    peer, open, f->cfg.max_workers);
             f->m.workers_refused++;
             close(fd);
             continue;

@@ -201,8 +201,10 @@ typedef struct gi_farm_metrics {
     double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;
     uint64_t workers_accepted, workers_refused, frames_refused;
+    uint64_t handshakes_displaced; /* closed unauthenticated for a newer connection */
     uint64_t api_requests, api_refused_auth, api_refused_input;
     uint64_t api_slow_closed; /* connections cut for a request head not sent in time */
+    uint64_t api_conns_shed; /* cut to keep a slot free (the longest idle, or one over) */
     uint64_t assets_uploaded, asset_bytes_uploaded, assets_served;
 } gi_farm_metrics;
 
@@ -230,6 +232,9 @@ struct gi_farm {
     uint64_t next_conn_id;
     gi_farm_host **hosts;
     size_t host_count, host_cap;
+    /* Displaced handshakes (gi_farm_conn.c): when last logged, and the count then. */
+    double displaced_logged_at;
+    uint64_t displaced_logged;
 
     int api_fd;
     char api_addr[80];

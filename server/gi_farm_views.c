@@ -331,6 +331,9 @@ char *gi_farm_view_metrics(gi_farm *f)
             (double)m->workers_accepted);
     counter(&b, "gi_farm_workers_refused_total", "Worker connections refused.",
             (double)m->workers_refused);
+    counter(&b, "gi_farm_worker_handshakes_displaced_total",
+            "Unauthenticated worker connections closed to make room for newer ones.",
+            (double)m->handshakes_displaced);
     counter(&b, "gi_farm_frames_refused_total", "Malformed or oversized frames refused.",
             (double)m->frames_refused);
     counter(&b, "gi_farm_api_requests_total", "HTTP API requests.", (double)m->api_requests);
@@ -341,6 +344,10 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_api_slow_closed_total",
             "API connections closed for not sending a request head in time.",
             (double)m->api_slow_closed);
+    counter(&b, "gi_farm_api_conns_shed_total",
+            "API connections closed to keep a slot free: the longest idle, or a new one "
+            "over the limit.",
+            (double)m->api_conns_shed);
     counter(&b, "gi_farm_assets_uploaded_total", "Assets uploaded.", (double)m->assets_uploaded);
     counter(&b, "gi_farm_asset_bytes_uploaded_total", "Bytes of assets uploaded.",
             (double)m->asset_bytes_uploaded);
