@@ -556,14 +556,6 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
         gi_farm_upload *u = r->up;
         r->up = NULL;
         uint64_t bytes = r->received;
-        if (f->store_bytes + bytes > f->cfg.max_store_bytes) {
-            gi_farm_upload_abort(u);
-            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
-                          "the asset store is full (%llu bytes, limit %llu): `gi purge` ended "
-                          "jobs to free their files",
-                          (unsigned long long)f->store_bytes,
-                          (unsigned long long)f->cfg.max_store_bytes);
-        }
         if (gi_farm_upload_finish(f, u, &err))
             return refuse(f, conn, r, method, url,
                           err.code == GI_EINVAL ? MHD_HTTP_BAD_REQUEST : MHD_HTTP_INTERNAL_SERVER_ERROR,
@@ -611,12 +603,10 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
             return refuse(f, conn, r, method, url, MHD_HTTP_CONTENT_TOO_LARGE,
                           "request body of %llu bytes is over the limit of %llu", n,
                           (unsigned long long)r->limit);
-        if (r->route == R_ASSET_PUT && f->store_bytes + n > f->cfg.max_store_bytes)
-            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE,
-                          "the asset store is full (%llu bytes, limit %llu): `gi purge` ended "
-                          "jobs to free their files",
-                          (unsigned long long)f->store_bytes,
-                          (unsigned long long)f->cfg.max_store_bytes);
+        gi_error err;
+        if (r->route == R_ASSET_PUT && gi_farm_store_room(f, n, &err))
+            return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE, "%s",
+                          err.msg);
     }
     if (r->route == R_ASSET_PUT) {
         gi_error err;
@@ -629,7 +619,8 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
     return MHD_YES;
 }
 
-/* How far past its limit a body is read (and discarded) to answer 413. */
+/* How far past its limit, or its refusal, a body is read (and discarded)
+ * to answer. */
 #define DISCARD_MAX ((uint64_t)64 << 20)
 
 /* A piece of a request body. */
@@ -649,7 +640,10 @@ static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
     if (r->up) {
         gi_error err;
         if (gi_farm_upload_write(r->up, data, n, &err)) {
-            r->status = MHD_HTTP_INTERNAL_SERVER_ERROR;
+            gi_farm_upload_abort(r->up);
+            r->up = NULL;
+            r->status = err.code == GI_ENOMEM ? MHD_HTTP_INSUFFICIENT_STORAGE
+                                              : MHD_HTTP_INTERNAL_SERVER_ERROR;
             snprintf(r->err, sizeof r->err, "%s", err.msg);
         }
     } else if (r->route == R_JOBS_SUBMIT) {
@@ -694,10 +688,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         /* A body over the limit (sent chunked, or longer than it said) is
          * read to its end and answered then: MHD cannot answer in the middle
          * of a body. One far over it is cut off without an answer. */
-        if (r->status == MHD_HTTP_CONTENT_TOO_LARGE && r->received > r->limit + DISCARD_MAX) {
-            gi_warn("api: %s from %s: closed after %llu bytes of a body over the limit of %llu",
-                    method, r->peer, (unsigned long long)r->received,
-                    (unsigned long long)r->limit);
+        if (r->status && r->received > r->limit + DISCARD_MAX) {
+            gi_warn("api: %s from %s: closed after %llu bytes of a body refused (%s)", method,
+                    r->peer, (unsigned long long)r->received, r->err);
             return MHD_NO;
         }
         return MHD_YES;

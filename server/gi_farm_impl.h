@@ -223,7 +223,8 @@ struct gi_farm {
     gi_farm_job **jobs; /* by submission order */
     size_t job_count, job_cap;
     uint64_t next_job_id;
-    uint64_t store_bytes; /* bytes in the asset store */
+    uint64_t store_bytes;  /* bytes in the asset store */
+    uint64_t upload_bytes; /* bytes in assets/tmp: uploads under way */
 
     int worker_fd;
     char worker_addr[80];
@@ -301,7 +302,12 @@ char *gi_farm_store_path(const gi_farm *f, const char *hash);
 int gi_farm_store_has(const gi_farm *f, const char *hash, uint64_t *size);
 int gi_farm_store_read(const gi_farm *f, const char *hash, gi_buf *out, gi_error *err);
 int gi_farm_store_put(gi_farm *f, const char *hash, const void *data, size_t len, gi_error *err);
-/* Streaming upload: bytes go to a temporary file while being hashed. */
+/* -1 with err (GI_ENOMEM, "the asset store is full...") if `more` bytes
+ * do not fit beside the store's and the uploads' under way. */
+int gi_farm_store_room(const gi_farm *f, uint64_t more, gi_error *err);
+/* Streaming upload: bytes go to a temporary file while being hashed; the
+ * bytes written count against --max-store-bytes as they arrive
+ * (GI_ENOMEM once they do not fit). */
 typedef struct gi_farm_upload gi_farm_upload;
 gi_farm_upload *gi_farm_upload_begin(gi_farm *f, const char *hash, gi_error *err);
 int gi_farm_upload_write(gi_farm_upload *u, const void *data, size_t len, gi_error *err);

@@ -92,7 +92,20 @@ int gi_farm_store_put(gi_farm *f, const char *hash, const void *data, size_t len
     return rc;
 }
 
+int gi_farm_store_room(const gi_farm *f, uint64_t more, gi_error *err)
+{
+    uint64_t used = f->store_bytes + f->upload_bytes;
+    if (used + more <= f->cfg.max_store_bytes)
+        return 0;
+    return gi_fail(err, GI_ENOMEM,
+                   "the asset store is full (%llu bytes, %llu of them uploads under way; limit "
+                   "%llu): `gi purge` ended jobs to free their files",
+                   (unsigned long long)used, (unsigned long long)f->upload_bytes,
+                   (unsigned long long)f->cfg.max_store_bytes);
+}
+
 struct gi_farm_upload {
+    gi_farm *f;
     char hash[GI_HASH_HEX];
     char *tmp;
     int fd;
@@ -109,6 +122,7 @@ gi_farm_upload *gi_farm_upload_begin(gi_farm *f, const char *hash, gi_error *err
     static unsigned counter;
     size_t n = strlen(f->assets_dir) + 64;
     gi_farm_upload *u = gi_xcalloc(1, sizeof *u);
+    u->f = f;
     memcpy(u->hash, hash, GI_HASH_HEX);
     u->tmp = gi_xmalloc(n);
     snprintf(u->tmp, n, "%s/tmp/upload-%ld-%u", f->assets_dir, (long)getpid(), counter++);
@@ -125,6 +139,10 @@ gi_farm_upload *gi_farm_upload_begin(gi_farm *f, const char *hash, gi_error *err
 
 int gi_farm_upload_write(gi_farm_upload *u, const void *data, size_t len, gi_error *err)
 {
+    /* Counted as they arrive: uploads at once, or sent chunked, would
+     * otherwise fill the disk past the limit before the first finished. */
+    if (gi_farm_store_room(u->f, len, err))
+        return -1;
     crypto_generichash_update(&u->st, data, len);
     const uint8_t *p = data;
     while (len) {
@@ -136,6 +154,7 @@ int gi_farm_upload_write(gi_farm_upload *u, const void *data, size_t len, gi_err
         p += w;
         len -= (size_t)w;
         u->bytes += (uint64_t)w;
+        u->f->upload_bytes += (uint64_t)w;
     }
     return 0;
 }
@@ -144,6 +163,8 @@ void gi_farm_upload_abort(gi_farm_upload *u)
 {
     if (!u)
         return;
+    u->f->upload_bytes -= u->bytes;
+    u->bytes = 0;
     if (u->fd >= 0)
         close(u->fd);
     unlink(u->tmp);
@@ -153,6 +174,10 @@ void gi_farm_upload_abort(gi_farm_upload *u)
 
 int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err)
 {
+    /* From here on its bytes are in the store, or gone. */
+    uint64_t bytes = u->bytes;
+    f->upload_bytes -= bytes;
+    u->bytes = 0;
     uint8_t h[32];
     crypto_generichash_final(&u->st, h, sizeof h);
     char hex[GI_HASH_HEX];
@@ -160,7 +185,7 @@ int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err)
     int rc = 0;
     if (strcmp(hex, u->hash) != 0) {
         rc = gi_fail(err, GI_EINVAL, "the %llu bytes uploaded hash to %.16s..., not %.16s...",
-                     (unsigned long long)u->bytes, hex, u->hash);
+                     (unsigned long long)bytes, hex, u->hash);
     } else if (close(u->fd) != 0) {
         u->fd = -1;
         rc = gi_fail(err, GI_EIO, "%s: close: %s", u->tmp, strerror(errno));
@@ -174,9 +199,9 @@ int gi_farm_upload_finish(gi_farm *f, gi_farm_upload *u, gi_error *err)
             rc = gi_commit_file(u->tmp, p, err);
             free(p);
             if (rc == 0) {
-                f->store_bytes += u->bytes;
+                f->store_bytes += bytes;
                 f->m.assets_uploaded++;
-                f->m.asset_bytes_uploaded += u->bytes;
+                f->m.asset_bytes_uploaded += bytes;
             }
         } else {
             rc = -1;

@@ -1,7 +1,8 @@
 # gi-farmd refuses, each with a logged reason, and keeps serving:
 # a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
 # an oversized frame, a frame with a bad CRC, an unknown message type, frames
-# a connection may not carry, an oversized upload, jobs that name files
+# a connection may not carry, an oversized upload, uploads under way past the
+# store's limit, jobs that name files
 # outside their uploaded assets, and a scene whose parser crashes (in the
 # forked checker). Then a job still renders.
 . "$(dirname "$0")/lib.sh"
@@ -9,7 +10,7 @@
 make_secrets
 LOG="$TMP/farmd.log"
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10 --max-result-bytes 16M \
-    --max-asset-bytes 1M --api-head-seconds 1
+    --max-asset-bytes 1M --max-store-bytes 2M --api-head-seconds 1
 logged() { grep -q -- "$1" "$LOG" || { cat "$LOG"; fail "not logged: $1"; }; }
 
 # Wrong farm secret: the worker is refused and says why.
@@ -79,6 +80,39 @@ logged "hash to"
 code=$(api "/api/v1/assets/$(printf 'a%.0s' $(seq 300))" -o "$TMP/r" -w '%{http_code}' -X PUT \
     --data-binary 'x')
 [ "$code" = 400 ] && ! grep -q "no such endpoint" "$TMP/r" || { cat "$TMP/r"; fail "a 300-character hash: HTTP $code"; }
+# Uploads under way count against --max-store-bytes as their bytes arrive:
+# three of 900 KiB at once, sent chunked (no length to refuse up front),
+# never put more than the store's 2 MiB on disk; the third is refused (507),
+# and its bytes no longer count once it is.
+st=0
+python3 - "$API" "$(cat "$TMP/token")" "$TMP/state/assets/tmp" >"$TMP/uploads.out" 2>&1 \
+    <<'PY' || st=$?
+import hashlib, os, socket, sys, time
+host, port = sys.argv[1].rsplit(":", 1)
+conns = []
+for k in range(3):
+    body = bytes([k]) * (900 << 10)
+    name = hashlib.blake2b(body, digest_size=32).hexdigest()
+    s = socket.create_connection((host, int(port)))
+    s.settimeout(10)
+    s.sendall(("PUT /api/v1/assets/%s HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+               "Transfer-Encoding: chunked\r\n\r\n" % (name, sys.argv[2])).encode())
+    s.sendall(b"%x\r\n%s\r\n" % (len(body), body))
+    conns.append(s)
+time.sleep(1)
+held = sum(os.path.getsize(os.path.join(sys.argv[3], n)) for n in os.listdir(sys.argv[3]))
+codes = []
+for s in conns:
+    s.sendall(b"0\r\n\r\n")
+    codes.append(s.recv(64).split(b" ")[1].decode())
+print("on disk while under way:", held, "answers:", codes)
+sys.exit(0 if held <= 2 << 20 and sorted(codes) == ["201", "201", "507"] else 1)
+PY
+[ $st -eq 0 ] || { cat "$TMP/uploads.out"; fail "uploads under way past the store's limit"; }
+head -c 100000 /dev/urandom >"$TMP/small"
+h=$(b2sum -l 256 "$TMP/small" | cut -d' ' -f1)
+code=$(api "/api/v1/assets/$h" -o "$TMP/r" -w '%{http_code}' -X PUT --data-binary @"$TMP/small")
+[ "$code" = 201 ] || { cat "$TMP/r"; fail "an upload that fits after a refused one: HTTP $code"; }
 
 # A client trickling its request's head, a line every 0.2 s, is cut off
 # after --api-head-seconds; the others are served all the while.
