@@ -573,6 +573,31 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
     return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no such endpoint");
 }
 
+/* Submission bodies are held in memory until they are complete: those
+ * under way at once hold at most this much (else 256 connections of 32 MiB
+ * each: 8 GiB). Four of the largest; a job is usually a few KiB. */
+#define SUBMIT_BUFFERED_MAX ((uint64_t)128 << 20)
+
+static int submissions_have_room(const gi_farm *f, uint64_t more, api_req *r)
+{
+    if (f->submit_buffered + more <= SUBMIT_BUFFERED_MAX)
+        return 1;
+    r->status = MHD_HTTP_SERVICE_UNAVAILABLE;
+    snprintf(r->err, sizeof r->err,
+             "submissions under way hold %llu bytes, and this one's %llu more would pass the "
+             "limit of %llu: try again when they are in",
+             (unsigned long long)f->submit_buffered, (unsigned long long)more,
+             (unsigned long long)SUBMIT_BUFFERED_MAX);
+    return 0;
+}
+
+/* The memory a submission's body held is free again. */
+static void body_release(gi_farm *f, api_req *r)
+{
+    f->submit_buffered -= r->body.len;
+    gi_buf_free(&r->body);
+}
+
 /* First call of a request: route, authenticate, prepare for its body. */
 static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r,
                              const char *method, const char *url)
@@ -607,6 +632,8 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
         if (r->route == R_ASSET_PUT && gi_farm_store_room(f, n, &err))
             return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE, "%s",
                           err.msg);
+        if (r->route == R_JOBS_SUBMIT && !submissions_have_room(f, n, r))
+            return refuse(f, conn, r, method, url, (unsigned)r->status, "%s", r->err);
     }
     if (r->route == R_ASSET_PUT) {
         gi_error err;
@@ -632,6 +659,7 @@ static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
     if (r->received > r->limit) {
         gi_farm_upload_abort(r->up);
         r->up = NULL;
+        body_release(f, r);
         r->status = MHD_HTTP_CONTENT_TOO_LARGE;
         snprintf(r->err, sizeof r->err, "request body is over the limit of %llu bytes",
                  (unsigned long long)r->limit);
@@ -647,12 +675,16 @@ static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
             snprintf(r->err, sizeof r->err, "%s", err.msg);
         }
     } else if (r->route == R_JOBS_SUBMIT) {
-        gi_buf_put(&r->body, data, n);
+        if (submissions_have_room(f, n, r)) {
+            gi_buf_put(&r->body, data, n);
+            f->submit_buffered += n;
+        } else {
+            body_release(f, r);
+        }
     } else {
         r->status = MHD_HTTP_BAD_REQUEST;
         snprintf(r->err, sizeof r->err, "this endpoint takes no request body");
     }
-    (void)f;
 }
 
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
@@ -717,10 +749,9 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     if (!r)
         return;
     gi_farm_upload_abort(r->up); /* a client that went away mid-upload */
-    gi_buf_free(&r->body);
+    body_release(cls, r);
     free(r);
     *con_cls = NULL;
-    (void)cls;
     (void)conn;
     (void)toe;
 }

@@ -241,6 +241,7 @@ struct gi_farm {
     char api_addr[80];
     struct MHD_Daemon *mhd;
     struct gi_api_conn *api_conns; /* the API's TCP connections (gi_farm_api.c) */
+    uint64_t submit_buffered; /* bytes of submission bodies held while they arrive */
 
     gi_farm_metrics m;
 };

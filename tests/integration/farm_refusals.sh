@@ -113,6 +113,42 @@ head -c 100000 /dev/urandom >"$TMP/small"
 h=$(b2sum -l 256 "$TMP/small" | cut -d' ' -f1)
 code=$(api "/api/v1/assets/$h" -o "$TMP/r" -w '%{http_code}' -X PUT --data-binary @"$TMP/small")
 [ "$code" = 201 ] || { cat "$TMP/r"; fail "an upload that fits after a refused one: HTTP $code"; }
+# Submission bodies held in memory while they arrive: 128 MiB at most for
+# all of them. Four of 31 MiB under way; a fifth saying 8 MiB is refused at
+# once (503), one sent chunked when its bytes pass the limit; once they are
+# in, 8 MiB are read again (400: not a job).
+st=0
+python3 - "$API" "$(cat "$TMP/token")" >"$TMP/submits.out" 2>&1 <<'PY' || st=$?
+import socket, sys, time
+host, port = sys.argv[1].rsplit(":", 1)
+def post(head):
+    s = socket.create_connection((host, int(port)))
+    s.settimeout(20)
+    s.sendall(("POST /api/v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n%s\r\n"
+               % (sys.argv[2], head)).encode())
+    return s
+def status(s):
+    return s.recv(64).split(b" ")[1].decode()
+held = []
+for _ in range(4):
+    held.append(post("Content-Length: %d\r\n" % (32 << 20)))
+    held[-1].sendall(b" " * (31 << 20))
+time.sleep(1)  # the server has read them
+said = status(post("Content-Length: %d\r\n" % (8 << 20)))
+chunked = post("Transfer-Encoding: chunked\r\n")
+chunked.sendall(b"%x\r\n%s\r\n0\r\n\r\n" % (8 << 20, b" " * (8 << 20)))
+print("with 124 MiB under way: 8 MiB said", said, "- 8 MiB chunked", status(chunked))
+for s in held:
+    s.sendall(b" " * (1 << 20))
+    print("one under way, when complete:", status(s))
+later = post("Content-Length: %d\r\n" % (8 << 20))
+later.sendall(b" " * (8 << 20))
+print("8 MiB after them:", status(later))
+PY
+[ $st -eq 0 ] && grep -q "said 503 - 8 MiB chunked 503" "$TMP/submits.out" &&
+    grep -q "after them: 400" "$TMP/submits.out" ||
+    { cat "$TMP/submits.out"; fail "submissions under way"; }
+logged "submissions under way hold"
 
 # A client trickling its request's head, a line every 0.2 s, is cut off
 # after --api-head-seconds; the others are served all the while.
