@@ -105,6 +105,7 @@ codes = []
 for s in conns:
     s.sendall(b"0\r\n\r\n")
     codes.append(s.recv(64).split(b" ")[1].decode())
+    s.close()
 print("on disk while under way:", held, "answers:", codes)
 sys.exit(0 if held <= 2 << 20 and sorted(codes) == ["201", "201", "507"] else 1)
 PY
@@ -127,8 +128,10 @@ def post(head):
     s.sendall(("POST /api/v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n%s\r\n"
                % (sys.argv[2], head)).encode())
     return s
-def status(s):
-    return s.recv(64).split(b" ")[1].decode()
+def status(s):  # then closed: an idle connection would be cut, and counted
+    code = s.recv(64).split(b" ")[1].decode()
+    s.close()
+    return code
 held = []
 for _ in range(4):
     held.append(post("Content-Length: %d\r\n" % (32 << 20)))
