@@ -103,6 +103,13 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;
     gi_auth_key(&f->cfg.secret, f->key);
+    /* Clients hold the token, workers the secret: one value for both would
+     * let every client join as a worker, which is trusted with results and
+     * with every asset. */
+    if (gi_token_equal(&f->cfg.token, (const char *)f->cfg.secret.data, f->cfg.secret.len))
+        return gi_fail(err, GI_EINVAL,
+                       "the API token and the farm secret are the same: every client holding "
+                       "the token could join as a worker; give each a value of its own");
     signal(SIGPIPE, SIG_IGN);
     if (open_state(f, err))
         return -1;

@@ -1,4 +1,5 @@
-# gi-farmd refuses, each with a logged reason, and keeps serving:
+# gi-farmd refuses, each with a logged reason, and keeps serving (and
+# refuses to start with one value as API token and farm secret):
 # a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
 # an oversized frame, a frame with a bad CRC, an unknown message type, frames
 # a connection may not carry, an oversized upload, uploads under way past the
@@ -9,6 +10,12 @@
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
 LOG="$TMP/farmd.log"
+# The token as the farm secret too: any client could join as a worker.
+st=0
+GI_FARM_TOKEN_FILE="$TMP/secret" timeout 20 "$FARMD" --state "$TMP/same" --listen-workers 127.0.0.1:0 \
+    --listen-api 127.0.0.1:0 >"$TMP/same.log" 2>&1 || st=$?
+[ $st -eq 2 ] && grep -q "the API token and the farm secret are the same" "$TMP/same.log" ||
+    { cat "$TMP/same.log"; fail "one value as token and secret: exit $st"; }
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10 --max-result-bytes 16M \
     --max-asset-bytes 1M --max-store-bytes 2M --api-head-seconds 1
 logged() { grep -q -- "$1" "$LOG" || { cat "$LOG"; fail "not logged: $1"; }; }
