@@ -51,6 +51,7 @@ void gi_farm_config_default(gi_farm_config *c)
     c->max_result_bytes = (uint64_t)1 << 30;
     c->max_job_pixels = (uint64_t)64 << 20;
     c->max_jobs = 1000;
+    c->max_jobs_memory = (uint64_t)1 << 30;
     c->max_workers = 1024;
     c->check_timeout_s = 300.0;
     c->check_memory = (uint64_t)16 << 30;

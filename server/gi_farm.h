@@ -40,6 +40,7 @@ typedef struct gi_farm_config {
     uint64_t max_result_bytes;   /* one RESULT frame */
     uint64_t max_job_pixels;     /* image width x height */
     uint32_t max_jobs;           /* jobs not yet finished */
+    uint64_t max_jobs_memory;    /* the records and texts of all jobs kept, ended ones too */
     uint32_t max_workers;        /* worker connections */
     double check_timeout_s;      /* scene check of one job */
     uint64_t check_memory;       /* address-space limit of a checker, 0 = none */

@@ -56,6 +56,7 @@ typedef struct gi_farm_job {
     uint32_t priority;
     double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
     char *file, *text;
+    size_t text_len; /* strlen(text): counted against --max-jobs-memory at every submission */
     gi_manifest manifest;
     /* Data the job published that its last checkpoint needs from the asset
      * store (named by hash; <dir>/published), kept there until the job

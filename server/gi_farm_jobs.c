@@ -441,6 +441,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
         j->submitted = r->submitted;
         j->file = gi_xstrdup(r->file);
         j->text = gi_xstrdup(r->text);
+        j->text_len = strlen(j->text);
         for (size_t i = 0; i < r->manifest.count; i++)
             gi_manifest_put(&j->manifest, r->manifest.entries[i].name,
                             r->manifest.entries[i].hash, r->manifest.entries[i].size);
@@ -613,6 +614,17 @@ static size_t unfinished_jobs(const gi_farm *f)
     return n;
 }
 
+/* What the farm's jobs hold in memory for as long as they are kept (a
+ * cancelled or failed job keeps its text for a retry, a done one until it
+ * is purged): their records and texts. */
+static uint64_t jobs_memory(const gi_farm *f)
+{
+    uint64_t n = 0;
+    for (size_t i = 0; i < f->job_count; i++)
+        n += sizeof(gi_farm_job) + f->jobs[i]->text_len;
+    return n;
+}
+
 /* The id for a new job: next_job_id, or past it while that id is taken (by
  * a job, or by a directory left in jobs/ since start-up). 0 when none is
  * left. */
@@ -639,6 +651,17 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     if (unfinished_jobs(f) >= f->cfg.max_jobs) {
         gi_fail(err, GI_ENOMEM, "the farm already has %u unfinished jobs (its limit)",
                 f->cfg.max_jobs);
+        return NULL;
+    }
+    /* Else submitting and cancelling jobs would fill the coordinator's
+     * memory (and its journal) without bound. */
+    uint64_t held = jobs_memory(f), more = sizeof(gi_farm_job) + strlen(text);
+    if (held + more > f->cfg.max_jobs_memory) {
+        gi_fail(err, GI_ENOMEM,
+                "the farm's %zu jobs hold %llu bytes, and this one's %llu more would pass "
+                "--max-jobs-memory (%llu): `gi purge` ended jobs",
+                f->job_count, (unsigned long long)held, (unsigned long long)more,
+                (unsigned long long)f->cfg.max_jobs_memory);
         return NULL;
     }
     /* Everything that can be checked without loading the scene is checked
@@ -683,6 +706,7 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     j->submitted = gi_farm_wallnow();
     j->file = gi_xstrdup(file);
     j->text = text;
+    j->text_len = strlen(text);
     j->manifest = *manifest;
     gi_manifest_init(manifest);
     describe(j, &parsed);

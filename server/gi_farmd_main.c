@@ -43,6 +43,7 @@ static void usage(FILE *out)
             "  --blocklist-failures N --blocklist-seconds S   (5, 600)\n"
             "  --max-asset-bytes B --max-store-bytes B --max-result-bytes B  (1G, 64G, 1G)\n"
             "  --max-pixels N --max-jobs N --max-workers N    (64M, 1000, 1024)\n"
+            "  --max-jobs-memory B         what all jobs kept may hold, ended ones too (1G)\n"
             "  --check-timeout S --check-memory B             scene checker limits (300, 16G)\n"
             "  --api-head-seconds S        time an API client has to send a request's head (10)\n"
             "Sizes take K, M, G, T suffixes. See docs/farm.md.\n");
@@ -77,6 +78,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
     } sizes[] = {
         {"--max-asset-bytes", offsetof(gi_farm_config, max_asset_bytes)},
         {"--max-store-bytes", offsetof(gi_farm_config, max_store_bytes)},
+        {"--max-jobs-memory", offsetof(gi_farm_config, max_jobs_memory)},
         {"--max-result-bytes", offsetof(gi_farm_config, max_result_bytes)},
         {"--max-pixels", offsetof(gi_farm_config, max_job_pixels)},
         {"--check-memory", offsetof(gi_farm_config, check_memory)},
