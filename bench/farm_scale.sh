@@ -1,0 +1,108 @@
+#!/bin/sh
+# The coordinator's own cost under many workers: gi-farmd and WORKERS
+# gi-worker processes (--procs 1 each, their own --name and cache) on
+# loopback, the jobs submitted one after another with `gi submit --wait`.
+# For each job: tasks (results merged), wall time, gi-farmd's CPU seconds
+# (user + system from /proc/PID/stat) and per task, bytes on the worker
+# port per task (both directions, from `ss -ti`: what reached the socket),
+# result bytes per task, and gi-farmd's peak RSS (VmHWM) so far. On a
+# machine with fewer cores than workers the workers time-share them: the
+# wall time says nothing about speedup, the coordinator's CPU does.
+#   bench/farm_scale.sh BUILD_DIR WORKERS JOB.json [JOB.json...]
+# COPIES=K submits each job K times at once (a queue of K jobs), then waits
+# for them all; an argument K*JOB.json does so for that job alone (at most a
+# few hundred at once: each is a `gi submit --wait`). PERF=FILE records
+# gi-farmd with perf (call graphs) for the whole run. FARMD_ARGS adds
+# options to gi-farmd.
+set -eu
+BIN=$(cd "${1:?BUILD_DIR}" && pwd)
+WORKERS=${2:?WORKERS}
+shift 2
+COPIES=${COPIES:-1}
+T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-scale.XXXXXX")
+PIDS=""
+cleanup() {
+    for p in $PIDS; do kill "$p" 2>/dev/null || true; done
+    wait 2>/dev/null || true
+    rm -rf "$T"
+}
+trap cleanup EXIT INT TERM
+head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/secret"
+head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/token"
+chmod 600 "$T/secret" "$T/token"
+export GI_FARM_SECRET_FILE="$T/secret" GI_FARM_TOKEN_FILE="$T/token" GI_LOG=warn
+# shellcheck disable=SC2086
+"$BIN/gi-farmd" --state "$T/state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 \
+    ${FARMD_ARGS:-} >"$T/farmd.log" 2>&1 &
+FARMD_PID=$!
+PIDS="$PIDS $FARMD_PID"
+while [ ! -s "$T/state/addresses" ]; do sleep 0.05; done
+export GI_FARM="http://$(awk '$1 == "api" {print $2}' "$T/state/addresses")"
+WADDR=$(awk '$1 == "workers" {print $2}' "$T/state/addresses")
+WPORT=${WADDR##*:}
+k=1
+while [ "$k" -le "$WORKERS" ]; do
+    "$BIN/gi-worker" --connect "$WADDR" --procs 1 --name "w$k" --cache "$T/cache$k" \
+        >"$T/worker$k.log" 2>&1 &
+    PIDS="$PIDS $!"
+    k=$((k + 1))
+done
+metric() {
+    curl -s -H "Authorization: Bearer $(cat "$T/token")" "$GI_FARM/metrics" |
+        awk -v m="$1" '$1 == m {print $2}'
+}
+while [ "$(metric 'gi_farm_workers{state="active"}')" != "$WORKERS" ]; do sleep 0.1; done
+if [ -n "${PERF:-}" ]; then
+    perf record -g -o "$PERF" -p "$FARMD_PID" >/dev/null 2>&1 &
+    PERF_PID=$!
+    sleep 0.5
+fi
+cpu() { awk '{print ($14 + $15) / 100}' "/proc/$FARMD_PID/stat"; }
+hwm() { awk '$1 == "VmHWM:" {print $2 / 1024}' "/proc/$FARMD_PID/status"; }
+# Bytes through the worker port's sockets, as seen by gi-farmd (received + acked).
+net() {
+    ss -tinH state established "( sport = :$WPORT )" |
+        awk '{for (i = 1; i <= NF; i++) if ($i ~ /^bytes_(acked|received):/) {
+                  split($i, kv, ":"); s[kv[1]] += kv[2] }}
+             END {printf "%.0f %.0f\n", s["bytes_received"], s["bytes_acked"]}'
+}
+now() { date +%s.%N; }
+printf '%-28s %7s %6s %7s %8s %8s %9s %9s %9s %7s\n' job workers tasks wall_s cpu_s \
+    cpu_us/t in_B/t out_B/t result_B/t hwm_MB
+for ARG in "$@"; do
+    case $ARG in
+    *'*'*) K=${ARG%%'*'*} JOB=${ARG#*'*'} ;;
+    *) K=$COPIES JOB=$ARG ;;
+    esac
+    r0=$(metric gi_farm_task_results_total)
+    b0=$(metric gi_farm_result_bytes_total)
+    c0=$(cpu)
+    set -- $(net)
+    i0=$1 o0=$2
+    t0=$(now)
+    n=1 SUBMITS=""
+    while [ "$n" -le "$K" ]; do
+        "$BIN/gi" submit "$JOB" --wait --out "$T/out-$n" --progress none >"$T/submit-$n.log" 2>&1 &
+        SUBMITS="$SUBMITS $!"
+        n=$((n + 1))
+    done
+    wait_ok=0
+    for p in $SUBMITS; do wait "$p" || wait_ok=$?; done
+    [ "$wait_ok" -eq 0 ] || { echo "a job failed:"; cat "$T"/submit-*.log; exit 1; }
+    t1=$(now)
+    c1=$(cpu)
+    set -- $(net)
+    i1=$1 o1=$2
+    r1=$(metric gi_farm_task_results_total)
+    b1=$(metric gi_farm_result_bytes_total)
+    awk -v job="$(basename "$JOB" .json)x$K" -v w="$WORKERS" -v r0="$r0" -v r1="$r1" \
+        -v t0="$t0" -v t1="$t1" -v c0="$c0" -v c1="$c1" -v i0="$i0" -v i1="$i1" \
+        -v o0="$o0" -v o1="$o1" -v b0="$b0" -v b1="$b1" -v h="$(hwm)" 'BEGIN {
+        n = r1 - r0; if (n < 1) n = 1
+        printf "%-28s %7d %6d %7.2f %8.2f %8.0f %9.0f %9.0f %9.0f %7.1f\n", job, w, r1 - r0,
+            t1 - t0, c1 - c0, 1e6 * (c1 - c0) / n, (i1 - i0) / n, (o1 - o0) / n, (b1 - b0) / n, h}'
+done
+if [ -n "${PERF:-}" ]; then
+    kill -INT "$PERF_PID"
+    wait "$PERF_PID" 2>/dev/null || true
+fi
