@@ -146,7 +146,9 @@ int gi_farm_run(gi_farm *f, gi_error *err)
     slot *slots = NULL;
     int api_fd = gi_farm_api_fd(f);
     while (!f->stop) {
-        size_t need = 2 + f->conn_count + f->job_count;
+        size_t live_count;
+        gi_farm_job **live = gi_farm_live_jobs(f, &live_count);
+        size_t need = 2 + f->conn_count + live_count;
         if (need > cap) {
             cap = 2 * need;
             fds = gi_xrealloc(fds, cap * sizeof *fds);
@@ -169,10 +171,10 @@ int gi_farm_run(gi_farm *f, gi_error *err)
             fds[n] = (struct pollfd){.fd = c->fd, .events = ev};
             slots[n++] = (slot){2, c};
         }
-        for (size_t i = 0; i < f->job_count; i++)
-            if (f->jobs[i]->check_fd >= 0) {
-                fds[n] = (struct pollfd){.fd = f->jobs[i]->check_fd, .events = POLLIN};
-                slots[n++] = (slot){3, f->jobs[i]};
+        for (size_t i = 0; i < live_count; i++)
+            if (live[i]->check_fd >= 0) {
+                fds[n] = (struct pollfd){.fd = live[i]->check_fd, .events = POLLIN};
+                slots[n++] = (slot){3, live[i]};
             }
         int timeout = TICK_MS;
         int at = gi_farm_api_timeout_ms(f);

@@ -223,6 +223,13 @@ struct gi_farm {
 
     gi_farm_job **jobs; /* by submission order */
     size_t job_count, job_cap;
+    int jobs_unsorted;  /* some job's id is below an earlier one's (a damaged journal) */
+    /* The jobs not ended (checking or running), in submission order: what
+     * the loop's poll set, timers and scheduler go through, so that a
+     * farm's history of ended jobs costs them nothing (gi_farm_live_jobs). */
+    gi_farm_job **live;
+    size_t live_count, live_cap;
+    int live_stale; /* a job was added, ended, reopened or purged since */
     uint64_t next_job_id;
     uint64_t store_bytes;  /* bytes in the asset store */
     uint64_t upload_bytes; /* bytes in assets/tmp: uploads under way */
@@ -256,6 +263,9 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err);
 gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
                                 gi_manifest *manifest, uint32_t priority, gi_error *err);
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
+/* The jobs not ended, in submission order (rebuilt here after a change).
+ * Valid until the next call: a job that ends meanwhile stays in it. */
+gi_farm_job **gi_farm_live_jobs(gi_farm *f, size_t *count);
 int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why);
 int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err);
 /* Runs a failed or cancelled job again, from its last checkpoint if it has

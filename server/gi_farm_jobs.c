@@ -76,7 +76,10 @@ static gi_farm_job *job_new(gi_farm *f, uint64_t id)
         f->job_cap = f->job_cap ? 2 * f->job_cap : 16;
         f->jobs = gi_xrealloc(f->jobs, f->job_cap * sizeof *f->jobs);
     }
+    if (f->job_count && f->jobs[f->job_count - 1]->id > id)
+        f->jobs_unsorted = 1;
     f->jobs[f->job_count++] = j;
+    f->live_stale = 1;
     /* Never past GI_JOB_ID_MAX: at the last id, submissions are refused
      * (next_free_id) instead of wrapping to ids of jobs that exist. */
     if (id >= f->next_job_id)
@@ -124,12 +127,43 @@ static void job_free(gi_farm_job *j)
     free(j);
 }
 
+/* Every result and lease looks its job up, among all the farm's jobs ever
+ * submitted and not purged: ids rise in submission order, so a binary
+ * search (a linear one if a damaged journal broke the order). */
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id)
 {
-    for (size_t i = 0; i < f->job_count; i++)
-        if (f->jobs[i]->id == id)
-            return f->jobs[i];
-    return NULL;
+    if (f->jobs_unsorted) {
+        for (size_t i = 0; i < f->job_count; i++)
+            if (f->jobs[i]->id == id)
+                return f->jobs[i];
+        return NULL;
+    }
+    size_t lo = 0, hi = f->job_count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (f->jobs[mid]->id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < f->job_count && f->jobs[lo]->id == id ? f->jobs[lo] : NULL;
+}
+
+gi_farm_job **gi_farm_live_jobs(gi_farm *f, size_t *count)
+{
+    if (f->live_stale) {
+        if (f->live_cap < f->job_count) {
+            f->live_cap = f->job_count;
+            f->live = gi_xrealloc(f->live, f->live_cap * sizeof *f->live);
+        }
+        f->live_count = 0;
+        for (size_t i = 0; i < f->job_count; i++)
+            if (!terminal(f->jobs[i]))
+                f->live[f->live_count++] = f->jobs[i];
+        f->live_stale = 0;
+    }
+    *count = f->live_count;
+    return f->live;
 }
 
 static void push_log_line(gi_farm_job *j, char *line)
@@ -412,9 +446,10 @@ static int compact(gi_farm *f, gi_error *err)
 /* A failed or cancelled job made unfinished again: it is checked and
  * loaded like a job of a restarted coordinator, from its checkpoint if it
  * has one. What its last run counted starts over. */
-static void reopen(gi_farm_job *j)
+static void reopen(gi_farm *f, gi_farm_job *j)
 {
     j->state = GI_FJ_CHECKING;
+    f->live_stale = 1;
     j->ended = 0;
     gi_error_clear(&j->error);
     j->final_tasks = j->final_merged = j->final_retries = 0;
@@ -455,6 +490,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
         return 0;
     case GI_JREC_END:
         if (j) {
+            f->live_stale = 1;
             j->state = r->end == GI_JOB_END_DONE     ? GI_FJ_DONE
                        : r->end == GI_JOB_END_FAILED ? GI_FJ_FAILED
                                                      : GI_FJ_CANCELLED;
@@ -480,7 +516,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
         return 0;
     case GI_JREC_RETRY:
         if (j && (j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED))
-            reopen(j);
+            reopen(f, j);
         return 0;
     case GI_JREC_PURGE:
         for (size_t i = 0; i < f->job_count; i++)
@@ -488,6 +524,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
                 job_free(f->jobs[i]);
                 memmove(&f->jobs[i], &f->jobs[i + 1], (f->job_count - i - 1) * sizeof *f->jobs);
                 f->job_count--;
+                f->live_stale = 1;
                 break;
             }
         return 0;
@@ -591,11 +628,13 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err)
 
 static void start_checkers(gi_farm *f)
 {
+    size_t n;
+    gi_farm_job **live = gi_farm_live_jobs(f, &n);
     int running = 0;
-    for (size_t i = 0; i < f->job_count; i++)
-        running += f->jobs[i]->check_pid > 0;
-    for (size_t i = 0; i < f->job_count && running < MAX_CHECKERS; i++) {
-        gi_farm_job *j = f->jobs[i];
+    for (size_t i = 0; i < n; i++)
+        running += live[i]->check_pid > 0;
+    for (size_t i = 0; i < n && running < MAX_CHECKERS; i++) {
+        gi_farm_job *j = live[i];
         if (j->state != GI_FJ_CHECKING || j->check_pid > 0)
             continue;
         gi_error err;
@@ -718,6 +757,7 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     if (gi_mkdirs(out, err) || gi_journal_append(&f->journal, &r, err)) {
         /* Not journaled: forget it (the id is not reused). */
         f->job_count--;
+        f->live_stale = 1;
         j->text = NULL;
         job_free(j);
         return NULL;
@@ -843,6 +883,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
 {
     checkpoint_finish(f, j, 1); /* journaled before the END */
     j->state = state;
+    f->live_stale = 1;
     j->ended = gi_farm_wallnow();
     gi_farm_check_kill(j);
     gi_farm_sched_drop_job(f, j);
@@ -911,7 +952,7 @@ int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err)
     gi_farm_job_log(j, "retried after it %s (%s): %s",
                     j->state == GI_FJ_FAILED ? "failed" : "was cancelled", j->error.msg,
                     has_ckpt ? "resuming from its last checkpoint" : "starting over");
-    reopen(j);
+    reopen(f, j);
     f->m.jobs_retried++;
     start_checkers(f);
     return 0;
@@ -958,6 +999,7 @@ int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
         if (f->jobs[i] == j) {
             memmove(&f->jobs[i], &f->jobs[i + 1], (f->job_count - i - 1) * sizeof *f->jobs);
             f->job_count--;
+            f->live_stale = 1;
             break;
         }
     freed += gi_farm_store_release(f, &j->manifest, 1);
@@ -1325,8 +1367,10 @@ void gi_farm_jobs_tick(gi_farm *f)
 {
     start_checkers(f);
     double now = gi_now();
-    for (size_t i = 0; i < f->job_count; i++) {
-        gi_farm_job *j = f->jobs[i];
+    size_t n;
+    gi_farm_job **live = gi_farm_live_jobs(f, &n);
+    for (size_t i = 0; i < n; i++) {
+        gi_farm_job *j = live[i];
         if (j->state == GI_FJ_CHECKING)
             gi_farm_check_deadline(f, j, now);
         checkpoint_if_due(f, j, now, 0);
@@ -1358,6 +1402,9 @@ void gi_farm_jobs_free(gi_farm *f)
     free(f->jobs);
     f->jobs = NULL;
     f->job_count = f->job_cap = 0;
+    free(f->live);
+    f->live = NULL;
+    f->live_count = f->live_cap = 0;
     gi_journal_close(&f->journal);
 }
 

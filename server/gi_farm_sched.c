@@ -289,30 +289,37 @@ void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path)
 
 /* ---- leasing -------------------------------------------------------------- */
 
+/* The jobs a scheduling round chooses from: the live ones. */
+typedef struct candidates {
+    gi_farm_job **jobs;
+    size_t count;
+    unsigned char *exhausted; /* [i]: job i has nothing pending for anyone */
+    unsigned char *passed;    /* [i]: job i has nothing for this connection */
+} candidates;
+
 /* The running job with the lowest pass that may still have pending tasks
- * for this connection, as an index into f->jobs, or -1. */
-static long pick_job(gi_farm *f, const unsigned char *exhausted, const unsigned char *passed)
+ * for this connection, as an index into cand->jobs, or -1. */
+static long pick_job(const candidates *cand)
 {
     long best = -1;
-    for (size_t i = 0; i < f->job_count; i++) {
-        gi_farm_job *j = f->jobs[i];
-        if (exhausted[i] || passed[i] || j->state != GI_FJ_RUNNING || !j->loaded)
+    for (size_t i = 0; i < cand->count; i++) {
+        gi_farm_job *j = cand->jobs[i];
+        if (cand->exhausted[i] || cand->passed[i] || j->state != GI_FJ_RUNNING || !j->loaded)
             continue;
-        if (best < 0 || j->pass < f->jobs[best]->pass)
+        if (best < 0 || j->pass < cand->jobs[best]->pass)
             best = (long)i;
     }
     return best;
 }
 
 /* A task for connection c, from the job with the lowest pass that has one
- * it may take. exhausted[i]: job i has nothing pending for anyone. */
-static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, unsigned char *exhausted,
-                                unsigned char *passed, gi_farm_job **job)
+ * it may take. */
+static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, candidates *cand, gi_farm_job **job)
 {
-    memset(passed, 0, f->job_count);
+    memset(cand->passed, 0, cand->count);
     long i;
-    while ((i = pick_job(f, exhausted, passed)) >= 0) {
-        gi_farm_job *j = f->jobs[i];
+    while ((i = pick_job(cand)) >= 0) {
+        gi_farm_job *j = cand->jobs[i];
         taker k = {f, j, c->host};
         uint64_t refused;
         const gi_task *t = gi_jobrun_lease_if(&j->jr, may_take, &k, &refused);
@@ -321,21 +328,23 @@ static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, unsigned char *exha
             return t;
         }
         if (refused)
-            passed[i] = 1; /* its pending tasks belong to other hosts */
+            cand->passed[i] = 1; /* its pending tasks belong to other hosts */
         else
-            exhausted[i] = 1;
+            cand->exhausted[i] = 1;
     }
     return NULL;
 }
 
 void gi_farm_schedule(gi_farm *f)
 {
-    if (f->job_count == 0 || f->conn_count == 0)
+    candidates cand;
+    cand.jobs = gi_farm_live_jobs(f, &cand.count);
+    if (cand.count == 0 || f->conn_count == 0)
         return;
     double now = gi_now();
     mark_present(f, now);
-    unsigned char *exhausted = gi_xcalloc(f->job_count, 1);
-    unsigned char *passed = gi_xcalloc(f->job_count, 1);
+    cand.exhausted = gi_xcalloc(cand.count, 1);
+    cand.passed = gi_xcalloc(cand.count, 1);
     int any = 1;
     /* Round-robin over workers, one task at a time, so a burst of work is
      * spread rather than piled on the first worker. */
@@ -346,7 +355,7 @@ void gi_farm_schedule(gi_farm *f)
             if (!conn_takes_work(f, c, now))
                 continue;
             gi_farm_job *j = NULL;
-            const gi_task *t = lease_for(f, c, exhausted, passed, &j);
+            const gi_task *t = lease_for(f, c, &cand, &j);
             if (!t)
                 continue;
             affinity_own(j, t->affinity, c->host, "its owner cannot take work");
@@ -364,8 +373,8 @@ void gi_farm_schedule(gi_farm *f)
             any = 1;
         }
     }
-    free(exhausted);
-    free(passed);
+    free(cand.exhausted);
+    free(cand.passed);
 }
 
 /* ---- what workers report ------------------------------------------------- */
