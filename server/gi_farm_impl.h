@@ -131,7 +131,9 @@ typedef struct gi_farm_job {
      * lines are only counted, and the file says how many it lacks. */
     gi_buf log_pending;
     uint64_t log_dropped;
-    gi_fj_task_error errors[GI_FJ_ERRORS_KEEP];
+    /* GI_FJ_ERRORS_KEEP of them, allocated at the first: 25 KB a job, most
+     * of a farm's history of ended jobs would otherwise be empty rings. */
+    gi_fj_task_error *errors;
     int err_start, err_count;
 } gi_farm_job;
 

@@ -124,6 +124,7 @@ static void job_free(gi_farm_job *j)
     gi_buf_free(&j->log_pending);
     for (int i = 0; i < j->log_count; i++)
         free(j->log[(j->log_start + i) % GI_FJ_LOG_KEEP]);
+    free(j->errors);
     free(j);
 }
 
@@ -271,6 +272,8 @@ void gi_farm_job_task_error(gi_farm_job *j, uint64_t task, uint32_t attempt,
                             const char *worker, const char *msg)
 {
     gi_fj_task_error *e;
+    if (!j->errors)
+        j->errors = gi_xcalloc(GI_FJ_ERRORS_KEEP, sizeof *j->errors);
     if (j->err_count == GI_FJ_ERRORS_KEEP) {
         e = &j->errors[j->err_start];
         j->err_start = (j->err_start + 1) % GI_FJ_ERRORS_KEEP;
