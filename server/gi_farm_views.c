@@ -77,11 +77,8 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
         retries = jr->retries;
         st = jr->stats;
         leased = jr->leased;
-        for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
-            const gi_jobrun_task *jt = gi_jobrun_task_at(jr, i);
-            pending += jt->state == GI_TASK_PENDING;
-            held += jt->state == GI_TASK_DONE;
-        }
+        held = jr->held;
+        pending = gi_jobrun_pending_count(jr);
     }
     /* Work in the method's unit (samples, photons...), planned so far and
      * still to plan in this frame; the frame being computed, from 0. */

@@ -197,6 +197,7 @@ static int advance(gi_jobrun *jr)
             jt = gi_jobrun_task_at(jr, jr->merge_next); /* absorb may have moved the array */
             if (rc)
                 return job_fail(jr, &err);
+            jr->held--;
             jr->held_results_bytes -= jt->result.len;
             gi_buf_free(&jt->result);
             gi_task_free(&jt->task);
@@ -265,6 +266,7 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
     gi_buf_move(&jt->result, result);
     jt->state = GI_TASK_DONE;
     jr->leased--;
+    jr->held++;
     jr->cost_done += jt->task.cost;
     jr->stats.rays += stats->rays;
     jr->stats.samples += stats->samples;

@@ -39,6 +39,7 @@ typedef struct gi_jobrun {
     uint64_t *pending; /* ids waiting for a lease; retries go first */
     uint64_t pending_head, pending_count, pending_cap;
     uint64_t leased;
+    uint64_t held;       /* results waiting for their turn to merge (GI_TASK_DONE) */
     uint64_t merge_next; /* every id below this is merged */
     uint32_t max_attempts;
     int finished, failed;
@@ -105,6 +106,12 @@ int gi_jobrun_finish_retryable(const gi_jobrun *jr);
 /* Calls finish again on such a run (the outputs may find room now): 0 if
  * it is finished, -1 if it failed again (or was not such a run). */
 int gi_jobrun_finish_again(gi_jobrun *jr);
+/* Tasks waiting for a lease: those not merged, less the leased and held
+ * ones (kept as counts: a job's view is asked for many times a second). */
+static inline uint64_t gi_jobrun_pending_count(const gi_jobrun *jr)
+{
+    return jr->task_count - jr->merge_next - jr->leased - jr->held;
+}
 
 /* What a job's results depend on: BLAKE2b-256 (hex) of its text and of the
  * name and hash of every file its scene read. Checkpoints carry it. */

@@ -173,6 +173,65 @@ GI_TEST(test_jobrun_merges_in_id_order_whatever_the_completion_order)
     }
 }
 
+/* The counts a job's view shows match the tasks' states. */
+static int counts_match(const gi_jobrun *jr)
+{
+    uint64_t pending = 0, held = 0;
+    for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
+        pending += gi_jobrun_task_at(jr, i)->state == GI_TASK_PENDING;
+        held += gi_jobrun_task_at(jr, i)->state == GI_TASK_DONE;
+    }
+    return pending == gi_jobrun_pending_count(jr) && held == jr->held;
+}
+
+GI_TEST(test_jobrun_counts_pending_and_held_tasks_as_they_change)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    gi_rng rng;
+    gi_rng_init(&rng, 7, 0, 0);
+    uint64_t leased[16];
+    uint32_t attempts[16];
+    int nleased = 0, steps = 0;
+    gi_error crash;
+    gi_fail(&crash, GI_ECRASH, "simulated crash");
+    while (!gi_jobrun_done(&jr) && steps++ < 1000) {
+        const gi_task *t;
+        while (nleased < 12 && (t = gi_jobrun_lease(&jr))) {
+            leased[nleased] = t->id;
+            attempts[nleased++] = t->attempt;
+            GI_REQUIRE(counts_match(&jr));
+        }
+        if (nleased == 0)
+            break;
+        int k = (int)gi_rng_below(&rng, (uint32_t)nleased);
+        uint64_t id = leased[k];
+        uint32_t at = attempts[k];
+        leased[k] = leased[--nleased];
+        attempts[k] = attempts[nleased];
+        uint32_t what = gi_rng_below(&rng, 6);
+        if (what == 0 && at == 0) {
+            gi_jobrun_fail(&jr, id, at, &crash);
+        } else if (what == 1) {
+            gi_jobrun_requeue(&jr, id);
+        } else {
+            gi_buf r;
+            gi_buf_init(&r);
+            double v = task_value(id);
+            gi_buf_put(&r, &v, sizeof v);
+            gi_task_stats st = {1, 1, 0.0};
+            gi_jobrun_complete(&jr, id, at, &r, &st);
+            gi_buf_free(&r);
+        }
+        GI_REQUIRE(counts_match(&jr));
+    }
+    GI_CHECK(jr.finished && jr.held == 0 && gi_jobrun_pending_count(&jr) == 0);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
 GI_TEST(test_jobrun_fails_after_max_attempts_and_on_bad_input)
 {
     gi_job job;
