@@ -100,6 +100,29 @@ static int start(const gi_method *m, gi_job *job, gi_jobrun *jr, gi_error *err)
     return gi_jobrun_start(jr, job, err);
 }
 
+/* Takes one of the n leases held, at random: its task's id and attempt. */
+static void take_lease(gi_rng *rng, uint64_t *leased, uint32_t *attempts, int *n, uint64_t *id,
+                       uint32_t *at)
+{
+    int k = (int)gi_rng_below(rng, (uint32_t)*n);
+    *id = leased[k];
+    *at = attempts[k];
+    leased[k] = leased[--*n];
+    attempts[k] = attempts[*n];
+}
+
+/* The result of task id (attempt at): its value. */
+static void complete(gi_jobrun *jr, uint64_t id, uint32_t at)
+{
+    gi_buf r;
+    gi_buf_init(&r);
+    double v = task_value(id);
+    gi_buf_put(&r, &v, sizeof v);
+    gi_task_stats s = {1, 1, 0.0};
+    gi_jobrun_complete(jr, id, at, &r, &s);
+    gi_buf_free(&r);
+}
+
 /* Runs the job completing leased tasks in a shuffled order, with some
  * failures and stale duplicates; returns the merge sum. */
 static double run_shuffled(uint64_t seed, fake_state *out)
@@ -124,27 +147,18 @@ static double run_shuffled(uint64_t seed, fake_state *out)
         }
         if (nleased == 0)
             break;
-        int k = (int)gi_rng_below(&rng, (uint32_t)nleased);
-        uint64_t id = leased[k];
-        uint32_t at = attempts[k];
-        leased[k] = leased[--nleased];
-        attempts[k] = attempts[nleased];
+        uint64_t id;
+        uint32_t at;
+        take_lease(&rng, leased, attempts, &nleased, &id, &at);
         if (seed != 0 && at == 0 && gi_rng_below(&rng, 5) == 0) {
             gi_error e;
             gi_fail(&e, GI_ECRASH, "simulated crash");
             gi_jobrun_fail(&jr, id, at, &e);
             continue;
         }
-        gi_buf r;
-        gi_buf_init(&r);
-        double v = task_value(id);
-        gi_buf_put(&r, &v, sizeof v);
-        gi_task_stats s = {1, 1, 0.0};
-        gi_jobrun_complete(&jr, id, at, &r, &s);
+        complete(&jr, id, at);
         /* A stale duplicate of the same result changes nothing. */
-        gi_buf_put(&r, &v, sizeof v);
-        gi_jobrun_complete(&jr, id, at, &r, &s);
-        gi_buf_free(&r);
+        complete(&jr, id, at);
     }
     fake_state *st = job.state;
     double sum = jr.finished ? st->sum : -1;
@@ -206,24 +220,16 @@ GI_TEST(test_jobrun_counts_pending_and_held_tasks_as_they_change)
         }
         if (nleased == 0)
             break;
-        int k = (int)gi_rng_below(&rng, (uint32_t)nleased);
-        uint64_t id = leased[k];
-        uint32_t at = attempts[k];
-        leased[k] = leased[--nleased];
-        attempts[k] = attempts[nleased];
+        uint64_t id;
+        uint32_t at;
+        take_lease(&rng, leased, attempts, &nleased, &id, &at);
         uint32_t what = gi_rng_below(&rng, 6);
         if (what == 0 && at == 0) {
             gi_jobrun_fail(&jr, id, at, &crash);
         } else if (what == 1) {
             gi_jobrun_requeue(&jr, id);
         } else {
-            gi_buf r;
-            gi_buf_init(&r);
-            double v = task_value(id);
-            gi_buf_put(&r, &v, sizeof v);
-            gi_task_stats st = {1, 1, 0.0};
-            gi_jobrun_complete(&jr, id, at, &r, &st);
-            gi_buf_free(&r);
+            complete(&jr, id, at);
         }
         GI_REQUIRE(counts_match(&jr));
     }
