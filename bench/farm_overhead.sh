@@ -14,25 +14,8 @@ ROUNDS=${2:-5}
 JOB=${3:-}
 [ -z "$JOB" ] || JOB=$(cd "$(dirname "$JOB")" && pwd)/$(basename "$JOB")
 SRC=$(cd "$(dirname "$0")/.." && pwd)
-T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-farm.XXXXXX")
-PIDS=""
-cleanup() {
-    for p in $PIDS; do kill "$p" 2>/dev/null || true; done
-    wait 2>/dev/null || true
-    rm -rf "$T"
-}
-trap cleanup EXIT INT TERM
-head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/secret"
-head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' >"$T/token"
-chmod 600 "$T/secret" "$T/token"
-export GI_FARM_SECRET_FILE="$T/secret" GI_FARM_TOKEN_FILE="$T/token" GI_LOG=warn
-"$BIN/gi-farmd" --state "$T/state" --listen-workers 127.0.0.1:0 --listen-api 127.0.0.1:0 \
-    >"$T/farmd.log" 2>&1 &
-PIDS="$PIDS $!"
-FARMD_PID=$!
-while [ ! -s "$T/state/addresses" ]; do sleep 0.05; done
-export GI_FARM="http://$(awk '$1 == "api" {print $2}' "$T/state/addresses")"
-"$BIN/gi-worker" --connect "$(awk '$1 == "workers" {print $2}' "$T/state/addresses")" \
+. "$SRC/bench/farm_env.sh"
+"$BIN/gi-worker" --connect "$WADDR" \
     --procs 2 --cache "$T/cache" >"$T/worker.log" 2>&1 &
 PIDS="$PIDS $!"
 RELAY_PID=$!
