@@ -189,6 +189,11 @@ void gi_outq_push(gi_outq *q, uint16_t type, const gi_buf *payload, int compress
                     compress);
 }
 
+void gi_outq_push_frame(gi_outq *q, const gi_buf *frame)
+{
+    gi_buf_put(&q->buf, frame->data, frame->len);
+}
+
 int gi_outq_flush(gi_outq *q, int fd)
 {
     while (q->off < q->buf.len) {

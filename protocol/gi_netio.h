@@ -50,6 +50,8 @@ void gi_outq_init(gi_outq *q);
 void gi_outq_free(gi_outq *q);
 /* Encodes one frame at the end of the queue (see gi_frame_encode). */
 void gi_outq_push(gi_outq *q, uint16_t type, const gi_buf *payload, int compress);
+/* Queues a frame gi_frame_encode made earlier (sent to many peers). */
+void gi_outq_push_frame(gi_outq *q, const gi_buf *frame);
 static inline size_t gi_outq_pending(const gi_outq *q) { return q->buf.len - q->off; }
 /* Sends what the socket takes now (MSG_NOSIGNAL). Returns 0, with or
  * without bytes left, or -1 with errno when the socket failed. */

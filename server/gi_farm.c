@@ -24,6 +24,8 @@
 #include "gi_net.h"
 
 #define TICK_MS 50
+/* Bytes of ASSET_PUT frames kept for the next host that asks. */
+#define ASSET_FRAMES_MAX ((size_t)256 << 20)
 
 double gi_farm_wallnow(void)
 {
@@ -103,6 +105,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     f->started = gi_now();
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;
+    gi_frame_cache_init(&f->asset_frames, ASSET_FRAMES_MAX);
     gi_auth_key(&f->cfg.secret, f->key);
     /* Clients hold the token, workers the secret: one value for both would
      * let every client join as a worker, which is trusted with results and
@@ -246,6 +249,7 @@ void gi_farm_close(gi_farm *f)
         close(f->lock_fd);
     free(f->assets_dir);
     free(f->jobs_dir);
+    gi_frame_cache_free(&f->asset_frames);
     gi_secret_free(&f->cfg.secret);
     gi_secret_free(&f->cfg.token);
     memset(f->key, 0, sizeof f->key);

@@ -327,9 +327,20 @@ static void serve_assets(gi_farm *f, gi_farm_conn *c)
         gi_buf_init(&bytes);
         gi_buf_init(&b);
         gi_error err;
-        if (gi_farm_asset_bytes(f, hash, &bytes, &err) == 0) {
+        /* Every host asks for a job's assets: read, checked and compressed
+         * once (gi_frame_cache), not once a host. */
+        const gi_buf *frame = gi_frame_cache_get(&f->asset_frames, hash);
+        if (frame) {
+            gi_outq_push_frame(&c->out, frame);
+            f->m.assets_served++;
+        } else if (gi_farm_asset_bytes(f, hash, &bytes, &err) == 0) {
             gi_msg_asset_put_encode(&b, hash, bytes.data, bytes.len);
-            gi_farm_conn_send(c, GI_MSG_ASSET_PUT, &b, bytes.len <= ASSET_COMPRESS_MAX);
+            gi_buf fr;
+            gi_buf_init(&fr);
+            gi_frame_encode(&fr, GI_MSG_ASSET_PUT, b.data, b.len, bytes.len <= ASSET_COMPRESS_MAX);
+            gi_outq_push_frame(&c->out, &fr);
+            gi_frame_cache_put(&f->asset_frames, hash, &fr);
+            gi_buf_free(&fr);
             f->m.assets_served++;
         } else {
             gi_warn("worker %s asked for asset %.12s: %s", who(c), hash, err.msg);

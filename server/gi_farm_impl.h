@@ -18,6 +18,7 @@
 #include "gi_auth.h"
 #include "gi_farm.h"
 #include "gi_frame.h"
+#include "gi_frame_cache.h"
 #include "gi_job.h"
 #include "gi_jobrun.h"
 #include "gi_journal.h"
@@ -252,6 +253,9 @@ struct gi_farm {
     struct MHD_Daemon *mhd;
     struct gi_api_conn *api_conns; /* the API's TCP connections (gi_farm_api.c) */
     uint64_t submit_buffered; /* bytes of submission bodies held while they arrive */
+
+    /* ASSET_PUT frames served lately: each host asks for the same bytes. */
+    gi_frame_cache asset_frames;
 
     gi_farm_metrics m;
 };
