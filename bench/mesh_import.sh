@@ -12,13 +12,7 @@ ROUNDS=${3:-5}
 OTHER=${4:-}
 T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-mesh.XXXXXX")
 trap 'rm -rf "$T"' EXIT INT TERM
-awk -v n="$N" 'BEGIN {
-    for (i = 0; i <= n; i++) for (j = 0; j <= n; j++) printf "v %.6f 0 %.6f\n", i / n, j / n
-    for (i = 0; i < n; i++) for (j = 0; j < n; j++) {
-        a = i * (n + 1) + j + 1
-        printf "f %d %d %d %d\n", a, a + 1, a + n + 2, a + n + 1
-    }
-}' >"$T/grid.obj"
+sh "$(dirname "$0")/grid_obj.sh" "$N" >"$T/grid.obj"
 cat >"$T/scene.json" <<'SCENE'
 {"materials": {"w": {"diffuse": [0.5, 0.5, 0.5]}, "l": {"emission": [1, 1, 1]}},
  "objects": [{"name": "grid", "material": "w", "mesh": "grid.obj"},

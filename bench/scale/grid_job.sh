@@ -7,13 +7,7 @@ set -eu
 D=${1:?DIR}
 N=${2:-300}
 mkdir -p "$D"
-awk -v n="$N" 'BEGIN {
-    for (i = 0; i <= n; i++) for (j = 0; j <= n; j++) printf "v %.6f 0 %.6f\n", i / n, j / n
-    for (i = 0; i < n; i++) for (j = 0; j < n; j++) {
-        a = i * (n + 1) + j + 1
-        printf "f %d %d %d %d\n", a, a + 1, a + n + 2, a + n + 1
-    }
-}' >"$D/grid.obj"
+sh "$(dirname "$0")/../grid_obj.sh" "$N" >"$D/grid.obj"
 cat >"$D/scene.json" <<'SCENE'
 {"camera": {"position": [0.5, 2, 0.5], "look_at": [0.5, 0, 0.5], "up": [0, 0, 1], "fov_y": 40},
  "materials": {"w": {"diffuse": [0.5, 0.5, 0.5]}, "l": {"emission": [1, 1, 1]}},
