@@ -233,6 +233,7 @@ struct gi_farm {
     gi_farm_job **live;
     size_t live_count, live_cap;
     int live_stale; /* a job was added, ended, reopened or purged since */
+    int ended_flush_due; /* an ended job may have its END or log lines to write */
     uint64_t next_job_id;
     uint64_t store_bytes;  /* bytes in the asset store */
     uint64_t upload_bytes; /* bytes in assets/tmp: uploads under way */

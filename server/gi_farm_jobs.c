@@ -181,10 +181,10 @@ static void push_log_line(gi_farm_job *j, char *line)
 /* Appends the lines not yet in the job's log file, if its disk has room
  * (whole lines: a cut one is cut back off). gi-farmd's own log has them
  * meanwhile. */
-static void log_flush(gi_farm_job *j)
+static int log_flush(gi_farm_job *j)
 {
     if (!j->log_pending.len && !j->log_dropped)
-        return;
+        return 0;
     if (j->log_dropped) {
         char note[128];
         int n = snprintf(note, sizeof note, "(%llu more lines lost here: the disk was full)\n",
@@ -196,6 +196,7 @@ static void log_flush(gi_farm_job *j)
     snprintf(path, sizeof path, "%s/log", j->dir);
     if (gi_append_whole(path, j->log_pending.data, j->log_pending.len, NULL) == 0)
         j->log_pending.len = 0;
+    return j->log_pending.len != 0;
 }
 
 /* echo: also to gi-farmd's own log (a line already there is not). */
@@ -887,6 +888,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
     checkpoint_finish(f, j, 1); /* journaled before the END */
     j->state = state;
     f->live_stale = 1;
+    f->ended_flush_due = 1; /* its END or log lines may have to wait for room */
     j->ended = gi_farm_wallnow();
     gi_farm_check_kill(j);
     gi_farm_sched_drop_job(f, j);
@@ -1380,6 +1382,16 @@ void gi_farm_jobs_tick(gi_farm *f)
         outputs_retry(f, j, now);
         log_flush(j);
         end_flush(f, j);
+    }
+    /* Ended jobs are not live: their END records and log lines still
+     * waiting for room are tried here, while there are any. */
+    if (f->ended_flush_due) {
+        f->ended_flush_due = 0;
+        for (size_t i = 0; i < f->job_count; i++) {
+            gi_farm_job *j = f->jobs[i];
+            if (terminal(j) && ((end_flush(f, j) != 0) | log_flush(j)))
+                f->ended_flush_due = 1;
+        }
     }
     if (f->journal.records > COMPACT_AFTER_RECORDS) {
         gi_error err;
