@@ -31,12 +31,8 @@ wait_log "$LOG" "job $id: checkpoint failed (the job goes on): .*Read-only file 
 kill -STOP "$WORKER_PID" $(pgrep -P "$WORKER_PID") # the job waits while we look
 ! grep -q "checkpoint failed" "$JOBS/$id/log" || fail "a read-only disk took a log line"
 nsenter -t "$FARMD_PID" -m mount -o remount,rw "$TMP/state/jobs" || fail "remount read-write"
-n=0
-until grep -q "checkpoint failed (the job goes on): .*Read-only file system" "$JOBS/$id/log"; do
-    n=$((n + 1))
-    [ $n -lt 100 ] || { cat "$JOBS/$id/log"; fail "the job's log line was lost"; }
-    sleep 0.1
-done
+# The line waiting in memory reaches the job's log once it has room.
+wait_log "$JOBS/$id/log" "checkpoint failed (the job goes on): .*Read-only file system"
 kill -CONT "$WORKER_PID" $(pgrep -P "$WORKER_PID")
 wait_state "$id" done 120
 grep -vq '^20[0-9][0-9]-[0-9][0-9]-[0-9][0-9]T' "$JOBS/$id/log" &&
