@@ -11,6 +11,7 @@
 #include "gi_buf.h"
 #include "gi_json.h"
 #include "gi_fs.h"
+#include "gi_log.h"
 
 #define GLB_MAGIC 0x46546C67u      /* "glTF" */
 #define GLB_CHUNK_JSON 0x4E4F534Au /* "JSON" */
@@ -152,6 +153,24 @@ static void put_chunk(gi_buf *out, uint32_t type, const void *data, size_t len, 
         gi_buf_put_u8(out, pad);
 }
 
+int gi_glb_fits(uint32_t vertex_count, uint32_t triangle_count)
+{
+    /* GLB lengths are 32-bit: 5 attributes of 12 bytes a vertex, 12 a
+     * triangle, and the JSON (under 4 KiB). */
+    return 60.0 * vertex_count + 12.0 * triangle_count + 65536.0 <= 4294967295.0;
+}
+
+int gi_glb_write_or_skip(const char *path, const gi_vertex_bake *b, gi_error *err)
+{
+    if (!gi_glb_fits(b->vertex_count, b->triangle_count)) {
+        gi_warn("%s: not written: %u vertices and %u triangles pass glTF's 4 GiB file size (the "
+                "ply and bin outputs hold the same values)",
+                path, b->vertex_count, b->triangle_count);
+        return 0;
+    }
+    return gi_glb_write(path, b, err) ? -1 : 1;
+}
+
 int gi_glb_write(const char *path, const gi_vertex_bake *b, gi_error *err)
 {
     if (!isfinite(b->exposure_stops))
@@ -162,13 +181,8 @@ int gi_glb_write(const char *path, const gi_vertex_bake *b, gi_error *err)
         if (b->indices[i] >= b->vertex_count)
             return gi_fail(err, GI_EINTERNAL, "%s: triangle index %u out of range", path,
                            b->indices[i]);
-    /* GLB lengths are 32-bit: 5 attributes of 12 bytes a vertex, 12 a
-     * triangle, and the JSON (under 4 KiB). */
-    double bytes = 60.0 * b->vertex_count + 12.0 * b->triangle_count + 65536.0;
-    if (bytes > 4294967295.0)
-        return gi_fail(err, GI_EINVAL,
-                       "%s: %u vertices and %u triangles exceed glTF's 4 GiB file size; "
-                       "leave the glb output out and use ply or bin",
+    if (!gi_glb_fits(b->vertex_count, b->triangle_count))
+        return gi_fail(err, GI_EINTERNAL, "%s: %u vertices and %u triangles exceed glTF's 4 GiB",
                        path, b->vertex_count, b->triangle_count);
 
     glb_doc d = {cJSON_CreateArray(), cJSON_CreateArray(), {0}};

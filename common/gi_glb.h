@@ -30,4 +30,12 @@ typedef struct gi_vertex_bake {
  * application-specific attributes). Temp file + rename. */
 int gi_glb_write(const char *path, const gi_vertex_bake *bake, gi_error *err);
 
+/* 1 if a mesh of this size fits glTF's 32-bit lengths (some 50 million
+ * vertices do not). A larger mesh's glb output is skipped with a warning
+ * (gi_glb_write_or_skip) rather than failing a finished bake. */
+int gi_glb_fits(uint32_t vertex_count, uint32_t triangle_count);
+/* gi_glb_write, or a warning and 0 (nothing written) if the mesh does not
+ * fit: returns 1 if written. -1 on a failed write. */
+int gi_glb_write_or_skip(const char *path, const gi_vertex_bake *bake, gi_error *err);
+
 #endif

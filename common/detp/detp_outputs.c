@@ -67,11 +67,11 @@ static int write_glb(gi_job *job, const detp_vertex_data *v, gi_error *err)
     const gi_vertex_bake bake = {s->vertex_count, s->positions, s->normals, v->radiance,
                                  v->irradiance,   s->triangle_count, s->indices, job->exposure};
     char *path = gi_job_output_path(job, file);
-    int rc = gi_glb_write(path, &bake, err);
-    if (rc == 0)
+    int rc = gi_glb_write_or_skip(path, &bake, err);
+    if (rc == 1)
         gi_job_note_output(job, "glb", path);
     free(path);
-    return rc;
+    return rc < 0 ? -1 : 0;
 }
 
 static void add_num(cJSON *o, const char *k, double v) { cJSON_AddNumberToObject(o, k, v); }

@@ -659,10 +659,10 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
                 continue;
             int rc = gi_rad_vertex_output_write(path, vertex_kinds[k], st->md, st->B + i * n3,
                                                 job->exposure, err);
-            if (rc == 0)
+            if (rc == 1)
                 gi_job_note_output(job, vertex_kinds[k], path);
             free(path);
-            if (rc)
+            if (rc < 0)
                 return -1;
         }
         if (!st->images)

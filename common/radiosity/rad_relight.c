@@ -82,12 +82,14 @@ int gi_rad_vertex_output_write(const char *path, const char *kind, const gi_rad_
         return -1;
     int rc = gi_rad_vertex_values(vx, md->n, md->area, B, vv, err);
     if (rc == 0 && strcmp(kind, "ply") == 0) {
-        rc = gi_ply_write(path, vx->count, vx->positions, vv, md->n, vx->corner, exposure, err);
+        rc = gi_ply_write(path, vx->count, vx->positions, vv, md->n, vx->corner, exposure, err)
+                 ? -1
+                 : 1;
     } else if (rc == 0) {
         gi_vec3 *nrm = vertex_normals(vx, md->n, err);
         const gi_vertex_bake bake = {vx->count, vx->positions, nrm,        vv,
                                      NULL,      md->n,         vx->corner, exposure};
-        rc = nrm ? gi_glb_write(path, &bake, err) : -1;
+        rc = nrm ? gi_glb_write_or_skip(path, &bake, err) : -1;
         free(nrm);
     }
     free(vv);
@@ -253,11 +255,11 @@ int gi_rad_relight_write(const char *dir, const char *ply, const char *glb, cons
             char *path = gi_path_join(dir, name);
             int rc = gi_rad_vertex_output_write(path, outs[o].kind, md, B + i * n3, exposure,
                                                 err);
-            if (rc == 0 && note)
+            if (rc == 1 && note)
                 note(user, outs[o].kind, path);
             free(name);
             free(path);
-            if (rc)
+            if (rc < 0)
                 return -1;
         }
     if (!report)

@@ -46,7 +46,8 @@ int gi_rad_solve_emissions(const gi_rad_factor *f, const gi_rad_model *md,
                            float *B, gi_rad_solve_info *info, gi_error *err);
 
 /* Per-vertex radiance of a solution (B, n x 3) as the per-vertex output
- * `kind`: "ply" or "glb". */
+ * `kind`: "ply" or "glb". 1 if written, 0 if skipped (a glb too large for
+ * glTF, with a warning), -1 on failure. */
 int gi_rad_vertex_output_write(const char *path, const char *kind, const gi_rad_model *md,
                                const float *B, double exposure, gi_error *err);
 

@@ -194,3 +194,24 @@ GI_TEST(test_glb_output_refuses_bad_input_and_writes_nothing)
     struct stat st;
     GI_CHECK(stat(path, &st) != 0);
 }
+
+/* A mesh too large for glTF's 32-bit lengths is skipped (0, nothing
+ * written) instead of failing a finished bake; one that fits is written. */
+GI_TEST(test_glb_output_too_large_for_gltf_is_skipped)
+{
+    GI_CHECK(gi_glb_fits(52000000, 104000000) == 0);
+    GI_CHECK(gi_glb_fits(40000000, 80000000) == 1);
+    gi_error err;
+    gi_vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    float rad[9] = {0};
+    uint32_t idx[3] = {0, 1, 2};
+    char path[600];
+    snprintf(path, sizeof path, "%s/huge.glb", gi_test_tmpdir());
+    /* The counts are checked before any array is read. */
+    gi_vertex_bake huge = {80000000, pos, NULL, rad, NULL, 1, idx, 0.0};
+    GI_CHECK(gi_glb_write_or_skip(path, &huge, &err) == 0);
+    struct stat st;
+    GI_CHECK(stat(path, &st) != 0);
+    gi_vertex_bake small = {3, pos, NULL, rad, NULL, 1, idx, 0.0};
+    GI_CHECK(gi_glb_write_or_skip(path, &small, &err) == 1 && stat(path, &st) == 0);
+}
