@@ -9,8 +9,8 @@
 
 #include "detp_method.h"
 #include "gi_fs.h"
-#include "gi_outputs.h"
 #include "gi_glb.h"
+#include "gi_outputs.h"
 #include "gi_ply.h"
 
 /* The binary float file: a 24-byte header - "GIVTXF32", u32 version (1),
