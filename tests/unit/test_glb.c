@@ -85,6 +85,15 @@ static const uint8_t *accessor(const glb_file *g, const char *name, int *count,
     return off >= 0 && (size_t)off + (size_t)len <= g->bin_len ? g->bin + off : NULL;
 }
 
+/* One black triangle, for the tests of what is left out, refused or skipped. */
+static const gi_vec3 tri_pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+static const float tri_black[9] = {0};
+
+static void tmp_path(char *out, size_t n, const char *name)
+{
+    snprintf(out, n, "%s/%s", gi_test_tmpdir(), name);
+}
+
 static float f32_at(const uint8_t *p, size_t i)
 {
     uint32_t u = gi_le_get_u32(p + 4 * i);
@@ -103,7 +112,7 @@ GI_TEST(test_glb_output_holds_the_mesh_and_its_light)
     uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
     gi_vertex_bake bake = {4, pos, nrm, rad, irr, 2, idx, 1.0}; /* one stop up */
     char path[600];
-    snprintf(path, sizeof path, "%s/out.glb", gi_test_tmpdir());
+    tmp_path(path, sizeof path, "out.glb");
     GI_REQUIRE_OK(gi_glb_write(path, &bake, &err));
 
     glb_file g;
@@ -160,12 +169,10 @@ GI_TEST(test_glb_output_holds_the_mesh_and_its_light)
 GI_TEST(test_glb_output_leaves_out_what_it_is_not_given)
 {
     gi_error err;
-    gi_vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-    float rad[9] = {1, 1, 1, 1, 1, 1, 1, 1, 1};
     uint32_t idx[3] = {0, 1, 2};
-    gi_vertex_bake bake = {3, pos, NULL, rad, NULL, 1, idx, 0.0};
+    gi_vertex_bake bake = {3, tri_pos, NULL, tri_black, NULL, 1, idx, 0.0};
     char path[600];
-    snprintf(path, sizeof path, "%s/bare.glb", gi_test_tmpdir());
+    tmp_path(path, sizeof path, "bare.glb");
     GI_REQUIRE_OK(gi_glb_write(path, &bake, &err));
     glb_file g;
     GI_REQUIRE(glb_read(path, &g) == 0);
@@ -180,12 +187,10 @@ GI_TEST(test_glb_output_leaves_out_what_it_is_not_given)
 GI_TEST(test_glb_output_refuses_bad_input_and_writes_nothing)
 {
     gi_error err;
-    gi_vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-    float rad[9] = {0};
     uint32_t bad[3] = {0, 1, 3};
     char path[600];
-    snprintf(path, sizeof path, "%s/bad.glb", gi_test_tmpdir());
-    gi_vertex_bake bake = {3, pos, NULL, rad, NULL, 1, bad, 0.0};
+    tmp_path(path, sizeof path, "bad.glb");
+    gi_vertex_bake bake = {3, tri_pos, NULL, tri_black, NULL, 1, bad, 0.0};
     GI_CHECK(gi_glb_write(path, &bake, &err) == -1 && strstr(err.msg, "bad.glb"));
     uint32_t ok[3] = {0, 1, 2};
     bake.indices = ok;
@@ -202,16 +207,14 @@ GI_TEST(test_glb_output_too_large_for_gltf_is_skipped)
     GI_CHECK(gi_glb_fits(52000000, 104000000) == 0);
     GI_CHECK(gi_glb_fits(40000000, 80000000) == 1);
     gi_error err;
-    gi_vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-    float rad[9] = {0};
     uint32_t idx[3] = {0, 1, 2};
     char path[600];
-    snprintf(path, sizeof path, "%s/huge.glb", gi_test_tmpdir());
+    tmp_path(path, sizeof path, "huge.glb");
     /* The counts are checked before any array is read. */
-    gi_vertex_bake huge = {80000000, pos, NULL, rad, NULL, 1, idx, 0.0};
+    gi_vertex_bake huge = {80000000, tri_pos, NULL, tri_black, NULL, 1, idx, 0.0};
     GI_CHECK(gi_glb_write_or_skip(path, &huge, &err) == 0);
     struct stat st;
     GI_CHECK(stat(path, &st) != 0);
-    gi_vertex_bake small = {3, pos, NULL, rad, NULL, 1, idx, 0.0};
+    gi_vertex_bake small = {3, tri_pos, NULL, tri_black, NULL, 1, idx, 0.0};
     GI_CHECK(gi_glb_write_or_skip(path, &small, &err) == 1 && stat(path, &st) == 0);
 }
