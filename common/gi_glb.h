@@ -1,5 +1,5 @@
 /* gi_glb: writing per-vertex results as a binary glTF 2.0 file (.glb), the
- * format real-time engines (Unity, Unreal, Godot, three.js) and Blender
+ * format real-time engines (Unreal, Godot, three.js; Unity with a package) and Blender
  * import directly: the baked mesh with its lighting as vertex colours. */
 #ifndef GI_GLB_H
 #define GI_GLB_H
