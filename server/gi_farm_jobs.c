@@ -43,10 +43,8 @@ const char *gi_fj_state_name(gi_fj_state s)
 }
 
 static void start_checkers(gi_farm *f);
-static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err);
+static void checkpoint_begin(gi_farm *f, gi_farm_job *j);
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait);
-static void checkpoint_published(gi_farm *f, gi_farm_job *j, int written);
-static void checkpoint_outcome(gi_farm *f, gi_farm_job *j, const char *why);
 static void published_load(gi_farm_job *j);
 static void end_journaled(gi_farm *f, gi_farm_job *j);
 
@@ -1042,11 +1040,7 @@ static int keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
 {
     checkpoint_finish(f, j, 1);
     uint64_t seq = j->ckpt_seq;
-    gi_error err;
-    if (checkpoint_start(f, j, &err)) {
-        checkpoint_published(f, j, 0);
-        checkpoint_outcome(f, j, err.msg);
-    }
+    checkpoint_begin(f, j);
     checkpoint_finish(f, j, 1);
     if (j->ckpt_seq == seq)
         return 0;
@@ -1346,6 +1340,17 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
 
 /* force: now, whatever the interval, and in place before returning (a
  * stopping coordinator). */
+/* Starts a checkpoint; one that cannot start is a failed one: what it
+ * stored goes, and the job's log and view say so. */
+static void checkpoint_begin(gi_farm *f, gi_farm_job *j)
+{
+    gi_error err;
+    if (checkpoint_start(f, j, &err)) {
+        checkpoint_published(f, j, 0);
+        checkpoint_outcome(f, j, err.msg);
+    }
+}
+
 static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 {
     if (!checkpoint_finish(f, j, force) || j->state != GI_FJ_RUNNING)
@@ -1358,11 +1363,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
     j->ckpt_last = now;
     if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
         return; /* nothing merged since the last one */
-    gi_error err;
-    if (checkpoint_start(f, j, &err)) {
-        checkpoint_published(f, j, 0);
-        checkpoint_outcome(f, j, err.msg);
-    }
+    checkpoint_begin(f, j);
     j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
     if (force)
         checkpoint_finish(f, j, 1);
@@ -1381,7 +1382,6 @@ void gi_farm_jobs_tick(gi_farm *f)
         checkpoint_if_due(f, j, now, 0);
         outputs_retry(f, j, now);
         log_flush(j);
-        end_flush(f, j);
     }
     /* Ended jobs are not live: their END records and log lines still
      * waiting for room are tried here, while there are any. */

@@ -285,6 +285,19 @@ static void drive(gi_jobrun *jr, int stop_after)
     }
 }
 
+/* Gives the run `results` results (drive), checkpoints it into ck
+ * (initialised here), and frees the run and its job. */
+static int checkpoint_then_free(gi_jobrun *jr, gi_job *job, int results, gi_buf *ck,
+                                gi_error *err)
+{
+    drive(jr, results);
+    gi_buf_init(ck);
+    int rc = gi_jobrun_checkpoint(jr, ck, err);
+    gi_jobrun_free(jr);
+    gi_job_free(job);
+    return rc;
+}
+
 /* A coordinator's restart: jr checkpointed, thrown away with its job, and
  * restored into a fresh job of method m. */
 static int reload(gi_jobrun *jr, gi_job *job, const gi_method *m, gi_error *err)
@@ -354,12 +367,8 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     /* So is one whose bytes changed anywhere, though it still parses: the
      * method's sums would resume wrong. */
     GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
-    drive(&jr, 20);
     gi_buf ck;
-    gi_buf_init(&ck);
-    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
-    gi_jobrun_free(&jr);
-    gi_job_free(&job);
+    GI_REQUIRE_OK(checkpoint_then_free(&jr, &job, 20, &ck, &err));
     for (size_t at = 8; at < ck.len; at += ck.len / 7) {
         memset(&job, 0, sizeof job);
         job.method = &fake_method;
@@ -390,12 +399,8 @@ GI_TEST(test_jobrun_checkpoint_of_another_job_is_refused)
     GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
     job.text = gi_xstrdup("{\"seed\": 1}");
     gi_manifest_put(&job.manifest, "scene.json", HASH_A, 10);
-    drive(&jr, 20);
     gi_buf ck;
-    gi_buf_init(&ck);
-    GI_REQUIRE_OK(gi_jobrun_checkpoint(&jr, &ck, &err));
-    gi_jobrun_free(&jr);
-    gi_job_free(&job);
+    GI_REQUIRE_OK(checkpoint_then_free(&jr, &job, 20, &ck, &err));
     static const struct {
         const char *text, *hash;
         int ok;
