@@ -7,7 +7,9 @@
  * only if the bytes match the name; a file in the store is never rewritten.
  * Names are hashes, so no request can name a path. A file goes when no job
  * names it any more: a purged job's uploads (unless another job uses the
- * same bytes), published data its newer checkpoint no longer needs. */
+ * same bytes), published data its newer checkpoint no longer needs. A file
+ * found damaged when read (its bytes no longer hash to its name) is moved to
+ * <state>/assets/damaged/. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -43,6 +45,26 @@ int gi_farm_store_has(const gi_farm *f, const char *hash, uint64_t *size)
     return ok;
 }
 
+/* A damaged file goes to <assets>/damaged/ (kept for the operator to look
+ * at, outside the fan-out the store is read from), so that submitting the
+ * job again finds the hash missing and uploads the bytes anew. Returns the
+ * new path, or NULL if it could not be moved. Its bytes still count against
+ * --max-store-bytes until gi-farmd restarts: they are still on the disk. */
+static char *move_aside(const gi_farm *f, const char *hash, const char *path)
+{
+    size_t n = strlen(f->assets_dir) + 100;
+    char *dir = gi_xmalloc(n), *to = gi_xmalloc(n);
+    snprintf(dir, n, "%s/damaged", f->assets_dir);
+    snprintf(to, n, "%s/%s", dir, hash);
+    int ok = (mkdir(dir, 0700) == 0 || errno == EEXIST) && rename(path, to) == 0;
+    if (ok)
+        gi_warn("asset store: %s is damaged: moved to %s", hash, to);
+    free(dir);
+    if (!ok)
+        free(to);
+    return ok ? to : NULL;
+}
+
 int gi_farm_store_read(const gi_farm *f, const char *hash, gi_buf *out, gi_error *err)
 {
     if (!gi_hash_is_valid(hash))
@@ -59,10 +81,18 @@ int gi_farm_store_read(const gi_farm *f, const char *hash, gi_buf *out, gi_error
         gi_hash_hex(out->data, n, hex);
         if (strcmp(hex, hash) != 0) {
             gi_buf_reset(out);
-            rc = gi_fail(err, GI_EINVAL,
-                         "asset store: %s is damaged (%s: its %zu bytes hash to %.16s...); "
-                         "remove the file and submit the job again to upload it anew",
-                         hash, p, n, hex);
+            char *aside = move_aside(f, hash, p);
+            if (aside)
+                rc = gi_fail(err, GI_EINVAL,
+                             "asset store: %s is damaged (%s: its %zu bytes hash to %.16s...); "
+                             "it was moved to %s: submit the job again to upload it anew",
+                             hash, p, n, hex, aside);
+            else
+                rc = gi_fail(err, GI_EINVAL,
+                             "asset store: %s is damaged (%s: its %zu bytes hash to %.16s...); "
+                             "remove the file and submit the job again to upload it anew",
+                             hash, p, n, hex);
+            free(aside);
         }
     }
     free(p);

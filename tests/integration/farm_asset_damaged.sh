@@ -2,6 +2,8 @@
 # to its name) is caught when read: the job fails at once with an error that
 # names the asset and its path, instead of workers refusing the bytes,
 # reconnecting in a loop and the job failing for a reason that names nothing.
+# The damaged file is moved aside, so submitting the job again uploads the
+# bytes anew and renders.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -24,7 +26,15 @@ wait_state "$id" failed 60
 api "/api/v1/jobs/$id" >"$TMP/job.txt"
 grep -q "asset store: $h is damaged ($stored" "$TMP/job.txt" ||
     { cat "$TMP/job.txt"; fail "the job's error does not name the damaged asset"; }
+aside="$TMP/state/assets/damaged/$h"
+grep -q "it was moved to $aside" "$TMP/job.txt" ||
+    { cat "$TMP/job.txt"; fail "the job's error does not say where the file went"; }
+[ -f "$aside" ] && [ ! -e "$stored" ] || fail "the damaged file was not moved to $aside"
 # No worker was blamed for it.
 ! grep -q "blocklisted" "$LOG" || fail "a worker was blocklisted"
+# Submitted again, the scene is uploaded anew and the job renders.
+id2=$("$GI" submit "$TMP/pt.json" 2>"$TMP/submit2.err") || { cat "$TMP/submit2.err"; fail "resubmit"; }
+wait_state "$id2" done 60
+cmp -s "$stored" "$TMP/scene.json" || fail "the store does not hold the scene's bytes again"
 stop_farmd "$LOG"
 echo ok
