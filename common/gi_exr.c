@@ -27,6 +27,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "gi_cores.h"
 #include "gi_fs.h"
 
 
@@ -243,7 +244,7 @@ static void *zip_worker(void *arg)
  * none beyond one per 4 chunks. */
 static int zip_threads(int chunks)
 {
-    long t = sysconf(_SC_NPROCESSORS_ONLN);
+    long t = gi_cores_usable();
     if (t > 8)
         t = 8;
     if (t > chunks / 4)

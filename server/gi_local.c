@@ -30,6 +30,7 @@
 
 #include "gi_batch_dir.h"
 #include "gi_batch_root.h"
+#include "gi_cores.h"
 #include "gi_file_writer.h"
 #include "gi_fs.h"
 #include "gi_local_checkpoint.h"
@@ -204,11 +205,7 @@ static int periodic_finish(local_run *lr, int wait)
     return 1;
 }
 
-static int default_workers(void)
-{
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n > 0 ? (int)n : 1;
-}
+static int default_workers(void) { return gi_cores_usable(); }
 
 /* The end of a render (its pool stopped, if it had one): a finished job's
  * checkpoint removed; one stopped from outside (interrupted, its pool

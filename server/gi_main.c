@@ -39,7 +39,7 @@ static void usage(FILE *out)
             "%s"
             "\n"
             "render    renders a job on this machine with a pool of N worker processes\n"
-            "          (default: one per core) and writes its outputs into DIR (default: out)\n"
+            "          (default: one per usable CPU) and writes its outputs into DIR (default: out)\n"
             "          MODE: auto (a bar on a terminal, lines otherwise), bar, lines, json, none\n"
             "          A checkpoint, DIR/.NAME.checkpoint, is written when the render is\n"
             "          stopped and every S seconds (30; 0: only then); --resume continues it\n"

@@ -12,6 +12,7 @@
 
 #include <cblas.h>
 
+#include "gi_cores.h"
 #include "gi_fs.h"
 #include "gi_job.h"
 #include "gi_local.h"
@@ -51,8 +52,7 @@ static int parse_args(int argc, char **argv, relight_args *a)
     memset(a, 0, sizeof *a);
     a->out = "out";
     a->progress = GI_PROGRESS_NONE;
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    a->threads = cores > 0 ? (int)cores : 1;
+    a->threads = gi_cores_usable();
     for (int i = 2; i < argc; i++) {
         const char *arg = argv[i];
         if (strcmp(arg, "--images") == 0) {

@@ -16,6 +16,7 @@
 #include "gi_auth.h"
 #include "gi_batch_dir.h"
 #include "gi_clock.h"
+#include "gi_cores.h"
 #include "gi_frame.h"
 #include "gi_fs.h"
 #include "gi_log.h"
@@ -665,8 +666,7 @@ static int handshake(worker *w, gi_error *err)
     h.version = (char *)GI_VERSION;
     h.procs = (uint32_t)w->pool.count;
     h.slots = (uint32_t)(w->pool.count + w->o->queue);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    h.cores = cores > 0 ? (uint32_t)cores : 1;
+    h.cores = (uint32_t)gi_cores_usable();
     long pages = sysconf(_SC_PHYS_PAGES), psize = sysconf(_SC_PAGESIZE);
     h.memory = pages > 0 && psize > 0 ? (uint64_t)pages * (uint64_t)psize : 0;
     gi_buf hello;

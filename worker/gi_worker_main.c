@@ -15,6 +15,7 @@
 #include "gi_args.h"
 #include "gi_auth.h"
 #include "gi_blas_threads.h"
+#include "gi_cores.h"
 #include "gi_farm_worker.h"
 #include "gi_log.h"
 #include "gi_version.h"
@@ -29,7 +30,8 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: gi-worker --connect HOST:PORT [options]\n"
-            "  --procs N            pool processes (default: one per core)\n"
+            "  --procs N            pool processes (default: one per usable CPU: affinity\n"
+            "                       mask and cgroup CPU limit)\n"
             "  --queue N            tasks queued beyond the running ones (default procs/2, >= 1)\n"
             "  --cache DIR          asset cache (default $XDG_CACHE_HOME/gi-worker or ~/.cache/gi-worker)\n"
             "  --cache-max BYTES    cache size bound (default 10G; K, M, G, T suffixes)\n"
@@ -63,8 +65,7 @@ int main(int argc, char **argv)
         gi_log_set_level(GI_LOG_INFO);
     gi_worker_opts o;
     memset(&o, 0, sizeof o);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    o.procs = cores > 0 ? (int)cores : 1;
+    o.procs = gi_cores_usable();
     o.queue = -1;
     o.cache_max = (uint64_t)10 << 30;
     o.drain_s = 120;

@@ -1,6 +1,6 @@
 # The command line: validate (a job, a scene alone), methods, --help, JSON progress, the summary, a bare
-# OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, and an
-# interrupted render leaving no output.
+# OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, the default
+# pool size under a narrowed CPU set, and an interrupted render leaving no output.
 . "$(dirname "$0")/lib.sh"
 cp "$SRC/tests/data/meshes/two_materials.obj" "$SRC/tests/data/meshes/two_materials.mtl" "$TMP/"
 write_job "$TMP/obj.json" <<JOB
@@ -52,6 +52,15 @@ grep -q "exr  $TMP/out/obj.exr" "$TMP/summary.txt" || fail "summary does not lis
 awk '/^mean/ { exit !($2 > 0.01 && $2 > $3 && $3 > $4) }' "$TMP/stats.txt" ||
     { cat "$TMP/stats.txt"; fail "the OBJ scene renders dark or with the wrong colours"; }
 ls "$TMP/out" | grep -q tmp && fail "temporary files left in the output directory"
+
+# With no --workers, the pool follows the CPUs this process may use (here its
+# affinity mask, as under taskset or a Slurm step), not the machine's.
+if command -v taskset >/dev/null && [ "$(nproc --all)" -gt 1 ]; then
+    taskset -c 0 "$GI" render "$TMP/obj.json" --out "$TMP/one" --progress none >"$TMP/one.txt" ||
+        fail "render under taskset"
+    grep -q "^obj: pt done in .* with 1 worker$" "$TMP/one.txt" ||
+        { cat "$TMP/one.txt"; fail "a render limited to one CPU did not use one worker"; }
+fi
 
 # An --out that cannot take the outputs is refused before anything runs.
 : >"$TMP/afile"
