@@ -45,8 +45,11 @@ static int parse_outputs(gi_jv *v, gi_job *job, const cJSON *outs)
     const gi_method *m = job->method;
     if (!outs) {
         for (int i = 0; m->default_outputs[i]; i++) {
+            /* A report is JSON: its default name says so (NAME.json). */
+            const char *kind = m->default_outputs[i];
             char file[300];
-            snprintf(file, sizeof file, "%s.%s", job->name, m->default_outputs[i]);
+            snprintf(file, sizeof file, "%s.%s", job->name,
+                     strcmp(kind, "report") == 0 ? "json" : kind);
             job->outputs[job->output_count].kind = gi_xstrdup(m->default_outputs[i]);
             job->outputs[job->output_count].file = gi_xstrdup(file);
             job->output_count++;

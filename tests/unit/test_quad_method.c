@@ -182,6 +182,23 @@ static int parse_block(const char *block, gi_error *err)
     return rc;
 }
 
+/* With no "outputs" block every kind is written, named after the job; the
+ * report, which is JSON, as NAME.json. */
+GI_TEST(test_quad_default_outputs_are_named_by_kind)
+{
+    const char *text = "{\"scene\": \"s.json\", \"method\": \"quadrature\"}";
+    gi_job job;
+    gi_error err;
+    GI_REQUIRE(gi_job_parse(text, strlen(text), "hall.json", &job, &err) == 0);
+    const char *want[][2] = {{"exr", "hall.exr"}, {"png", "hall.png"}, {"report", "hall.json"}};
+    GI_CHECK(job.output_count == 3);
+    for (int i = 0; i < job.output_count && i < 3; i++) {
+        GI_CHECK_MSG(strcmp(job.outputs[i].kind, want[i][0]) == 0, "kind %s", job.outputs[i].kind);
+        GI_CHECK_MSG(strcmp(job.outputs[i].file, want[i][1]) == 0, "file %s", job.outputs[i].file);
+    }
+    gi_job_free(&job);
+}
+
 GI_TEST(test_quad_parameters_are_validated)
 {
     gi_error err;
