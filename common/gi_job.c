@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "gi_camera.h"
 #include "gi_fs.h"
@@ -45,11 +46,15 @@ static int parse_outputs(gi_jv *v, gi_job *job, const cJSON *outs)
     const gi_method *m = job->method;
     if (!outs) {
         for (int i = 0; m->default_outputs[i]; i++) {
-            /* A report is JSON: its default name says so (NAME.json). */
+            /* A report is JSON: its default name says so, without being
+             * the job file's own name (NAME.json, beside which
+             * `gi render NAME.json --out .` would write it). */
             const char *kind = m->default_outputs[i];
+            int report = strcmp(kind, "report") == 0 || strcmp(kind, "json") == 0;
             char file[300];
-            snprintf(file, sizeof file, "%s.%s", job->name,
-                     strcmp(kind, "report") == 0 ? "json" : kind);
+            snprintf(file, sizeof file, "%s%s", job->name, report ? "-report.json" : "");
+            if (!report)
+                snprintf(file, sizeof file, "%s.%s", job->name, kind);
             job->outputs[job->output_count].kind = gi_xstrdup(m->default_outputs[i]);
             job->outputs[job->output_count].file = gi_xstrdup(file);
             job->output_count++;
@@ -231,6 +236,47 @@ int gi_job_load(const char *path, gi_job *job, gi_error *err)
 const gi_camera *gi_job_camera(const gi_job *job)
 {
     return job->has_camera ? &job->camera : &job->scene.camera;
+}
+
+/* path names the same file as one of `inputs` (n stat results). */
+static int same_file(const char *path, const struct stat *inputs, size_t n)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (st.st_dev == inputs[i].st_dev && st.st_ino == inputs[i].st_ino)
+            return 1;
+    return 0;
+}
+
+int gi_job_outputs_spare_inputs(const gi_job *job, const char *job_path, const char *out_dir,
+                                gi_error *err)
+{
+    size_t n = 0;
+    struct stat *inputs = gi_xmalloc((job->manifest.count + 1) * sizeof *inputs);
+    if (stat(job_path, &inputs[n]) == 0)
+        n++;
+    char *dir = gi_dirname(job_path);
+    for (size_t i = 0; i < job->manifest.count; i++) {
+        char *p = gi_path_join(dir, job->manifest.entries[i].name);
+        if (stat(p, &inputs[n]) == 0)
+            n++;
+        free(p);
+    }
+    free(dir);
+    int rc = 0;
+    for (int i = 0; i < job->output_count && rc == 0; i++) {
+        char *p = gi_path_join(out_dir, job->outputs[i].file);
+        if (same_file(p, inputs, n))
+            rc = gi_fail(err, GI_EINVAL,
+                         "%s: outputs.%s: %s would replace one of the job's own files (the job "
+                         "or its scene): name the output otherwise or render into another --out",
+                         job_path, job->outputs[i].kind, p);
+        free(p);
+    }
+    free(inputs);
+    return rc;
 }
 
 const char *gi_job_output(const gi_job *job, const char *kind)

@@ -90,6 +90,11 @@ int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err);
 
 /* The camera the job renders with (job override, else the scene's). */
 const gi_camera *gi_job_camera(const gi_job *job);
+/* Refuses (GI_EINVAL, naming the output) a job whose output in out_dir would
+ * replace one of its inputs: the job file at job_path, or a file its scene
+ * read (job->manifest, names relative to the job file's directory). */
+int gi_job_outputs_spare_inputs(const gi_job *job, const char *job_path, const char *out_dir,
+                                gi_error *err);
 /* The output file of a kind ("exr"), or NULL if the job does not ask for it. */
 const char *gi_job_output(const gi_job *job, const char *kind);
 /* Full path of an output in out_dir (malloc'ed); the current frame's file

@@ -173,8 +173,12 @@ static int cmd_render(int argc, char **argv)
     gi_error_clear(&err);
     gi_job job;
     double t0 = gi_now();
-    if (gi_job_load(job_path, &job, &err) == 0 && gi_output_dir_ready(out_dir, &err) != 0)
-        gi_error_prefix(&err, "--out");
+    if (gi_job_load(job_path, &job, &err) == 0) {
+        if (gi_output_dir_ready(out_dir, &err) != 0)
+            gi_error_prefix(&err, "--out");
+        else
+            gi_job_outputs_spare_inputs(&job, job_path, out_dir, &err);
+    }
     if (err.code != GI_OK) {
         if (json) /* the end event says why; there is no job name yet */
             gi_progress_json_end(stderr, job_path, "failed", gi_now() - t0, err.msg);

@@ -62,6 +62,34 @@ if command -v taskset >/dev/null && [ "$(nproc --all)" -gt 1 ]; then
         { cat "$TMP/one.txt"; fail "a render limited to one CPU did not use one worker"; }
 fi
 
+# Rendered beside its job file (--out .), a job's default outputs leave it be
+# (the report is NAME-report.json, not NAME.json); an output named as the
+# job file or its scene is refused before anything runs.
+mkdir -p "$TMP/here"
+cp "$TMP/two_materials.obj" "$TMP/two_materials.mtl" "$TMP/here/"
+printf '{"scene": "two_materials.obj", "method": "quadrature", "image": {"width": 8, "height": 8},
+ "quadrature": {"max_evals": 20000}}' >"$TMP/here/q.json"
+cp "$TMP/here/q.json" "$TMP/q.orig"
+(cd "$TMP/here" && "$GI" render q.json --out . --progress none >/dev/null) || fail "render into the job's directory"
+cmp -s "$TMP/here/q.json" "$TMP/q.orig" || fail "the render replaced its own job file"
+grep -q '"evaluations"' "$TMP/here/q-report.json" || fail "no report named q-report.json"
+printf '{"scene": "two_materials.obj", "method": "pt", "image": {"width": 8, "height": 8},
+ "outputs": {"exr": "%s", "png": "new.png"}}' clash.json >"$TMP/here/clash.json"
+cp "$TMP/here/clash.json" "$TMP/clash.orig"
+for out in clash.json two_materials.obj; do
+    sed "s/\"exr\": \"[^\"]*\"/\"exr\": \"$out\"/" "$TMP/clash.orig" >"$TMP/here/clash.json"
+    cp "$TMP/here/clash.json" "$TMP/clash.now"
+    set +e
+    (cd "$TMP/here" && "$GI" render clash.json --out . --progress none >/dev/null 2>"$TMP/clash.err")
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] && grep -q "outputs.exr: $out would replace one of the job's own files" "$TMP/clash.err" ||
+        { cat "$TMP/clash.err"; fail "an output named $out: exit $rc"; }
+    [ ! -e "$TMP/here/new.png" ] || fail "a refused job wrote an output"
+    cmp -s "$TMP/here/clash.json" "$TMP/clash.now" || fail "the job file changed"
+done
+cmp -s "$TMP/here/two_materials.obj" "$TMP/two_materials.obj" || fail "the scene's mesh changed"
+
 # An --out that cannot take the outputs is refused before anything runs.
 : >"$TMP/afile"
 for case in "$TMP/afile|not a directory" "|an empty directory name"; do
