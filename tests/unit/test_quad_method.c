@@ -183,14 +183,14 @@ static int parse_block(const char *block, gi_error *err)
 }
 
 /* With no "outputs" block every kind is written, named after the job; the
- * report, which is JSON, as NAME.json. */
+ * report, which is JSON, as NAME-report.json (NAME.json is the job file). */
 GI_TEST(test_quad_default_outputs_are_named_by_kind)
 {
     const char *text = "{\"scene\": \"s.json\", \"method\": \"quadrature\"}";
     gi_job job;
     gi_error err;
     GI_REQUIRE(gi_job_parse(text, strlen(text), "hall.json", &job, &err) == 0);
-    const char *want[][2] = {{"exr", "hall.exr"}, {"png", "hall.png"}, {"report", "hall.json"}};
+    const char *want[][2] = {{"exr", "hall.exr"}, {"png", "hall.png"}, {"report", "hall-report.json"}};
     GI_CHECK(job.output_count == 3);
     for (int i = 0; i < job.output_count && i < 3; i++) {
         GI_CHECK_MSG(strcmp(job.outputs[i].kind, want[i][0]) == 0, "kind %s", job.outputs[i].kind);
