@@ -54,31 +54,18 @@ grace=$(grep "terminationGracePeriodSeconds:" "$K8S" | sed -n 2p | awk '{print $
 # The secrets as the pods get them: environment variables.
 secret=$(head -c 32 /dev/urandom | base64)
 token=$(head -c 32 /dev/urandom | base64)
-mkdir -p "$TMP/state"
 set -f
 # shellcheck disable=SC2046
-GI_FARM_SECRET=$secret GI_FARM_TOKEN=$token "$FARMD" $(cat "$TMP/farmd.args") >"$TMP/farmd.log" 2>&1 &
+start_farmd "$TMP/state" "$TMP/farmd.log" env GI_FARM_SECRET="$secret" GI_FARM_TOKEN="$token" -- \
+    $(cat "$TMP/farmd.args") # the manifest's --state and --listen-* come last: they count
 set +f
-FARMD_PID=$!
-FARM_PIDS="$FARM_PIDS $FARMD_PID"
-show_on_failure "$TMP/farmd.log"
-n=0
-until [ -s "$TMP/state/addresses" ]; do
-    n=$((n + 1))
-    [ $n -lt 200 ] || fail "gi-farmd did not start with the manifest's arguments"
-    sleep 0.05
-done
-API=$(awk '$1 == "api" {print $2}' "$TMP/state/addresses")
-WADDR=$(awk '$1 == "workers" {print $2}' "$TMP/state/addresses")
 export GI_FARM="http://$API" GI_FARM_TOKEN="$token"
 unset GI_FARM_TOKEN_FILE GI_FARM_SECRET_FILE
 set -f
 # shellcheck disable=SC2046
-GI_FARM_SECRET=$secret "$WORKER" $(sed "s#^\$WADDR\$#$WADDR#" "$TMP/worker.args") --procs 1 \
-    >"$TMP/worker.log" 2>&1 &
+start_worker "$TMP/worker.log" env GI_FARM_SECRET="$secret" -- \
+    $(sed "s#^\$WADDR\$#$WADDR#" "$TMP/worker.args") --procs 1
 set +f
-FARM_PIDS="$FARM_PIDS $!"
-show_on_failure "$TMP/worker.log"
 wait_workers 1
 cornell_job "$TMP/pt.json" 9 32 32 16
 "$GI" submit "$TMP/pt.json" --wait --out "$TMP/farm" --progress none >"$TMP/submit.log" 2>&1 ||
