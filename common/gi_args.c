@@ -1,6 +1,7 @@
 /* gi_args: option values. */
 #include "gi_args.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -62,5 +63,38 @@ int gi_args_bytes(const char *s, uint64_t *out)
     if (*end || v > (UINT64_C(1) << (50 - shift)))
         return -1;
     *out = (uint64_t)v << shift;
+    return 0;
+}
+
+int gi_args_duration(const char *s, double lo, double hi, double *out)
+{
+    /* Plain digits and a point only: strtod would also take blanks, signs,
+     * hex, exponents, "inf" and "nan", none of which an operator means. */
+    size_t n = 0, points = 0, digits = 0;
+    for (; s[n] && (isdigit((unsigned char)s[n]) || s[n] == '.'); n++) {
+        points += s[n] == '.';
+        digits += s[n] != '.';
+    }
+    if (!digits || points > 1 || n > 32)
+        return -1;
+    double unit = 1;
+    switch (s[n]) {
+    case '\0': break;
+    case 's': unit = 1; break;
+    case 'm': unit = 60; break;
+    case 'h': unit = 3600; break;
+    case 'd': unit = 86400; break;
+    case 'w': unit = 7 * 86400; break;
+    default: return -1;
+    }
+    if (s[n] && s[n + 1])
+        return -1;
+    char num[40];
+    memcpy(num, s, n);
+    num[n] = '\0';
+    double v = strtod(num, NULL) * unit;
+    if (!isfinite(v) || v < lo || v > hi)
+        return -1;
+    *out = v;
     return 0;
 }

@@ -18,4 +18,9 @@ int gi_args_int(const char *s, int64_t lo, int64_t hi, int64_t *out);
  * of 1024), at most 2^50. */
 int gi_args_bytes(const char *s, uint64_t *out);
 
+/* A duration in seconds within [lo, hi]: a decimal number (digits and at
+ * most one point, no sign or exponent) with an optional unit s, m, h, d or
+ * w (seconds by default): "90", "1.5h", "14d". */
+int gi_args_duration(const char *s, double lo, double hi, double *out);
+
 #endif

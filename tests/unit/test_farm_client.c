@@ -296,6 +296,19 @@ GI_TEST(test_args_values)
     double d;
     GI_CHECK(gi_args_number("0.25", 0, 1, &d) == 0 && d == 0.25);
     GI_CHECK(gi_args_number("nan", 0, 1, &d) != 0 && gi_args_number("2", 0, 1, &d) != 0);
+    GI_CHECK(gi_args_duration("90", 1, 1e9, &d) == 0 && d == 90);
+    GI_CHECK(gi_args_duration("1.5h", 1, 1e9, &d) == 0 && d == 5400);
+    GI_CHECK(gi_args_duration("14d", 1, 1e9, &d) == 0 && d == 14 * 86400);
+    GI_CHECK(gi_args_duration("2w", 1, 1e9, &d) == 0 && d == 14 * 86400);
+    GI_CHECK(gi_args_duration("30m", 1, 1e9, &d) == 0 && d == 1800);
+    GI_CHECK(gi_args_duration(".5s", 0.1, 1e9, &d) == 0 && d == 0.5);
+    GI_CHECK(gi_args_duration("0.5", 1, 1e9, &d) != 0); /* under lo */
+    GI_CHECK(gi_args_duration("", 1, 1e9, &d) != 0 && gi_args_duration("d", 1, 1e9, &d) != 0);
+    GI_CHECK(gi_args_duration(" 5", 1, 1e9, &d) != 0 && gi_args_duration("+5", 1, 1e9, &d) != 0);
+    GI_CHECK(gi_args_duration("5dd", 1, 1e9, &d) != 0 && gi_args_duration("5y", 1, 1e9, &d) != 0);
+    GI_CHECK(gi_args_duration("1e3", 1, 1e9, &d) != 0 && gi_args_duration("inf", 1, 1e9, &d) != 0);
+    GI_CHECK(gi_args_duration("1.2.3", 1, 1e9, &d) != 0 && gi_args_duration(".", 1, 1e9, &d) != 0);
+    GI_CHECK(gi_args_duration("99999999999w", 1, 1e9, &d) != 0);
     char *argv[] = {"gi", "--out=x", "--out", "y", "--out", NULL};
     int i = 1;
     const char *o;
