@@ -535,6 +535,9 @@ static int cmd_status(client *c, uint64_t id)
     const cJSON *err = cJSON_GetObjectItemCaseSensitive(job, "error");
     if (cJSON_IsObject(err))
         printf("  error: %s\n", str(err, "message"));
+    if (str(job, "purge_at")[0])
+        printf("  ended %s; purged at %s by the farm's retention (fetch its outputs before)\n",
+               str(job, "ended"), str(job, "purge_at"));
     const cJSON *te = cJSON_GetObjectItemCaseSensitive(job, "task_errors");
     int n = cJSON_GetArraySize(te);
     if (n > 0)

@@ -45,6 +45,7 @@ void gi_farm_config_default(gi_farm_config *c)
     c->dead_s = 120.0;
     c->handshake_s = 10.0;
     c->checkpoint_s = 30.0;
+    c->refusal_window_s = GI_REFUSAL_WINDOW_S;
     c->max_attempts = 4;
     c->blocklist_failures = 5;
     c->blocklist_s = 600.0;
@@ -105,6 +106,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     f->started = gi_now();
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;
+    gi_refusal_log_init(&f->refusals, f->cfg.refusal_window_s);
     gi_frame_cache_init(&f->asset_frames, ASSET_FRAMES_MAX);
     gi_auth_key(&f->cfg.secret, f->key);
     /* Clients hold the token, workers the secret: one value for both would
@@ -216,6 +218,7 @@ int gi_farm_run(gi_farm *f, gi_error *err)
         /* Always: MHD also has timeouts of its own to run. */
         gi_farm_api_run(f);
         gi_farm_conns_tick(f);
+        gi_refusal_tick(&f->refusals, gi_now());
         gi_farm_jobs_tick(f);
         gi_farm_schedule(f);
         gi_farm_conns_reap(f);

@@ -32,6 +32,12 @@ typedef struct gi_farm_config {
     double handshake_s;  /* time allowed for HELLO .. AUTH */
     double api_head_s;   /* time allowed an API client for a request's head */
     double checkpoint_s; /* checkpoint running jobs this often */
+    double refusal_window_s; /* an unauthenticated peer's refusals: a log line per window */
+    /* Retention: an ended job is purged this long after it ended (0: kept
+     * until `gi purge`), and the oldest ended ones while their directories
+     * hold more than keep_ended_bytes (0: no limit). */
+    double keep_ended_s;
+    uint64_t keep_ended_bytes;
     uint32_t max_attempts;       /* runs of a task before its job fails */
     uint32_t blocklist_failures; /* consecutive task failures that blocklist a worker */
     double blocklist_s;          /* for how long */

@@ -12,7 +12,8 @@
  * "Authorization: Bearer <token>"; the comparison hashes both sides and
  * compares the digests in constant time. Refusals (no token, wrong token,
  * bodies over their limit, invalid jobs) are logged with the peer and the
- * reason, never with the token. */
+ * reason, never with the token; those of a missing or wrong token, which
+ * anyone can send, once per peer and 10 s (gi_refusal_log). */
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -291,7 +292,10 @@ static enum MHD_Result refuse(gi_farm *f, struct MHD_Connection *conn, api_req *
         f->m.api_refused_auth++;
     else if (status >= 400 && status < 500 && status != MHD_HTTP_NOT_FOUND)
         f->m.api_refused_input++;
-    if (status != MHD_HTTP_NOT_FOUND)
+    if (status == MHD_HTTP_UNAUTHORIZED) /* anyone can send these: a line per peer and 10 s */
+        gi_refusal_logf(&f->refusals, gi_now(), r->peer, "api: refused %s %s from %s: %s",
+                        method, u, r->peer, msg);
+    else if (status != MHD_HTTP_NOT_FOUND)
         gi_warn("api: refused %s %s from %s: %s", method, u, r->peer, msg);
     r->responded = 1;
     return send_json_allow(conn, status, json_error(msg),

@@ -7,8 +7,9 @@
  * and has `handshake_s` to finish. Afterwards it accepts what a worker
  * sends (RESULT up to max_result_bytes, FAIL, HEARTBEAT, ASSET_NEED, DRAIN,
  * BYE, ERROR) and nothing else: a frame of any other type is refused from
- * its header. Every refusal is logged with the reason, counted in the
- * metrics, answered with ERROR when the socket still works, and ends only
+ * its header. Every refusal is logged with the reason (a peer's refusals
+ * before it authenticated: once per peer and 10 s, gi_refusal_log), counted
+ * in the metrics, answered with ERROR when the socket still works, and ends only
  * that connection. */
 #include <errno.h>
 #include <poll.h>
@@ -112,20 +113,16 @@ static void make_room_for_a_handshake(gi_farm *f)
     }
     if (n < HANDSHAKES_MAX)
         return;
-    /* Closed at once, and logged at most every 10 s: a peer reconnecting
-     * as fast as it can would otherwise write a line per connection. */
+    /* Closed at once, and logged once per peer and 10 s (gi_refusal_log): a
+     * peer reconnecting as fast as it can would otherwise write a line per
+     * connection. */
     double now = gi_now();
     f->m.workers_refused++;
     f->m.handshakes_displaced++;
-    if (now - f->displaced_logged_at >= 10.0) {
-        gi_warn("refused unauthenticated peer (%s): no handshake after %.1f s, and a newer "
-                "connection needed its place (%d handshakes at most; %llu such refusals "
-                "since this was last logged)",
-                oldest->peer, now - oldest->connected, HANDSHAKES_MAX,
-                (unsigned long long)(f->m.handshakes_displaced - f->displaced_logged));
-        f->displaced_logged_at = now;
-        f->displaced_logged = f->m.handshakes_displaced;
-    }
+    gi_refusal_logf(&f->refusals, now, oldest->peer,
+                    "refused unauthenticated peer (%s): no handshake after %.1f s, and a newer "
+                    "connection needed its place (%d handshakes at most)",
+                    oldest->peer, now - oldest->connected, HANDSHAKES_MAX);
     close(oldest->fd);
     oldest->fd = -1;
 }
@@ -148,8 +145,9 @@ int gi_farm_conn_accept(gi_farm *f)
          * connections flushing their last frames. */
         size_t open = open_connections(f);
         if (open >= (size_t)f->cfg.max_workers + 2 * HANDSHAKES_MAX) {
-            gi_warn("refused worker connection from %s: %zu connections open (limit %u workers)",
-                    peer, open, f->cfg.max_workers);
+            gi_refusal_logf(&f->refusals, gi_now(), peer,
+                            "refused worker connection from %s: %zu connections open (limit %u "
+                            "workers)", peer, open, f->cfg.max_workers);
             f->m.workers_refused++;
             close(fd);
             continue;
@@ -187,9 +185,11 @@ void gi_farm_conn_close(gi_farm *f, gi_farm_conn *c, gi_errcode code, const char
     int was_worker = c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING;
     if (code == GI_OK)
         gi_info("worker %s (%s) left: %s", who(c), c->peer, c->close_reason);
+    else if (!was_worker) /* not authenticated: a scanner, a wrong secret */
+        gi_refusal_logf(&f->refusals, gi_now(), c->peer, "refused %s (%s): %s", who(c), c->peer,
+                        c->close_reason);
     else
-        gi_warn("%s %s (%s): %s", was_worker ? "dropped worker" : "refused", who(c), c->peer,
-                c->close_reason);
+        gi_warn("dropped worker %s (%s): %s", who(c), c->peer, c->close_reason);
     if (code != GI_OK && code != GI_EIO) {
         /* Tell the peer why; it may no longer be listening. */
         gi_error e;

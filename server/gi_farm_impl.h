@@ -24,6 +24,7 @@
 #include "gi_journal.h"
 #include "gi_msg_ctrl.h"
 #include "gi_netio.h"
+#include "gi_refusal_log.h"
 
 struct MHD_Daemon;
 
@@ -79,6 +80,10 @@ typedef struct gi_farm_job {
      * run failed only writing them, and no checkpoint could keep its
      * result either (the same full disk): the result waits in memory. */
     double outputs_retry_at;
+    /* Bytes of <dir> once it ended (--keep-ended-bytes), measured by the
+     * first retention pass that needs them; disk_measured 0: not yet. */
+    uint64_t disk_bytes;
+    int disk_measured;
 
     /* Checker. */
     pid_t check_pid;
@@ -235,6 +240,7 @@ struct gi_farm {
     int live_stale; /* a job was added, ended, reopened or purged since */
     int ended_flush_due; /* an ended job may have its END or log lines to write */
     uint64_t next_job_id;
+    double retention_next; /* monotonic: the next retention pass (gi_farm_jobs.c) */
     uint64_t store_bytes;  /* bytes in the asset store */
     uint64_t upload_bytes; /* bytes in assets/tmp: uploads under way */
 
@@ -245,9 +251,9 @@ struct gi_farm {
     uint64_t next_conn_id;
     gi_farm_host **hosts;
     size_t host_count, host_cap;
-    /* Displaced handshakes (gi_farm_conn.c): when last logged, and the count then. */
-    double displaced_logged_at;
-    uint64_t displaced_logged;
+    /* Refusals of peers not authenticated (worker handshakes, API tokens):
+     * a line per peer and 10 s at most. */
+    gi_refusal_log refusals;
 
     int api_fd;
     char api_addr[80];
@@ -294,6 +300,9 @@ void gi_farm_jobs_tick(gi_farm *f);
 /* Checkpoints every running job now (shutdown). */
 void gi_farm_jobs_checkpoint_all(gi_farm *f);
 void gi_farm_jobs_free(gi_farm *f);
+/* When retention (--keep-ended) purges job j (epoch seconds), or 0 if it
+ * does not: not ended, or no --keep-ended. */
+double gi_farm_job_purge_at(const gi_farm *f, const gi_farm_job *j);
 /* Output file path of a finished job, or NULL if the job has no such output. */
 char *gi_farm_job_output_path(const gi_farm_job *j, const char *name);
 /* Fraction, ETA (< 0: unknown or not running), frames and work of a job. */

@@ -462,6 +462,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->host_disk_errors = 0;
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
+    j->disk_measured = 0;
 }
 
 static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
@@ -888,6 +889,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
     f->live_stale = 1;
     f->ended_flush_due = 1; /* its END or log lines may have to wait for room */
     j->ended = gi_farm_wallnow();
+    j->disk_measured = 0;
     gi_farm_check_kill(j);
     gi_farm_sched_drop_job(f, j);
     if (j->loaded) {
@@ -1369,6 +1371,134 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
         checkpoint_finish(f, j, 1);
 }
 
+/* ---- retention ---------------------------------------------------------- */
+
+/* Purges by retention per pass (one a second): each is a journal append and
+ * its fdatasync, and the loop must not stall on a backlog (a farm started
+ * with a retention shorter than its history, or after a long stop). */
+#define RETENTION_PURGES_PER_PASS 100
+
+/* Bytes the files under path take on disk. */
+static uint64_t tree_bytes(const char *path)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0)
+        return 0;
+    uint64_t n = (uint64_t)st.st_blocks * 512;
+    DIR *d = S_ISDIR(st.st_mode) ? opendir(path) : NULL;
+    if (!d)
+        return n;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+            continue;
+        char p[4400];
+        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
+        n += tree_bytes(p);
+    }
+    closedir(d);
+    return n;
+}
+
+double gi_farm_job_purge_at(const gi_farm *f, const gi_farm_job *j)
+{
+    if (!terminal(j) || f->cfg.keep_ended_s <= 0 || j->ended <= 0)
+        return 0;
+    return j->ended + f->cfg.keep_ended_s;
+}
+
+/* An ended job whose END is in the journal: what retention may purge. A
+ * job not ended is never purged: running, checking, or waiting to write
+ * its outputs again (outputs_retry_at: it is still running). */
+static int retainable(const gi_farm_job *j)
+{
+    return terminal(j) && !j->end_pending && j->ended > 0;
+}
+
+/* Exactly `gi purge`, logged with the reason. 1 if j is gone. */
+static int retention_purge(gi_farm *f, gi_farm_job *j, const char *why)
+{
+    unsigned long long id = (unsigned long long)j->id;
+    gi_info("job %llu (%s, %s): purged by retention: %s", id, j->name ? j->name : "?",
+            gi_fj_state_name(j->state), why);
+    gi_error err;
+    if (gi_farm_job_purge(f, j, &err) == 0)
+        return 1;
+    gi_warn("job %llu: its purge by retention failed (%s): tried again in a second", id, err.msg);
+    return 0;
+}
+
+static int by_ended(const void *a, const void *b)
+{
+    const gi_farm_job *x = *(gi_farm_job *const *)a, *y = *(gi_farm_job *const *)b;
+    if (x->ended != y->ended)
+        return x->ended < y->ended ? -1 : 1;
+    return x->id < y->id ? -1 : x->id > y->id;
+}
+
+/* --keep-ended-bytes: the oldest ended jobs go while the ended jobs'
+ * directories hold more. */
+static void retention_by_size(gi_farm *f, int *budget)
+{
+    uint64_t total = 0;
+    size_t n = 0;
+    gi_farm_job **ended = gi_xmalloc((f->job_count + 1) * sizeof *ended);
+    for (size_t i = 0; i < f->job_count; i++) {
+        gi_farm_job *j = f->jobs[i];
+        if (!retainable(j))
+            continue;
+        if (!j->disk_measured) {
+            j->disk_bytes = tree_bytes(j->dir);
+            j->disk_measured = 1;
+        }
+        total += j->disk_bytes;
+        ended[n++] = j;
+    }
+    qsort(ended, n, sizeof *ended, by_ended);
+    for (size_t i = 0; i < n && total > f->cfg.keep_ended_bytes && *budget > 0; i++, --*budget) {
+        char why[200];
+        uint64_t bytes = ended[i]->disk_bytes;
+        snprintf(why, sizeof why, "the ended jobs' files hold %llu bytes, over --keep-ended-bytes "
+                 "%llu, and it is the oldest", (unsigned long long)total,
+                 (unsigned long long)f->cfg.keep_ended_bytes);
+        if (!retention_purge(f, ended[i], why))
+            break;
+        total -= bytes;
+    }
+    free(ended);
+}
+
+/* Purges the ended jobs that retention no longer keeps. Once a second; the
+ * ended time is journaled (END), so a job due while gi-farmd was stopped
+ * goes at its first pass after a restart. */
+static void retention(gi_farm *f)
+{
+    if (f->cfg.keep_ended_s <= 0 && !f->cfg.keep_ended_bytes)
+        return;
+    double now = gi_now();
+    if (now < f->retention_next)
+        return;
+    f->retention_next = now + 1.0;
+    int budget = RETENTION_PURGES_PER_PASS;
+    double wall = gi_farm_wallnow();
+    for (size_t i = 0; f->cfg.keep_ended_s > 0 && i < f->job_count && budget > 0;) {
+        gi_farm_job *j = f->jobs[i];
+        if (retainable(j) && wall >= gi_farm_job_purge_at(f, j)) {
+            char why[200], ago[32], keep[32];
+            snprintf(why, sizeof why, "ended %s ago (--keep-ended %s)",
+                     gi_duration(wall - j->ended, ago, sizeof ago),
+                     gi_duration(f->cfg.keep_ended_s, keep, sizeof keep));
+            budget--;
+            if (retention_purge(f, j, why))
+                continue; /* the next job is at i now */
+            break;
+        }
+        i++;
+    }
+    if (f->cfg.keep_ended_bytes)
+        retention_by_size(f, &budget);
+}
+
 void gi_farm_jobs_tick(gi_farm *f)
 {
     start_checkers(f);
@@ -1393,6 +1523,7 @@ void gi_farm_jobs_tick(gi_farm *f)
                 f->ended_flush_due = 1;
         }
     }
+    retention(f);
     if (f->journal.records > COMPACT_AFTER_RECORDS) {
         gi_error err;
         if (compact(f, &err))

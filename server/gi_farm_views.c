@@ -66,6 +66,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON_AddStringToObject(o, "file", j->file);
     add_time(o, "started", j->started);
     add_time(o, "ended", j->ended);
+    add_time(o, "purge_at", gi_farm_job_purge_at(f, j)); /* --keep-ended */
 
     uint64_t total = j->final_tasks, merged = j->final_merged, retries = j->final_retries;
     uint64_t leased = 0, pending = 0, held = 0;

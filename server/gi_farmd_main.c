@@ -46,6 +46,13 @@ static void usage(FILE *out)
             "  --max-jobs-memory B         what all jobs kept may hold, ended ones too (1G)\n"
             "  --check-timeout S --check-memory B             scene checker limits (300, 16G)\n"
             "  --api-head-seconds S        time an API client has to send a request's head (10)\n"
+            "  --keep-ended DURATION       purge ended jobs (done, failed, cancelled) this long\n"
+            "                              after they ended, e.g. 14d (default: keep until purged)\n"
+            "  --keep-ended-bytes B        and the oldest ended ones while their files hold more\n"
+            "                              (outputs, checkpoints, logs; default: no limit)\n"
+            "  --refusal-log-window S      log an unauthenticated peer's refusals once per S\n"
+            "                              seconds, then a count (10; 0: every one)\n"
+            "Durations take s, m, h, d, w suffixes.\n"
             "Sizes take K, M, G, T suffixes. See docs/farm.md.\n");
 }
 
@@ -71,6 +78,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--blocklist-seconds", offsetof(gi_farm_config, blocklist_s), 0, 86400 * 30},
         {"--check-timeout", offsetof(gi_farm_config, check_timeout_s), 1, 86400},
         {"--api-head-seconds", offsetof(gi_farm_config, api_head_s), 0.1, 3600},
+        {"--refusal-log-window", offsetof(gi_farm_config, refusal_window_s), 0, 3600},
     };
     static const struct {
         const char *name;
@@ -82,6 +90,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--max-result-bytes", offsetof(gi_farm_config, max_result_bytes)},
         {"--max-pixels", offsetof(gi_farm_config, max_job_pixels)},
         {"--check-memory", offsetof(gi_farm_config, check_memory)},
+        {"--keep-ended-bytes", offsetof(gi_farm_config, keep_ended_bytes)},
     };
     static const struct {
         const char *name;
@@ -108,6 +117,13 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
     TAKE("--secret-file", secret_file)
     TAKE("--token-file", token_file)
 #undef TAKE
+    if ((rc = gi_args_take(argc, argv, i, "--keep-ended", &v)) != 0) {
+        /* Up to 100 years: "forever" is leaving the option out. */
+        if (rc < 0 || gi_args_duration(v, 1, 100 * 365.25 * 86400, &c->keep_ended_s))
+            return bad("--keep-ended", rc < 0 ? "" : v,
+                       "a duration of at least 1 s (e.g. 3600, 90m, 36h, 14d, 2w)");
+        return 1;
+    }
     for (size_t k = 0; k < GI_ARRAY_LEN(secs); k++)
         if ((rc = gi_args_take(argc, argv, i, secs[k].name, &v)) != 0) {
             if (rc < 0 || gi_args_number(v, secs[k].lo, secs[k].hi,

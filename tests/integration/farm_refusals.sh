@@ -1,6 +1,7 @@
 # gi-farmd refuses, each with a logged reason, and keeps serving (and
 # refuses to start with one value as API token and farm secret):
-# a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
+# (every refusal logged in full: --refusal-log-window 0; farm_refusal_log.sh
+# tests the default) a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
 # an oversized frame, a frame with a bad CRC, an unknown message type, frames
 # a connection may not carry, an oversized upload, uploads under way past the
 # store's limit, jobs that name files
@@ -17,7 +18,7 @@ GI_FARM_TOKEN_FILE="$TMP/secret" timeout 20 "$FARMD" --state "$TMP/same" --liste
 [ $st -eq 2 ] && grep -q "the API token and the farm secret are the same" "$TMP/same.log" ||
     { cat "$TMP/same.log"; fail "one value as token and secret: exit $st"; }
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 2 --dead 10 --max-result-bytes 16M \
-    --max-asset-bytes 1M --max-store-bytes 2M --api-head-seconds 1
+    --max-asset-bytes 1M --max-store-bytes 2M --api-head-seconds 1 --refusal-log-window 0
 logged() { grep -q -- "$1" "$LOG" || { cat "$LOG"; fail "not logged: $1"; }; }
 
 # Wrong farm secret: the worker is refused and says why.
