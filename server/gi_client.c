@@ -25,6 +25,13 @@
 #define POLL_S 0.1     /* the longest wait between two looks at a job */
 #define POLL_MIN_S 0.01 /* the shortest, once the job is about to end */
 #define WAIT_UNANSWERED_S 300.0 /* gi wait asks a silent farm again this long */
+/* A farm that refuses a connection, resets it or answers 503 (busy: its
+ * connection limit, 1000 clients at once) is asked again this long, with
+ * a backoff from RETRY_FIRST_S doubling up to RETRY_MAX_S, each pause
+ * jittered so that clients turned away together do not return together. */
+#define RETRY_S 60.0
+#define RETRY_FIRST_S 0.1
+#define RETRY_MAX_S 2.0
 
 const char gi_client_usage[] =
     "       gi submit JOB.json [--priority N] [--wait] [--out DIR] [--progress MODE]\n"
@@ -52,6 +59,9 @@ typedef struct client {
     int json, wait;
     int64_t priority;
     const char *arg; /* the command's operand (job file or id) */
+    /* The submission's Idempotency-Key while it is being sent (else NULL). */
+    const char *idempotency_key;
+    int said_retrying; /* stderr said once that the farm is asked again */
 } client;
 
 /* The options each command takes (--farm and --token-file: all). */
@@ -108,11 +118,66 @@ static int http_failure(const char *what, int status, const gi_buf *body)
     return fail_msg(status == 400 ? 2 : 1, "%s: %s (HTTP %d)", what, msg, status);
 }
 
+/* One try. */
+static int request_once(client *c, const char *method, const char *path, const void *body,
+                        size_t len, const char *type, gi_buf *resp, const char *to_file,
+                        gi_error *err)
+{
+    gi_http_request rq = {method, path, c->token, body, len, type, 60.0, c->idempotency_key};
+    return gi_http_do(&c->url, &rq, resp, MAX_JSON_BODY, to_file, err);
+}
+
+/* The pause before the next try: *next (jittered into [next/2, next]),
+ * then *next doubles up to max_s. */
+static double backoff(double *next, double max_s)
+{
+    uint32_t r;
+    gi_auth_random(&r, sizeof r);
+    double s = *next * (0.5 + 0.5 * (double)r / 4294967295.0);
+    *next = *next * 2 > max_s ? max_s : *next * 2;
+    return s;
+}
+
+static void sleep_s(double s);
+
+/* Whether a failed try may be made again: a request that did not reach the
+ * farm whole, and a 503 (refused, nothing done), always; one that may have
+ * been acted on (the connection broke after it went) only if a second one
+ * changes nothing: GET, HEAD, PUT of an asset by its hash, and a
+ * submission carrying its Idempotency-Key. Not DELETE or a retry's POST:
+ * a second cancel of a job the first one cancelled would fail. */
+static int may_retry(const client *c, const char *method, int status)
+{
+    if (status == GI_HTTP_UNSENT || status == 503)
+        return 1;
+    if (status != GI_HTTP_FAILED)
+        return 0;
+    return strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0 ||
+           strcmp(method, "PUT") == 0 || (strcmp(method, "POST") == 0 && c->idempotency_key);
+}
+
+/* A request, tried again for up to RETRY_S while may_retry says so. */
 static int request(client *c, const char *method, const char *path, const void *body, size_t len,
                    const char *type, gi_buf *resp, const char *to_file, gi_error *err)
 {
-    gi_http_request rq = {method, path, c->token, body, len, type, 60.0};
-    return gi_http_do(&c->url, &rq, resp, MAX_JSON_BODY, to_file, err);
+    double t0 = gi_now(), next = RETRY_FIRST_S;
+    for (;;) {
+        int st = request_once(c, method, path, body, len, type, resp, to_file, err);
+        if (!may_retry(c, method, st) || interrupted)
+            return st;
+        double pause = backoff(&next, RETRY_MAX_S);
+        if (gi_now() + pause - t0 > RETRY_S)
+            return st;
+        if (!c->said_retrying) {
+            char why[1200];
+            if (st == 503)
+                error_text(resp, why, sizeof why);
+            gi_say("the farm is busy or unreachable (%s%s); asking again for up to %.0f s",
+                   st == 503 ? "HTTP 503: " : "", st == 503 ? why : err->msg, RETRY_S);
+            c->said_retrying = 1;
+        }
+        sleep_s(pause);
+    }
 }
 
 /* A request that must answer `want` (or also `want2` when non-zero): 0, or
@@ -158,7 +223,8 @@ static int look_at_job(client *c, uint64_t id, cJSON **doc, char *why, size_t n)
     gi_buf b;
     gi_buf_init(&b);
     gi_error err;
-    int st = request(c, "GET", path, NULL, 0, NULL, &b, NULL, &err), rc = 0;
+    /* One try: wait_job asks a farm that does not answer again itself. */
+    int st = request_once(c, "GET", path, NULL, 0, NULL, &b, NULL, &err), rc = 0;
     if (st < 0 || st >= 500) {
         if (st < 0)
             snprintf(why, n, "%s", err.msg);
@@ -330,10 +396,10 @@ static int wait_job(client *c, uint64_t id, int fetch)
                     gi_progress_end(&prog);
                 gi_say("the farm does not answer (%s); asking again for up to %.0f s", why,
                        WAIT_UNANSWERED_S);
+                c->said_retrying = 1; /* its requests need not say it again */
             }
             if (now - unanswered < WAIT_UNANSWERED_S) {
-                sleep_s(retry);
-                retry = retry * 2 > 5.0 ? 5.0 : retry * 2;
+                sleep_s(backoff(&retry, 5.0));
                 continue;
             }
             gi_say("the farm has not answered for %.0f s (%s); job %llu goes on there when it is "
@@ -467,8 +533,17 @@ static int cmd_submit(client *c)
         gi_buf_init(&resp);
         gi_farm_submission_build(&body, base ? base + 1 : c->arg, job.text, &job.manifest,
                                  (uint32_t)c->priority);
-        rc = call(c, "POST", "/api/v1/jobs", body.data, body.len, "application/json", 201, 0, &resp,
-                  NULL);
+        /* Sent again after a connection broken before its answer, the
+         * submission makes no second job: the farm knows it by this key. */
+        uint8_t raw[16];
+        char key[2 * sizeof raw + 1];
+        gi_auth_random(raw, sizeof raw);
+        for (size_t i = 0; i < sizeof raw; i++)
+            snprintf(key + 2 * i, 3, "%02x", raw[i]);
+        c->idempotency_key = key;
+        rc = call(c, "POST", "/api/v1/jobs", body.data, body.len, "application/json", 201, 200,
+                  &resp, NULL);
+        c->idempotency_key = NULL;
         if (rc == 0) {
             cJSON *doc = cJSON_ParseWithLength((const char *)resp.data, resp.len);
             id = (uint64_t)num(doc, "id", 0);

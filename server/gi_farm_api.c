@@ -414,6 +414,19 @@ static unsigned route(const char *method, const char *url, api_req *r)
 
 /* ---- endpoints ------------------------------------------------------------- */
 
+/* An Idempotency-Key: a client's random token, not something to log or
+ * keep in any size. */
+static int key_valid(const char *k)
+{
+    size_t n = strlen(k);
+    if (n < 16 || n > 64)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)k[i]) && k[i] != '-' && k[i] != '_')
+            return 0;
+    return 1;
+}
+
 static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_req *r,
                                  const char *method, const char *url)
 {
@@ -421,7 +434,33 @@ static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_re
     gi_error err;
     if (gi_farm_submission_parse((const char *)r->body.data, r->body.len, &s, &err))
         return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST, "%s", err.msg);
-    gi_farm_job *j = gi_farm_job_submit(f, s.file, s.text, &s.manifest, s.priority, &err);
+    /* A submission repeated with its Idempotency-Key (its client lost the
+     * first answer: a connection reset under load) gets the job the first
+     * one made, instead of a second one. */
+    const char *key = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Idempotency-Key");
+    int status = MHD_HTTP_CREATED;
+    gi_farm_job *j = NULL;
+    if (key && !key_valid(key)) {
+        gi_farm_submission_free(&s);
+        return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST,
+                      "Idempotency-Key: 16 to 64 characters of A-Z, a-z, 0-9, '-' and '_'");
+    }
+    if (key && (j = gi_farm_job_by_key(f, key)) != NULL) {
+        int same = strcmp(j->text, s.text) == 0 && strcmp(j->file, s.file) == 0 &&
+                   j->priority == s.priority;
+        gi_farm_submission_free(&s);
+        if (!same)
+            return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
+                          "Idempotency-Key %s was given to job %llu, another submission", key,
+                          (unsigned long long)j->id);
+        gi_info("job %llu: its submission came again with its Idempotency-Key (from %s): "
+                "answered with the job, not submitted twice", (unsigned long long)j->id, r->peer);
+        status = MHD_HTTP_OK;
+    } else {
+        j = gi_farm_job_submit(f, s.file, s.text, &s.manifest, s.priority, &err);
+        if (j && key)
+            j->submit_key = gi_xstrdup(key);
+    }
     if (!j) {
         gi_farm_submission_free(&s);
         return refuse(f, conn, r, method, url,
@@ -430,14 +469,16 @@ static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_re
                                               : MHD_HTTP_INTERNAL_SERVER_ERROR,
                       "%s", err.msg);
     }
-    s.text = NULL; /* the job owns it */
-    gi_farm_submission_free(&s);
+    if (status == MHD_HTTP_CREATED) {
+        s.text = NULL; /* the job owns it */
+        gi_farm_submission_free(&s);
+    }
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "id", (double)j->id);
     cJSON_AddStringToObject(o, "state", gi_fj_state_name(j->state));
     char *json = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
-    return send_json(conn, MHD_HTTP_CREATED, json);
+    return send_json(conn, (unsigned)status, json);
 }
 
 static const char *content_type(const char *name)

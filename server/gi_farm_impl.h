@@ -58,6 +58,9 @@ typedef struct gi_farm_job {
     uint32_t priority;
     double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
     char *file, *text;
+    /* The submission's Idempotency-Key (NULL: none). In memory only: a
+     * client repeats a submission within a minute, a restart forgets. */
+    char *submit_key;
     size_t text_len; /* strlen(text): counted against --max-jobs-memory at every submission */
     gi_manifest manifest;
     /* Data the job published that its last checkpoint needs from the asset
@@ -276,6 +279,8 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err);
 gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
                                 gi_manifest *manifest, uint32_t priority, gi_error *err);
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
+/* The job submitted with this Idempotency-Key, or NULL. */
+gi_farm_job *gi_farm_job_by_key(gi_farm *f, const char *key);
 /* The jobs not ended, in submission order (rebuilt here after a change).
  * Valid until the next call: a job that ends meanwhile stays in it. */
 gi_farm_job **gi_farm_live_jobs(gi_farm *f, size_t *count);

@@ -104,6 +104,7 @@ static void job_free(gi_farm_job *j)
     run_free(j);
     free(j->file);
     free(j->text);
+    free(j->submit_key);
     free(j->name);
     free(j->method);
     for (int i = 0; i < j->output_count; i++)
@@ -146,6 +147,15 @@ gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id)
             hi = mid;
     }
     return lo < f->job_count && f->jobs[lo]->id == id ? f->jobs[lo] : NULL;
+}
+
+gi_farm_job *gi_farm_job_by_key(gi_farm *f, const char *key)
+{
+    /* Newest first: a repeated submission follows its first closely. */
+    for (size_t i = f->job_count; i-- > 0;)
+        if (f->jobs[i]->submit_key && strcmp(f->jobs[i]->submit_key, key) == 0)
+            return f->jobs[i];
+    return NULL;
 }
 
 gi_farm_job **gi_farm_live_jobs(gi_farm *f, size_t *count)

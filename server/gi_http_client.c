@@ -202,6 +202,10 @@ static int send_request(int fd, const gi_http_url *u, const gi_http_request *rq,
                      "%s %s%s HTTP/1.1\r\nHost: %s\r\nConnection: close\r\nUser-Agent: gi\r\n",
                      rq->method, u->prefix, rq->path, u->hostport);
     gi_buf_put(&h, line, (size_t)n);
+    if (rq->idempotency_key) {
+        n = snprintf(line, sizeof line, "Idempotency-Key: %s\r\n", rq->idempotency_key);
+        gi_buf_put(&h, line, (size_t)n);
+    }
     if (rq->token) {
         gi_buf_put(&h, "Authorization: Bearer ", 22);
         gi_buf_put(&h, rq->token, strlen(rq->token));
@@ -315,13 +319,15 @@ int gi_http_do(const gi_http_url *u, const gi_http_request *rq, gi_buf *body, ui
     double timeout = rq->timeout_s > 0 ? rq->timeout_s : 60.0;
     int fd = gi_net_connect(u->hostport, timeout, err);
     if (fd < 0)
-        return -1;
-    int status = -1;
+        return GI_HTTP_UNSENT;
+    int status = GI_HTTP_FAILED;
     gi_buf in;
     gi_buf_init(&in);
     gi_buf_reset(body);
-    if (send_request(fd, u, rq, err))
+    if (send_request(fd, u, rq, err)) {
+        status = GI_HTTP_UNSENT;
         goto out;
+    }
     gi_http_head head;
     size_t head_len = 0;
     for (;;) {

@@ -48,12 +48,23 @@ typedef struct gi_http_request {
     size_t body_len;
     const char *content_type;
     double timeout_s;          /* for connecting and between reads */
+    /* Sent as "Idempotency-Key" when not NULL: gi-farmd answers a job
+     * submission repeated with the same key with the job it made the first
+     * time, so that a POST whose answer was lost can be sent again. */
+    const char *idempotency_key;
 } gi_http_request;
+
+/* gi_http_do's transport failures: after the whole request was sent (the
+ * server may have acted on it), and before (no connection, or it broke
+ * while sending: a server acts on a whole request only). */
+#define GI_HTTP_FAILED -1
+#define GI_HTTP_UNSENT -2
 
 /* Sends the request and reads the response. With to_file NULL the body goes
  * into *body (at most max_body bytes); otherwise, for a 2xx status, into
  * to_file (temporary name + rename), and the body of any other status into
- * *body. Returns the HTTP status, or -1 with err on a transport failure. */
+ * *body. Returns the HTTP status, or GI_HTTP_FAILED / GI_HTTP_UNSENT with
+ * err on a transport failure. */
 int gi_http_do(const gi_http_url *u, const gi_http_request *rq, gi_buf *body, uint64_t max_body,
                const char *to_file, gi_error *err);
 

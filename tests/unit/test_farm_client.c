@@ -194,6 +194,36 @@ static int download(const char *response, const char *path, gi_error *err)
     return status;
 }
 
+/* A transport failure says whether the request reached the server whole
+ * (gi retries a request that may have been acted on only when a second
+ * one changes nothing). */
+GI_TEST(test_http_failure_stages)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/nothing.bin", gi_test_tmpdir());
+    gi_error err;
+    /* Read, then closed without an answer: it may have been acted on. */
+    GI_CHECK(download("", path, &err) == GI_HTTP_FAILED);
+    GI_CHECK(strstr(err.msg, "closed the connection before answering") != NULL);
+    /* Nobody listening: it never went. */
+    int ls = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    GI_REQUIRE(bind(ls, (struct sockaddr *)&a, sizeof a) == 0 &&
+               getsockname(ls, (struct sockaddr *)&a, &al) == 0);
+    close(ls); /* bound, never listened: the port refuses */
+    char url[64];
+    snprintf(url, sizeof url, "http://127.0.0.1:%d", ntohs(a.sin_port));
+    gi_http_url u;
+    GI_REQUIRE_OK(gi_http_url_parse(url, &u, &err));
+    gi_http_request rq = {.method = "POST", .path = "/x", .timeout_s = 5};
+    gi_buf body;
+    gi_buf_init(&body);
+    GI_CHECK(gi_http_do(&u, &rq, &body, 1024, NULL, &err) == GI_HTTP_UNSENT);
+    gi_buf_free(&body);
+    gi_http_url_free(&u);
+}
+
 /* Downloads go to the file whether the body comes chunked (a proxy may
  * re-chunk the farm's) or with a length (and no further). */
 GI_TEST(test_http_download_to_file)
