@@ -973,24 +973,41 @@ int gi_farm_job_retry(gi_farm *f, gi_farm_job *j, gi_error *err)
     return 0;
 }
 
-static int remove_tree(const char *path)
+/* Calls fn for every entry below path, then for path itself: children
+ * first, as a removal needs them. Symbolic links are not followed. */
+static void walk_tree(const char *path, void (*fn)(void *ctx, const char *p, int is_dir),
+                      void *ctx)
 {
     DIR *d = opendir(path);
-    if (!d)
-        return unlink(path);
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        char p[4400];
-        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-        if (e->d_type == DT_DIR)
-            remove_tree(p);
-        else
-            unlink(p);
+    if (d) {
+        struct dirent *e;
+        while ((e = readdir(d))) {
+            if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+                continue;
+            char p[4400];
+            snprintf(p, sizeof p, "%s/%s", path, e->d_name);
+            if (e->d_type == DT_DIR)
+                walk_tree(p, fn, ctx);
+            else
+                fn(ctx, p, 0);
+        }
+        closedir(d);
     }
-    closedir(d);
-    return rmdir(path);
+    fn(ctx, path, d != NULL);
+}
+
+static void remove_entry(void *ctx, const char *p, int is_dir)
+{
+    (void)ctx;
+    if (is_dir)
+        rmdir(p);
+    else
+        unlink(p);
+}
+
+static void remove_tree(const char *path)
+{
+    walk_tree(path, remove_entry, NULL);
 }
 
 int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
@@ -1388,25 +1405,19 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
  * with a retention shorter than its history, or after a long stop). */
 #define RETENTION_PURGES_PER_PASS 100
 
+static void add_entry_bytes(void *ctx, const char *p, int is_dir)
+{
+    struct stat st;
+    (void)is_dir;
+    if (lstat(p, &st) == 0)
+        *(uint64_t *)ctx += (uint64_t)st.st_blocks * 512;
+}
+
 /* Bytes the files under path take on disk. */
 static uint64_t tree_bytes(const char *path)
 {
-    struct stat st;
-    if (lstat(path, &st) != 0)
-        return 0;
-    uint64_t n = (uint64_t)st.st_blocks * 512;
-    DIR *d = S_ISDIR(st.st_mode) ? opendir(path) : NULL;
-    if (!d)
-        return n;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        char p[4400];
-        snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-        n += tree_bytes(p);
-    }
-    closedir(d);
+    uint64_t n = 0;
+    walk_tree(path, add_entry_bytes, &n);
     return n;
 }
 
