@@ -1445,7 +1445,10 @@ static int retention_purge(gi_farm *f, gi_farm_job *j, const char *why)
     gi_error err;
     if (gi_farm_job_purge(f, j, &err) == 0)
         return 1;
-    gi_warn("job %llu: its purge by retention failed (%s): tried again in a second", id, err.msg);
+    /* A journal that refuses the PURGE (a full disk) refuses the next one
+     * too: a warning a minute, not one a second. */
+    gi_warn("job %llu: its purge by retention failed (%s): tried again in a minute", id, err.msg);
+    f->retention_next = gi_now() + 60.0;
     return 0;
 }
 

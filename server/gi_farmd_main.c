@@ -47,7 +47,7 @@ static void usage(FILE *out)
             "  --check-timeout S --check-memory B             scene checker limits (300, 16G)\n"
             "  --api-head-seconds S        time an API client has to send a request's head (10)\n"
             "  --keep-ended DURATION       purge ended jobs (done, failed, cancelled) this long\n"
-            "                              after they ended, e.g. 14d (default: keep until purged)\n"
+            "                              after they ended, e.g. 14d (default: until purged)\n"
             "  --keep-ended-bytes B        and the oldest ended ones while their files hold more\n"
             "                              (outputs, checkpoints, logs; default: no limit)\n"
             "  --refusal-log-window S      log an unauthenticated peer's refusals once per S\n"

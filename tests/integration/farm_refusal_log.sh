@@ -47,6 +47,7 @@ lines=$(grep -c "refused\|refusals" "$LOG")
 counted=$(sed -n 's/.* \([0-9]*\) more refusals from 127.0.0.1 .*/\1/p' "$LOG" | awk '{s += $1} END {print s}')
 full=$(grep -v "more refusals" "$LOG" | grep -c "api: refused\|refused unauthenticated peer")
 [ $((counted + full)) -eq 350 ] || { cat "$LOG"; fail "$counted counted and $full logged, not 350"; }
-grep -q 'more refusals from 127.0.0.1 .*(the last: refused unauthenticated peer (127.0.0.1:[0-9]*): .*bad magic' "$LOG" ||
+last='more refusals from 127.0.0.1 .*(the last: refused unauthenticated peer (127.0.0.1:[0-9]*): '
+grep -q "$last.*bad magic" "$LOG" ||
     { cat "$LOG"; fail "the summary does not say the last reason"; }
 stop_farmd "$LOG"

@@ -1,7 +1,8 @@
 # gi-farmd refuses, each with a logged reason, and keeps serving (and
-# refuses to start with one value as API token and farm secret):
-# (every refusal logged in full: --refusal-log-window 0; farm_refusal_log.sh
-# tests the default) a worker with the wrong secret, a worker with no protocol version in common, API calls without (or with a wrong) token,
+# refuses to start with one value as API token and farm secret). Every
+# refusal is logged in full here (--refusal-log-window 0; farm_refusal_log.sh
+# tests the default): a worker with the wrong secret, a worker with no
+# protocol version in common, API calls without (or with a wrong) token,
 # an oversized frame, a frame with a bad CRC, an unknown message type, frames
 # a connection may not carry, an oversized upload, uploads under way past the
 # store's limit, jobs that name files
