@@ -520,7 +520,8 @@ static int cmd_submit(client *c)
     gi_error err;
     gi_job job;
     /* Checked here first: a bad job never reaches the farm. */
-    if (gi_job_load(c->arg, &job, &err)) {
+    if (gi_job_load(c->arg, &job, &err) ||
+        (c->wait && gi_job_outputs_spare_inputs(&job, c->arg, c->out_dir, &err))) {
         gi_job_free(&job);
         return fail_msg(gi_error_exit_status(&err), "%s", err.msg);
     }

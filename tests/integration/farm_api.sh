@@ -24,6 +24,18 @@ set -e
 [ $rc -eq 2 ] || fail "bad job: exit $rc"
 grep -q "pt.spp" "$TMP/bad.log" || { cat "$TMP/bad.log"; fail "no reason"; }
 [ "$(metric gi_farm_jobs_submitted_total)" = 0 ] || fail "the bad job reached the farm"
+# So is one whose outputs, fetched into --out, would replace the job file.
+printf '{"scene": "%s", "method": "pt", "outputs": {"exr": "self.json"}}' \
+    "$SRC/scenes/cornell-box/scene.json" >"$TMP/self.json"
+cp "$TMP/self.json" "$TMP/self.orig"
+set +e
+"$GI" submit "$TMP/self.json" --wait --out "$TMP" >/dev/null 2>"$TMP/self.log"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "outputs.exr: $TMP/self.json would replace one of the job's own files" \
+    "$TMP/self.log" || { cat "$TMP/self.log"; fail "an output replacing its job: exit $rc"; }
+cmp -s "$TMP/self.json" "$TMP/self.orig" || fail "the job file changed"
+[ "$(metric gi_farm_jobs_submitted_total)" = 0 ] || fail "the self-replacing job reached the farm"
 
 # Priorities: with no worker yet, queue a low (1) and a high (9) priority job
 # of the same size; one single-process worker then runs the high one ~9x
