@@ -9,6 +9,14 @@
 #include "gi_progress.h"
 
 #define DEFAULT_MAX_ATTEMPTS 4
+/* Losses are not the task's fault as a rule (spot hosts reclaimed, laptops
+ * closed, kill -9): a chaos run of 4 allowed attempts failed one job in
+ * ~220 only because a task had sat on 4 killed hosts. 8 makes such bad luck
+ * some 200 times rarer still, while a task that really takes its host down
+ * costs at most 8 host restarts before its job fails saying so. */
+#define DEFAULT_MAX_LOSSES 8
+/* Bytes of host names a task keeps for its losses' message; past it, ", ...". */
+#define LOST_ON_MAX 240
 
 static void pending_push(gi_jobrun *jr, uint64_t id, int front)
 {
@@ -101,6 +109,7 @@ int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
     memset(jr, 0, sizeof *jr);
     jr->job = job;
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
+    jr->max_losses = DEFAULT_MAX_LOSSES;
     gi_task_queue q;
     gi_task_queue_init(&q, 0);
     int rc = job->method->plan(job, &q, err);
@@ -117,6 +126,7 @@ void gi_jobrun_free(gi_jobrun *jr)
     for (uint64_t i = 0; i < jr->task_count - jr->task_base; i++) {
         gi_task_free(&jr->tasks[i].task);
         gi_buf_free(&jr->tasks[i].result);
+        free(jr->tasks[i].lost_on);
     }
     free(jr->tasks);
     free(jr->pending);
@@ -201,6 +211,8 @@ static int advance(gi_jobrun *jr)
             jr->held_results_bytes -= jt->result.len;
             gi_buf_free(&jt->result);
             gi_task_free(&jt->task);
+            free(jt->lost_on);
+            jt->lost_on = NULL;
             jt->state = GI_TASK_MERGED;
             jr->merge_next++;
         }
@@ -277,32 +289,86 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
     return advance(jr);
 }
 
+/* Ends run `attempt` of a leased task that failed or was lost: the task,
+ * pending again under the next attempt number (so that anything the ended
+ * run still sends is stale), or NULL if that run is not the one leased. */
+static gi_jobrun_task *end_run(gi_jobrun *jr, uint64_t task_id, uint32_t attempt)
+{
+    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt)
+        return NULL;
+    jr->leased--;
+    jt->task.attempt++;
+    jt->state = GI_TASK_PENDING;
+    return jt;
+}
+
 int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why)
 {
     if (gi_jobrun_done(jr))
         return jr->failed ? -1 : 0;
-    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
-    if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt)
+    gi_jobrun_task *jt = end_run(jr, task_id, attempt);
+    if (!jt)
         return 0;
-    jr->leased--;
-    jt->task.attempt++;
+    jt->failures++;
     /* Bad input fails the same way every time, and so does a full disk
      * here (the farm gives such a task to another host, gi_farm_sched.c). */
-    if (why->code == GI_EINVAL || why->code == GI_EHOST ||
-        jt->task.attempt >= jr->max_attempts) {
+    if (why->code == GI_EINVAL || why->code == GI_EHOST || jt->failures >= jr->max_attempts) {
         gi_error e;
         if (why->code == GI_EINVAL || why->code == GI_EHOST)
             gi_fail(&e, why->code, "%s", why->msg);
         else
             gi_fail(&e, why->code, "task %llu failed %u times; last error: %s",
-                    (unsigned long long)task_id, jt->task.attempt, why->msg);
-        jt->state = GI_TASK_PENDING;
+                    (unsigned long long)task_id, jt->failures, why->msg);
         return job_fail(jr, &e);
     }
     gi_info("retrying task %llu (attempt %u): %s", (unsigned long long)task_id,
             jt->task.attempt, why->msg);
     jr->retries++;
-    jt->state = GI_TASK_PENDING;
+    pending_push(jr, task_id, 1);
+    return 0;
+}
+
+/* Adds host to the task's list of hosts it was lost with, once. */
+static void note_lost_on(gi_jobrun_task *jt, const char *host)
+{
+    if (!host || !*host)
+        return;
+    size_t have = jt->lost_on ? strlen(jt->lost_on) : 0, n = strlen(host);
+    for (const char *p = jt->lost_on; p && *p;) {
+        const char *end = strstr(p, ", ");
+        size_t len = end ? (size_t)(end - p) : strlen(p);
+        if (len == n && memcmp(p, host, n) == 0)
+            return;
+        p = end ? end + 2 : p + len;
+    }
+    if (have >= 3 && strcmp(jt->lost_on + have - 3, "...") == 0)
+        return; /* full */
+    const char *add = have + 2 + n <= LOST_ON_MAX ? host : "...";
+    jt->lost_on = gi_xrealloc(jt->lost_on, have + 2 + strlen(add) + 1);
+    snprintf(jt->lost_on + have, 2 + strlen(add) + 1, "%s%s", have ? ", " : "", add);
+}
+
+int gi_jobrun_lost(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const char *host,
+                   const gi_error *why)
+{
+    if (gi_jobrun_done(jr))
+        return jr->failed ? -1 : 0;
+    gi_jobrun_task *jt = end_run(jr, task_id, attempt);
+    if (!jt)
+        return 0;
+    jt->losses++;
+    note_lost_on(jt, host);
+    if (jt->losses >= jr->max_losses) {
+        gi_error e;
+        gi_fail(&e, GI_ECRASH, "task %llu was lost with its host %u times (hosts %s): it may be "
+                "taking its host down; last: %s", (unsigned long long)task_id, jt->losses,
+                jt->lost_on ? jt->lost_on : "unnamed", why->msg);
+        return job_fail(jr, &e);
+    }
+    gi_info("requeueing task %llu (attempt %u), lost with its host (loss %u of %u): %s",
+            (unsigned long long)task_id, jt->task.attempt, jt->losses, jr->max_losses, why->msg);
+    jr->losses++;
     pending_push(jr, task_id, 1);
     return 0;
 }
@@ -322,9 +388,11 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
  * progress survives a restart); 4: a CRC-32C of everything before it at the
  * end (a damaged checkpoint used to resume into wrong outputs); 5: the
  * job's identity after the method's name (a farm that lost its journal gave
- * a new job the id, and so the checkpoint, of an old one). Older versions
- * are still read. */
-#define CHECKPOINT_VERSION 5u
+ * a new job the id, and so the checkpoint, of an old one); 6: the job's
+ * losses after its retries, and each task's failures, losses and the hosts
+ * of those (the attempt numbers its runs, which a loss advances too; before
+ * it, the attempt was the failures). Older versions are still read. */
+#define CHECKPOINT_VERSION 6u
 
 void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX])
 {
@@ -360,18 +428,23 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     gi_buf_put_u64(out, jr->task_count);
     gi_buf_put_u64(out, jr->merge_next);
     gi_buf_put_u64(out, jr->retries);
+    gi_buf_put_u64(out, jr->losses);
     gi_buf_put_u64(out, jr->stats.rays);
     gi_buf_put_u64(out, jr->stats.samples);
     gi_buf_put_f64(out, jr->stats.seconds);
     gi_buf_put_f64(out, jr->cost_total);
     gi_buf_put_f64(out, jr->clock.frame_base);
     for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
-        const gi_task *t = &gi_jobrun_task_at(jr, i)->task;
+        const gi_jobrun_task *jt = gi_jobrun_task_at(jr, i);
+        const gi_task *t = &jt->task;
         gi_buf_put_u32(out, t->kind);
         gi_buf_put_u32(out, t->attempt);
+        gi_buf_put_u32(out, jt->failures);
+        gi_buf_put_u32(out, jt->losses);
         gi_buf_put_f64(out, t->cost);
         gi_buf_put_u64(out, t->affinity);
         gi_buf_put_blob(out, t->payload.data, t->payload.len);
+        gi_buf_put_str(out, jt->lost_on ? jt->lost_on : "");
     }
     /* The method's state goes straight into out as a blob, its length
      * patched after: a big image's sums are copied once, not twice. */
@@ -390,6 +463,7 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     memset(jr, 0, sizeof *jr);
     jr->job = job;
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
+    jr->max_losses = DEFAULT_MAX_LOSSES;
     if (!job->method->load)
         return gi_fail(err, GI_EINTERNAL, "method %s cannot restore", job->method->name);
     gi_reader r;
@@ -426,6 +500,7 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
     }
     uint64_t count = gi_get_u64(&r), merged = gi_get_u64(&r);
     jr->retries = gi_get_u64(&r);
+    jr->losses = version >= 6 ? gi_get_u64(&r) : 0;
     jr->stats.rays = gi_get_u64(&r);
     jr->stats.samples = gi_get_u64(&r);
     jr->stats.seconds = gi_get_f64(&r);
@@ -450,14 +525,21 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
         gi_buf_init(&jt->result);
         jt->task.kind = gi_get_u32(&r);
         jt->task.attempt = gi_get_u32(&r);
+        jt->failures = version >= 6 ? gi_get_u32(&r) : jt->task.attempt;
+        jt->losses = version >= 6 ? gi_get_u32(&r) : 0;
         jt->task.cost = gi_get_f64(&r);
         if (version >= 2)
             jt->task.affinity = gi_get_u64(&r);
         size_t len;
         const uint8_t *p = gi_get_blob(&r, (size_t)1 << 30, &len);
+        char *lost_on = version >= 6 ? gi_get_str(&r, LOST_ON_MAX + 8) : NULL;
         if (r.failed)
             return gi_fail(err, GI_EPROTO, "%s: checkpoint: truncated task %llu", job->file,
                            (unsigned long long)i);
+        if (lost_on && *lost_on)
+            jt->lost_on = lost_on;
+        else
+            free(lost_on);
         gi_buf_put(&jt->task.payload, p, len);
         jt->state = GI_TASK_PENDING;
         unmerged_cost += jt->task.cost;

@@ -23,9 +23,12 @@ typedef enum {
 } gi_task_state;
 
 typedef struct gi_jobrun_task {
-    gi_task task;
+    gi_task task; /* task.attempt numbers its runs: +1 on every failure or loss */
     gi_task_state state;
     gi_buf result;
+    uint32_t failures; /* runs that failed (counted against max_attempts) */
+    uint32_t losses;   /* runs lost with their host (against max_losses) */
+    char *lost_on;     /* the hosts of those losses, ", "-separated (NULL: none) */
 } gi_jobrun_task;
 
 typedef struct gi_jobrun {
@@ -41,7 +44,8 @@ typedef struct gi_jobrun {
     uint64_t leased;
     uint64_t held;       /* results waiting for their turn to merge (GI_TASK_DONE) */
     uint64_t merge_next; /* every id below this is merged */
-    uint32_t max_attempts;
+    uint32_t max_attempts; /* failures of a task before the job fails */
+    uint32_t max_losses;   /* losses of a task with its host before the job fails */
     int finished, failed;
     gi_error error;
     /* Progress and statistics. */
@@ -49,6 +53,7 @@ typedef struct gi_jobrun {
     gi_progress_clock clock; /* frames and ETA (gi_jobrun_progress) */
     gi_task_stats stats; /* summed over merged tasks */
     uint64_t retries;
+    uint64_t losses; /* runs lost with their host and requeued (not retries) */
     uint64_t held_results_bytes, held_results_peak;
     /* Coordinator time in method->merge (with the bytes merged) and in
      * method->finish, for throughput figures. */
@@ -83,6 +88,14 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
  * to max_attempts; bad input (GI_EINVAL) and this host's full disk
  * (GI_EHOST) fail the job at once. */
 int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_error *why);
+/* A leased task's host was lost (its connection, or its lease expired):
+ * not the task's fault, so no attempt is counted. The task is requeued
+ * first in line under a new attempt number (a late result of the lost run
+ * is stale). Its losses are counted apart and bounded by max_losses, so a
+ * task that takes down every host running it fails the job, naming it and
+ * the hosts (host: the lost one's name, for that message). */
+int gi_jobrun_lost(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const char *host,
+                   const gi_error *why);
 /* A lease given back without running (worker shutting down). */
 void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
 
@@ -118,9 +131,10 @@ static inline uint64_t gi_jobrun_pending_count(const gi_jobrun *jr)
 void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX]);
 
 /* Checkpoints. The checkpoint holds the merge position, every task not yet
- * merged (id, kind, attempt, cost, payload), the statistics, and the
- * method's state (method->save). Results received but not yet merged are
- * not in it: their tasks run again after a restore. */
+ * merged (id, kind, attempt, failures, losses and their hosts, cost,
+ * payload), the statistics, and the method's state (method->save). Results
+ * received but not yet merged are not in it: their tasks run again after a
+ * restore. */
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
 /* Rebuilds the run of `job` (parsed and loaded again from the same text and
  * assets) from a checkpoint, in place of gi_jobrun_start. A checkpoint of

@@ -156,6 +156,20 @@ static double run_shuffled(uint64_t seed, fake_state *out)
             gi_jobrun_fail(&jr, id, at, &e);
             continue;
         }
+        if (seed != 0 && at <= 2 && gi_rng_below(&rng, 5) == 0) {
+            gi_error e;
+            gi_fail(&e, GI_ECRASH, "simulated lost host");
+            gi_jobrun_lost(&jr, id, at, "h", &e);
+            /* What the lost run still sends is stale, even once the task
+             * is leased again. */
+            const gi_task *again = gi_jobrun_lease(&jr);
+            if (again) {
+                leased[nleased] = again->id;
+                attempts[nleased++] = again->attempt;
+            }
+            complete(&jr, id, at);
+            continue;
+        }
         complete(&jr, id, at);
         /* A stale duplicate of the same result changes nothing. */
         complete(&jr, id, at);
@@ -298,6 +312,116 @@ static int checkpoint_then_free(gi_jobrun *jr, gi_job *job, int results, gi_buf 
     return rc;
 }
 
+/* A host lost with its task (gi_jobrun_lost) is not the task's failure:
+ * losses are not retries and do not use up max_attempts; each advances the
+ * attempt number, so the lost run's late result is refused and the task is
+ * merged once, from the run that was leased. */
+GI_TEST(test_jobrun_losses_are_not_attempts)
+{
+    fake_state ref;
+    double want = run_shuffled(0, &ref);
+    GI_REQUIRE(want >= 0);
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err, crash, lost;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    gi_fail(&crash, GI_ECRASH, "boom");
+    gi_fail(&lost, GI_ECRASH, "worker h1 was lost");
+    GI_REQUIRE(jr.max_attempts == 4 && jr.max_losses == 8);
+    /* Task 0: lost 6 times (more than max_attempts), failed 3 times, in
+     * turns; it is leased again first each time. */
+    uint32_t at = 0;
+    for (int k = 0; k < 9; k++) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t && t->id == 0 && t->attempt == at);
+        if (k % 3 == 2)
+            GI_CHECK(gi_jobrun_fail(&jr, 0, at, &crash) == 0);
+        else
+            GI_CHECK(gi_jobrun_lost(&jr, 0, at, k % 2 ? "h2" : "h1", &lost) == 0);
+        at++;
+        GI_REQUIRE(!jr.failed);
+        /* The ended run's result is stale now, and so is a second report. */
+        complete(&jr, 0, at - 1);
+        GI_CHECK(gi_jobrun_lost(&jr, 0, at - 1, "h1", &lost) == 0);
+        GI_CHECK(gi_jobrun_task_at(&jr, 0)->state == GI_TASK_PENDING);
+    }
+    const gi_jobrun_task *jt = gi_jobrun_task_at(&jr, 0);
+    GI_CHECK(jt->failures == 3 && jt->losses == 6 && jr.retries == 3 && jr.losses == 6);
+    GI_CHECK_MSG(jt->lost_on && strcmp(jt->lost_on, "h1, h2") == 0, "%s",
+                 jt->lost_on ? jt->lost_on : "(none)");
+    GI_CHECK(jr.merge_next == 0 && jr.held == 0 && jr.leased == 0);
+    /* Leased again and lost, then its stale result arrives while the next
+     * run holds it: refused; the run leased gives the one merged. */
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 0 && t->attempt == at);
+    GI_CHECK(gi_jobrun_lost(&jr, 0, at, "h3", &lost) == 0);
+    t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 0 && t->attempt == at + 1);
+    complete(&jr, 0, at);
+    GI_CHECK(jr.merge_next == 0 && gi_jobrun_task_at(&jr, 0)->state == GI_TASK_LEASED);
+    complete(&jr, 0, at + 1);
+    GI_CHECK(jr.merge_next == 1);
+    drive(&jr, 1000);
+    GI_REQUIRE(jr.finished);
+    fake_state *st = job.state;
+    GI_CHECK(memcmp(&st->sum, &want, sizeof want) == 0 && st->merged == ref.merged);
+    for (int i = 0; i < st->merged; i++)
+        GI_CHECK(st->order[i] == (uint64_t)i);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
+/* A task lost with its host max_losses times fails its job, naming it and
+ * the hosts: it may be what takes them down. Losses of other tasks, and
+ * its failures, do not add up to it. */
+GI_TEST(test_jobrun_fails_a_task_lost_too_often_naming_its_hosts)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err, lost;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    jr.max_losses = 3;
+    gi_fail(&lost, GI_ECRASH, "worker b (10.0.0.2:5000) was lost with 1 task: connection closed");
+    /* Task 1 lost twice, task 0 once: nothing fails. */
+    const gi_task *t0 = gi_jobrun_lease(&jr), *t1 = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t0 && t1 && t0->id == 0 && t1->id == 1);
+    gi_jobrun_lost(&jr, 1, 0, "a", &lost);
+    gi_jobrun_lost(&jr, 0, 0, "a", &lost);
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 0 && t->attempt == 1);
+    t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 1 && t->attempt == 1);
+    gi_jobrun_lost(&jr, 1, 1, "b", &lost);
+    GI_CHECK(!jr.failed && jr.losses == 3);
+    t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 1 && t->attempt == 2);
+    GI_CHECK(gi_jobrun_lost(&jr, 1, 2, "a", &lost) == -1);
+    GI_CHECK(jr.failed && jr.error.code == GI_ECRASH);
+    GI_CHECK_MSG(strcmp(jr.error.msg, "task 1 was lost with its host 3 times (hosts a, b): it may "
+                        "be taking its host down; last: worker b (10.0.0.2:5000) was lost with 1 "
+                        "task: connection closed") == 0, "%s", jr.error.msg);
+    GI_CHECK(gi_jobrun_lease(&jr) == NULL);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+
+    /* A host list too long for the message is cut short. */
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    jr.max_losses = 100;
+    char name[64];
+    for (uint32_t k = 0; k < 40; k++) {
+        t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t && t->id == 0 && t->attempt == k);
+        snprintf(name, sizeof name, "a-rather-long-host-name-%02u", k);
+        gi_jobrun_lost(&jr, 0, k, name, &lost);
+    }
+    const char *on = gi_jobrun_task_at(&jr, 0)->lost_on;
+    GI_REQUIRE(on);
+    GI_CHECK_MSG(strlen(on) < 260 && strncmp(on, "a-rather-long-host-name-00, ", 28) == 0 &&
+                 strcmp(on + strlen(on) - 5, ", ...") == 0, "%s", on);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
 /* A coordinator's restart: jr checkpointed, thrown away with its job, and
  * restored into a fresh job of method m. */
 static int reload(gi_jobrun *jr, gi_job *job, const gi_method *m, gi_error *err)
@@ -387,6 +511,96 @@ GI_TEST(test_jobrun_checkpoint_restore_resumes_without_redoing_work)
     gi_buf_free(&ck);
 }
 
+/* A checkpoint as versions 4 and 5 wrote it (5: with the job's identity),
+ * kept here as it was: a task's attempt was its failures, and losses were
+ * not kept. */
+static void old_checkpoint(const gi_jobrun *jr, uint32_t version, gi_buf *out)
+{
+    gi_buf_init(out);
+    gi_buf_put_u32(out, 0x4B434947u);
+    gi_buf_put_u32(out, version);
+    gi_buf_put_str(out, jr->job->method->name);
+    if (version >= 5) {
+        char id[GI_HASH_HEX];
+        gi_jobrun_identity(jr->job, id);
+        gi_buf_put_str(out, id);
+    }
+    gi_buf_put_u64(out, jr->task_count);
+    gi_buf_put_u64(out, jr->merge_next);
+    gi_buf_put_u64(out, jr->retries);
+    gi_buf_put_u64(out, jr->stats.rays);
+    gi_buf_put_u64(out, jr->stats.samples);
+    gi_buf_put_f64(out, jr->stats.seconds);
+    gi_buf_put_f64(out, jr->cost_total);
+    gi_buf_put_f64(out, jr->clock.frame_base);
+    for (uint64_t i = jr->merge_next; i < jr->task_count; i++) {
+        const gi_task *t = &gi_jobrun_task_at(jr, i)->task;
+        gi_buf_put_u32(out, t->kind);
+        gi_buf_put_u32(out, t->attempt);
+        gi_buf_put_f64(out, t->cost);
+        gi_buf_put_u64(out, t->affinity);
+        gi_buf_put_blob(out, t->payload.data, t->payload.len);
+    }
+    gi_buf state;
+    gi_buf_init(&state);
+    gi_error err;
+    fake_save(jr->job, &state, &err);
+    gi_buf_put_blob(out, state.data, state.len);
+    gi_buf_free(&state);
+    gi_buf_put_u32(out, gi_crc32c(0, out->data, out->len));
+}
+
+/* A task's failures, losses and the hosts of those survive a restart
+ * (version 6): its next loss still counts towards the same bound. A
+ * version 5 checkpoint's attempt is its failures, with no losses. */
+GI_TEST(test_jobrun_checkpoint_keeps_failures_and_losses)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err, crash, lost;
+    gi_fail(&crash, GI_ECRASH, "boom");
+    gi_fail(&lost, GI_ECRASH, "lost");
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    drive(&jr, 5);
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 5);
+    gi_jobrun_fail(&jr, 5, 0, &crash);
+    GI_REQUIRE(gi_jobrun_lease(&jr) == t);
+    gi_jobrun_lost(&jr, 5, 1, "h1", &lost);
+    GI_REQUIRE(gi_jobrun_lease(&jr) == t);
+    gi_jobrun_lost(&jr, 5, 2, "h2", &lost);
+    GI_REQUIRE(gi_jobrun_lease(&jr) == t && t->attempt == 3); /* leased when checkpointed */
+    gi_buf v5;
+    old_checkpoint(&jr, 5, &v5);
+    GI_REQUIRE_OK(reload(&jr, &job, &fake_method, &err));
+    const gi_jobrun_task *jt = gi_jobrun_task_at(&jr, 5);
+    GI_REQUIRE(jt && jt->state == GI_TASK_PENDING);
+    GI_CHECK(jt->task.attempt == 3 && jt->failures == 1 && jt->losses == 2);
+    GI_CHECK(jt->lost_on && strcmp(jt->lost_on, "h1, h2") == 0);
+    GI_CHECK(jr.retries == 1 && jr.losses == 2 && jr.merge_next == 5);
+    jr.max_losses = 3;
+    t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t && t->id == 5 && t->attempt == 3);
+    GI_CHECK(gi_jobrun_lost(&jr, 5, 3, "h3", &lost) == -1);
+    GI_CHECK_MSG(strstr(jr.error.msg, "task 5 was lost with its host 3 times (hosts h1, h2, h3)"),
+                 "%s", jr.error.msg);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+
+    memset(&job, 0, sizeof job);
+    job.method = &fake_method;
+    GI_REQUIRE_OK(gi_jobrun_restore(&jr, &job, &v5, &err));
+    jt = gi_jobrun_task_at(&jr, 5);
+    GI_REQUIRE(jt);
+    GI_CHECK(jt->task.attempt == 3 && jt->failures == 3 && jt->losses == 0 && !jt->lost_on);
+    GI_CHECK(jr.retries == 1 && jr.losses == 0);
+    drive(&jr, 1000);
+    GI_CHECK(jr.finished);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_buf_free(&v5);
+}
+
 /* A checkpoint carries its job's identity (version 5): a job of other text
  * or other files does not resume it (a farm that lost its journal gave a
  * new job an old job's id, and its checkpoint); version 4, without the
@@ -419,13 +633,14 @@ GI_TEST(test_jobrun_checkpoint_of_another_job_is_refused)
         gi_jobrun_free(&jr);
         gi_job_free(&job);
     }
-    /* The same as version 4: no identity (after the method's name), its own CRC. */
-    size_t id_at = 8 + 4 + strlen(fake_method.name), id_len = 4 + GI_HASH_HEX - 1;
-    GI_REQUIRE(ck.len > id_at + id_len + 4 && gi_le_get_u32(ck.data + id_at) == GI_HASH_HEX - 1);
-    memmove(ck.data + id_at, ck.data + id_at + id_len, ck.len - id_at - id_len);
-    ck.len -= id_len;
-    gi_le_put_u32(ck.data + 4, 4);
-    gi_le_put_u32(ck.data + ck.len - 4, gi_crc32c(0, ck.data, ck.len - 4));
+    gi_buf_free(&ck);
+    /* The same as version 4, without the identity. */
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    job.text = gi_xstrdup("{\"seed\": 1}");
+    drive(&jr, 20);
+    old_checkpoint(&jr, 4, &ck);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
     memset(&job, 0, sizeof job);
     job.method = &fake_method;
     job.text = gi_xstrdup("{\"seed\": 2}");
