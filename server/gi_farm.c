@@ -47,6 +47,7 @@ void gi_farm_config_default(gi_farm_config *c)
     c->checkpoint_s = 30.0;
     c->refusal_window_s = GI_REFUSAL_WINDOW_S;
     c->max_attempts = 4;
+    c->max_task_losses = 8; /* why 8: gi_jobrun.c, DEFAULT_MAX_LOSSES */
     c->blocklist_failures = 5;
     c->blocklist_s = 600.0;
     c->max_asset_bytes = (uint64_t)1 << 30;

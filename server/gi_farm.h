@@ -38,7 +38,8 @@ typedef struct gi_farm_config {
      * hold more than keep_ended_bytes (0: no limit). */
     double keep_ended_s;
     uint64_t keep_ended_bytes;
-    uint32_t max_attempts;       /* runs of a task before its job fails */
+    uint32_t max_attempts;       /* failed runs of a task before its job fails */
+    uint32_t max_task_losses;    /* runs of a task lost with their host, likewise */
     uint32_t blocklist_failures; /* consecutive task failures that blocklist a worker */
     double blocklist_s;          /* for how long */
     uint64_t max_asset_bytes;    /* one uploaded asset */

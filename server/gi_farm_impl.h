@@ -109,7 +109,7 @@ typedef struct gi_farm_job {
     uint64_t result_bytes;    /* result data accepted */
     uint64_t merged_bytes;    /* result data merged (in task order) */
     /* Task counts and statistics as they stood when the run ended. */
-    uint64_t final_tasks, final_merged, final_retries;
+    uint64_t final_tasks, final_merged, final_retries, final_losses;
     gi_task_stats final_stats;
     gi_progress_at final_progress;
     /* Affinity key -> gi_farm_host owning it (gi_farm_sched.c). Kept with
@@ -209,6 +209,7 @@ typedef struct gi_farm_metrics {
     uint64_t jobs_submitted, jobs_done, jobs_failed, jobs_cancelled, jobs_retried;
     uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
     uint64_t requeued;
+    uint64_t tasks_lost; /* runs lost with their host: requeued, not counted as attempts */
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;

@@ -409,6 +409,8 @@ static void end_record(const gi_farm_job *j, gi_jrec *r)
         r->tasks = j->final_tasks;
         r->merged = j->final_merged;
         r->retries = j->final_retries;
+        r->has_losses = 1;
+        r->losses = j->final_losses;
         r->rays = j->final_stats.rays;
         r->samples = j->final_stats.samples;
         r->seconds = j->final_stats.seconds;
@@ -464,7 +466,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     f->live_stale = 1;
     j->ended = 0;
     gi_error_clear(&j->error);
-    j->final_tasks = j->final_merged = j->final_retries = 0;
+    j->final_tasks = j->final_merged = j->final_retries = j->final_losses = 0;
     memset(&j->final_stats, 0, sizeof j->final_stats);
     memset(&j->final_progress, 0, sizeof j->final_progress);
     j->resumed_merged = j->results_accepted = j->results_late = 0;
@@ -515,6 +517,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
                 j->final_tasks = r->tasks;
                 j->final_merged = r->merged;
                 j->final_retries = r->retries;
+                j->final_losses = r->losses;
                 j->final_stats.rays = r->rays;
                 j->final_stats.samples = r->samples;
                 j->final_stats.seconds = r->seconds;
@@ -906,6 +909,7 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
         j->final_tasks = j->jr.task_count;
         j->final_merged = j->jr.merge_next;
         j->final_retries = j->jr.retries;
+        j->final_losses = j->jr.losses;
         j->final_stats = j->jr.stats;
         gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
     }
@@ -1192,6 +1196,7 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
         return;
     }
     j->jr.max_attempts = f->cfg.max_attempts;
+    j->jr.max_losses = f->cfg.max_task_losses;
     j->state = GI_FJ_RUNNING;
     if (!j->started)
         j->started = gi_farm_wallnow();
@@ -1228,9 +1233,11 @@ void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
     size_t k = 0;
     for (int i = 0; i < j->output_count && k + 16 < sizeof list; i++)
         k += (size_t)snprintf(list + k, sizeof list - k, "%s%s", i ? ", " : "", j->outputs[i]);
-    gi_farm_job_log(j, "done: %llu tasks, %llu retries, %llu results this run; outputs: %s",
+    gi_farm_job_log(j, "done: %llu tasks, %llu retries, %llu lost with their host, %llu results "
+                    "this run; outputs: %s",
                     (unsigned long long)j->jr.task_count, (unsigned long long)j->jr.retries,
-                    (unsigned long long)j->results_accepted, list);
+                    (unsigned long long)j->jr.losses, (unsigned long long)j->results_accepted,
+                    list);
     f->m.jobs_done++;
     gi_error_clear(&j->error);
     end_job(f, j, GI_FJ_DONE);

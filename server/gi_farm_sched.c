@@ -3,13 +3,28 @@
  * Leases. A task handed to a worker is leased to that connection until
  * `lease_s` after it was sent or last renewed (a worker's HEARTBEAT lists
  * the tasks it holds and renews exactly those). A lease ends with the
- * worker's RESULT or FAIL, when it expires, when the connection is lost
- * (the task fails: retried up to max_attempts, then the job fails with the
- * task's error) or when the worker drains and hands tasks back unrun (they
- * are requeued, not counted as attempts). A RESULT or FAIL for a task the
- * connection no longer holds is late: it is counted and discarded, never
- * merged, so a task's result is merged exactly once (gi_jobrun also
- * refuses stale attempts).
+ * worker's RESULT or FAIL (a failure: retried up to max_attempts, then the
+ * job fails with the task's error), when the worker drains and hands tasks
+ * back unrun (requeued, not counted as attempts), or when its host is lost:
+ * the connection is lost or closed for an error, or the lease expires.
+ *
+ * Losses. Hosts go away (spot instances, laptops, kill -9) with whatever
+ * they hold, through no fault of their tasks: a lost task is requeued
+ * without counting an attempt (gi_jobrun_lost), under a new attempt number.
+ * Its losses are counted apart, up to max_losses, so that a task which takes
+ * its host down every time (the whole gi-worker dies) fails its job, naming
+ * the hosts, instead of going round the farm forever. Every loss counts,
+ * however many tasks the host held: discounting a host lost with many tasks
+ * would let such a task loop forever on big hosts (it always dies among
+ * the 31 others of a 32-slot host), and a task only shares the bad luck of
+ * one lost host at a time, so the bound (8 by default) leaves innocent tasks
+ * a wide margin. A pool child's crash is a FAIL the worker reports: the
+ * task's fault, counted as an attempt.
+ *
+ * A RESULT or FAIL for a task the connection no longer holds is late: it is
+ * counted and discarded, never merged, so a task's result is merged exactly
+ * once (gi_jobrun also refuses stale attempts, and a lost run's attempt
+ * number is never leased again).
  *
  * Fair sharing. Jobs share workers in proportion to their priority by
  * stride scheduling in worker-seconds: each job has a pass; a lease adds
@@ -406,7 +421,21 @@ static void late(gi_farm *f, gi_farm_conn *c, const char *what, uint64_t job, ui
             what, (unsigned long long)job, (unsigned long long)task, attempt, conn_name(c));
 }
 
-/* The task failed on a worker (reported, lost or expired). */
+/* The task's run on c's host ended without a result: its next run goes
+ * elsewhere if it can (may_take), and so does its affinity key: the
+ * host's files for it may be the trouble. */
+static void leave_host(gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l)
+{
+    if (!c->host)
+        return;
+    gi_affinity_set(&j->failed_on, l->task_id + 1, c->host);
+    const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l->task_id);
+    uint64_t key = jt ? jt->task.affinity : 0;
+    if (key && gi_affinity_owner(&j->affinity, key) == c->host)
+        gi_affinity_set(&j->affinity, key, NULL);
+}
+
+/* The task failed on a worker (reported, or a result refused). */
 static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l,
                         const gi_error *e)
 {
@@ -421,21 +450,31 @@ static void task_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_fa
     gi_farm_job_log(j, "task %llu (attempt %u) failed on %s: %s%s", (unsigned long long)l->task_id,
                     l->attempt, conn_name(c), e->msg,
                     host_disk ? " (that host's disk: not counted as an attempt)" : "");
-    if (c->host) {
-        /* The retry goes elsewhere if it can (may_take), and so does the
-         * task's affinity key: its files on this host may be the trouble. */
-        gi_affinity_set(&j->failed_on, l->task_id + 1, c->host);
-        const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l->task_id);
-        uint64_t key = jt ? jt->task.affinity : 0;
-        if (key && gi_affinity_owner(&j->affinity, key) == c->host)
-            gi_affinity_set(&j->affinity, key, NULL);
-    }
+    leave_host(c, j, l);
     if (host_disk) {
         j->host_disk_errors++;
         gi_jobrun_requeue(&j->jr, l->task_id);
     } else {
         gi_jobrun_fail(&j->jr, l->task_id, l->attempt, e);
     }
+    gi_farm_job_settle(f, j);
+}
+
+/* The task was lost with its host (the connection, or the lease expired). */
+static void task_lost(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l,
+                      const gi_error *e)
+{
+    f->m.tasks_lost++;
+    gi_farm_job_task_error(j, l->task_id, l->attempt, conn_name(c), e->msg);
+    const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l->task_id);
+    uint32_t loss = jt ? jt->losses + 1 : 1;
+    gi_farm_job_log(j, "task %llu (attempt %u) was lost with its host %s (loss %u of %u%s): %s",
+                    (unsigned long long)l->task_id, l->attempt, conn_name(c), loss,
+                    j->jr.max_losses,
+                    loss < j->jr.max_losses ? "; requeued, not counted as an attempt" : "",
+                    e->msg);
+    leave_host(c, j, l);
+    gi_jobrun_lost(&j->jr, l->task_id, l->attempt, conn_name(c), e);
     gi_farm_job_settle(f, j);
 }
 
@@ -569,6 +608,7 @@ void gi_farm_sched_drain(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *bac
 
 void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *why)
 {
+    size_t held = c->lease_count;
     while (c->lease_count) {
         gi_farm_lease l = lease_take(c, c->lease_count - 1);
         gi_farm_job *j = running_job(f, l.job_id);
@@ -581,8 +621,9 @@ void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *w
             continue;
         }
         gi_error e;
-        gi_fail(&e, GI_ECRASH, "worker %s (%s) was lost: %s", conn_name(c), c->peer, why);
-        task_failed(f, c, j, &l, &e);
+        gi_fail(&e, GI_ECRASH, "worker %s (%s) was lost with %zu task%s: %s", conn_name(c),
+                c->peer, held, held == 1 ? "" : "s", why);
+        task_lost(f, c, j, &l, &e);
     }
 }
 
@@ -605,7 +646,7 @@ void gi_farm_sched_expire(gi_farm *f, double now)
             gi_error e;
             gi_fail(&e, GI_ECRASH, "lease expired on worker %s (%s): not renewed for %.1f s",
                     conn_name(c), c->peer, f->cfg.lease_s);
-            task_failed(f, c, j, &l, &e);
+            task_lost(f, c, j, &l, &e);
         }
     }
 }

@@ -69,6 +69,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     add_time(o, "purge_at", gi_farm_job_purge_at(f, j)); /* --keep-ended */
 
     uint64_t total = j->final_tasks, merged = j->final_merged, retries = j->final_retries;
+    uint64_t losses = j->final_losses;
     uint64_t leased = 0, pending = 0, held = 0;
     gi_task_stats st = j->final_stats;
     if (j->loaded) {
@@ -76,6 +77,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
         total = jr->task_count;
         merged = jr->merge_next;
         retries = jr->retries;
+        losses = jr->losses;
         st = jr->stats;
         leased = jr->leased;
         held = jr->held;
@@ -100,6 +102,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON_AddNumberToObject(t, "leased", (double)leased);
     cJSON_AddNumberToObject(t, "pending", (double)pending);
     cJSON_AddNumberToObject(t, "retries", (double)retries);
+    cJSON_AddNumberToObject(t, "losses", (double)losses);
     cJSON_AddNumberToObject(t, "resumed_merged", (double)j->resumed_merged);
     cJSON_AddNumberToObject(t, "results_this_run", (double)j->results_accepted);
     cJSON_AddNumberToObject(t, "late_results", (double)j->results_late);
@@ -309,8 +312,11 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_task_leases_total", "Tasks handed to workers.", (double)m->tasks_leased);
     counter(&b, "gi_farm_task_results_total", "Task results accepted and merged in order.",
             (double)m->task_results);
-    counter(&b, "gi_farm_task_failures_total", "Task failures (reported, lost, expired).",
+    counter(&b, "gi_farm_task_failures_total", "Task failures reported (or results refused).",
             (double)m->task_failures);
+    counter(&b, "gi_farm_tasks_lost_total",
+            "Task runs lost with their host (connection lost, lease expired): requeued.",
+            (double)m->tasks_lost);
     counter(&b, "gi_farm_late_results_total", "Results and failures discarded: lease no longer held.",
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);

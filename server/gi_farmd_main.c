@@ -39,7 +39,10 @@ static void usage(FILE *out)
             "  --token-file FILE           API token (or GI_FARM_TOKEN_FILE, GI_FARM_TOKEN)\n"
             "  --heartbeat S --lease S --dead S       worker timing (2, 30, 120)\n"
             "  --checkpoint S              checkpoint running jobs every S seconds (30)\n"
-            "  --max-attempts N            runs of a task before its job fails (4)\n"
+            "  --max-attempts N            failed runs of a task before its job fails (4)\n"
+            "  --max-task-losses N         runs of a task lost with their host (killed, cut\n"
+            "                              off, lease expired) before its job fails (8);\n"
+            "                              such runs are requeued, not counted as attempts\n"
             "  --blocklist-failures N --blocklist-seconds S   (5, 600)\n"
             "  --max-asset-bytes B --max-store-bytes B --max-result-bytes B  (1G, 64G, 1G)\n"
             "  --max-pixels N --max-jobs N --max-workers N    (64M, 1000, 1024)\n"
@@ -98,6 +101,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         int64_t lo, hi;
     } counts[] = {
         {"--max-attempts", offsetof(gi_farm_config, max_attempts), 1, 100},
+        {"--max-task-losses", offsetof(gi_farm_config, max_task_losses), 1, 1000},
         {"--blocklist-failures", offsetof(gi_farm_config, blocklist_failures), 1, 1000000},
         {"--max-jobs", offsetof(gi_farm_config, max_jobs), 1, 1000000},
         {"--max-workers", offsetof(gi_farm_config, max_workers), 1, 100000},

@@ -19,8 +19,10 @@
 
 #define JOURNAL_MAGIC "GIJ1"
 /* 2: RETRY records; 3: ENDs carry the run's summary (a build before it
- * would take such an END for damage, so it refuses the version instead). */
-#define JOURNAL_VERSION 3u
+ * would take such an END for damage, so it refuses the version instead);
+ * 4: the summary ends with the run's tasks lost with their host (absent
+ * from a version 3 END, read as 0). */
+#define JOURNAL_VERSION 4u
 #define HEADER_BYTES 8
 #define RECORD_OVERHEAD 12 /* type, length, crc */
 #define MAX_FILE_NAME 4096
@@ -77,6 +79,8 @@ static void encode_payload(const gi_jrec *r, gi_buf *out)
             gi_buf_put_f64(out, r->total);
             gi_buf_put_u32(out, r->frame);
             gi_buf_put_u32(out, r->frames);
+            if (r->has_losses)
+                gi_buf_put_u64(out, r->losses);
         }
         break;
     case GI_JREC_PURGE:
@@ -148,6 +152,10 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
             r->total = gi_get_f64(&rd);
             r->frame = gi_get_u32(&rd);
             r->frames = gi_get_u32(&rd);
+            if (!rd.failed && rd.left) { /* version 4 */
+                r->has_losses = 1;
+                r->losses = gi_get_u64(&rd);
+            }
             if (!rd.failed && (r->merged > r->tasks || !(r->fraction >= 0 && r->fraction <= 1) ||
                                !isfinite(r->started) || !isfinite(r->seconds) ||
                                !isfinite(r->done) || !isfinite(r->total) || r->frame >= r->frames))

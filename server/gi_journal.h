@@ -2,8 +2,8 @@
  * state directory, so a restarted gi-farmd knows every job it had.
  *
  * File layout (little-endian; docs/farm.md, "Journal"):
- *   header   "GIJ1" | u32 version (3; versions 1 and 2, without RETRY or
- *            END summaries, are read too)
+ *   header   "GIJ1" | u32 version (4; versions 1 to 3, without RETRY, END
+ *            summaries or their losses, are read too)
  *   record   u32 type | u32 length | payload | u32 crc32c(type, length, payload)
  * Records:
  *   SUBMIT      job id, priority, submit time, job file name, job text, manifest
@@ -75,6 +75,8 @@ typedef struct gi_jrec {
     double started, seconds, fraction, done, total;
     uint64_t retries, rays, samples;
     uint32_t frame, frames;
+    int has_losses;  /* version 4 on: the summary ends with losses */
+    uint64_t losses; /* tasks lost with their host and requeued */
 } gi_jrec;
 
 void gi_jrec_init(gi_jrec *r, gi_jrec_type type, uint64_t job_id);

@@ -107,7 +107,8 @@ static int keep_end(void *ctx, const gi_jrec *r, gi_error *err)
 }
 
 /* An END carries the run's summary (a restarted coordinator shows it); one
- * without (older journals) still reads; a summary out of range is damage. */
+ * without (older journals) still reads, and so does a summary without the
+ * tasks lost with their host (version 3); a summary out of range is damage. */
 GI_TEST(test_journal_end_summary)
 {
     gi_buf b;
@@ -141,6 +142,22 @@ GI_TEST(test_journal_end_summary)
     GI_CHECK(got.has_summary && got.started == 1.6e9 && got.tasks == 96 && got.merged == 96 &&
              got.retries == 2 && got.rays == 123456789 && got.samples == 4096 &&
              got.seconds == 12.5 && got.fraction == 1 && got.frame == 5 && got.frames == 6);
+    GI_CHECK(!got.has_losses && got.losses == 0);
+    b.len = head;
+    r.has_losses = 1;
+    r.losses = 17;
+    gi_jrec_encode(&r, &b);
+    size_t with_losses = b.len - head;
+    memset(&got, 0, sizeof got);
+    GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_end, &got, &valid, &skipped, &err) == 0);
+    GI_CHECK(got.has_losses && got.losses == 17 && got.retries == 2 && got.frames == 6);
+    /* Encoded back the same, as read (what compaction writes). */
+    gi_buf again;
+    gi_buf_init(&again);
+    got.message = (char *)""; /* keep_end kept numbers only; it was "" */
+    gi_jrec_encode(&got, &again);
+    GI_CHECK(again.len == with_losses && memcmp(again.data, b.data + head, again.len) == 0);
+    gi_buf_free(&again);
     /* A merged count past the tasks: the record is damaged. */
     b.len = head;
     r.merged = 97;
@@ -348,14 +365,14 @@ GI_TEST(test_journal_retry_record_and_versions)
     gi_error err;
     GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0);
     GI_CHECK(s.n == 4 && s.types[3] == GI_JREC_RETRY && s.ids[3] == 7 && valid == b.len);
-    for (uint8_t v = 2; v <= 3; v++) { /* RETRY records; END summaries; this build's */
+    for (uint8_t v = 2; v <= 4; v++) { /* RETRY records; END summaries; their losses */
         b.data[4] = v;
         memset(&s, 0, sizeof s);
         GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0 &&
                  s.n == 4);
     }
-    b.data[4] = 4; /* a later build's */
+    b.data[4] = 5; /* a later build's */
     GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == -1);
-    GI_CHECK_MSG(strstr(err.msg, "version 4 is not supported") != NULL, "%s", err.msg);
+    GI_CHECK_MSG(strstr(err.msg, "version 5 is not supported") != NULL, "%s", err.msg);
     gi_buf_free(&b);
 }
