@@ -142,9 +142,10 @@ static int ensure_job(child *c, uint64_t job_id, gi_error *err)
     return 0;
 }
 
-static int crash_requested(uint64_t task_id, uint32_t attempt)
+/* The fault injection spec in env names run `attempt` of task_id. */
+static int fault_requested(const char *env, uint64_t task_id, uint32_t attempt)
 {
-    const char *spec = getenv(GI_FAULT_CRASH_ENV);
+    const char *spec = getenv(env);
     if (!spec)
         return 0;
     const char *p = spec;
@@ -175,9 +176,15 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
     gi_buf result;
     gi_buf_init(&result);
     int rc = ensure_job(c, m.job_id, &terr);
+    if (rc == 0 && fault_requested(GI_FAULT_KILL_HOST_ENV, m.task.id, m.task.attempt)) {
+        gi_warn("fault injection: task %llu kills this host's gi-worker (pid %ld)",
+                (unsigned long long)m.task.id, (long)getppid());
+        kill(getppid(), SIGKILL);
+        kill(getpid(), SIGKILL);
+    }
     if (rc == 0)
         rc = gi_worker_run_task(&c->ctx, &m.task, &result, &terr);
-    if (rc == 0 && crash_requested(m.task.id, m.task.attempt)) {
+    if (rc == 0 && fault_requested(GI_FAULT_CRASH_ENV, m.task.id, m.task.attempt)) {
         gi_warn("fault injection: killing this child during task %llu",
                 (unsigned long long)m.task.id);
         kill(getpid(), SIGKILL);

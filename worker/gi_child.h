@@ -23,5 +23,9 @@ int gi_child_main(int fd, const char *batch_root);
  * makes a child kill itself with SIGKILL after computing task ID on that
  * attempt (default 0), before sending the result. */
 #define GI_FAULT_CRASH_ENV "GI_FAULT_CRASH_TASK"
+/* GI_FAULT_KILL_HOST_TASK, in the same form, makes the child that gets task
+ * ID on that attempt kill its parent (the gi-worker, or `gi render`) with
+ * SIGKILL, then itself, before running it: a task that takes its host down. */
+#define GI_FAULT_KILL_HOST_ENV "GI_FAULT_KILL_HOST_TASK"
 
 #endif

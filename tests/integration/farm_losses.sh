@@ -1,0 +1,66 @@
+# Hosts lost with their tasks: a task whose gi-worker is killed (kill -9)
+# more times than --max-attempts is requeued each time without counting an
+# attempt, and its job finishes with the image of `gi render`; a task lost
+# with its host --max-task-losses times fails its job, naming it and the
+# hosts. The task takes its host down by itself (GI_FAULT_KILL_HOST_TASK:
+# the pool child that gets it SIGKILLs its gi-worker), so the test needs no
+# timing: each gi-worker dies on that task, and the next one is started.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+cornell_job "$TMP/job.json" 8 32 32 32 8 # 4 tiles x 4 passes: 16 tasks
+
+# hosts NAME SPEC N: N gi-worker in turn (NAME1..NAMEN, one slot each), each
+# until its connection ends (the task in SPEC kills it).
+hosts() {
+    (
+        i=1
+        while [ "$i" -le "$3" ]; do
+            GI_FAULT_KILL_HOST_TASK="$2" "$WORKER" --once --connect "$WADDR" --procs 1 \
+                --queue 0 --cache "$TMP/cache-$1" --name "$1$i" >>"$TMP/$1.log" 2>&1 || true
+            i=$((i + 1))
+        done
+    ) &
+    FARM_PIDS="$FARM_PIDS $!"
+    show_on_failure "$TMP/$1.log"
+}
+
+"$FARMD" --state "$TMP/bad" --max-task-losses 0 >"$TMP/flag.log" 2>&1 && fail "a bound of 0"
+grep -q -- '--max-task-losses: "0" is not an integer in \[1, 1000\]' "$TMP/flag.log" ||
+    { cat "$TMP/flag.log"; fail "no clear error for --max-task-losses 0"; }
+"$FARMD" --help | grep -q -- "--max-task-losses N" || fail "--help does not name --max-task-losses"
+
+# 1. Task 2 kills its host on its first 4 runs, twice --max-attempts: the
+# fifth host runs it and the job is done, nothing counted as an attempt.
+LOG="$TMP/farmd.log"
+start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10 --max-attempts 2
+id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
+hosts k "2:0,2:1,2:2,2:3" 5
+"$GI" wait "$id" --out "$TMP/out" --progress none >"$TMP/wait1.log" 2>&1 ||
+    { cat "$TMP/wait1.log"; fail "the job of a task on 4 lost hosts did not finish"; }
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out/img.exr" || fail "image differs after losing 4 hosts"
+[ "$(jnum "$id" retries)" = 0 ] || { api "/api/v1/jobs/$id"; fail "losses counted as retries"; }
+[ "$(jnum "$id" losses)" = 4 ] || { api "/api/v1/jobs/$id"; fail "losses: $(jnum "$id" losses)"; }
+[ "$(metric gi_farm_tasks_lost_total)" = 4 ] || fail "tasks_lost: $(metric gi_farm_tasks_lost_total)"
+[ "$(metric gi_farm_task_failures_total)" = 0 ] || fail "losses counted as failures"
+api "/api/v1/jobs/$id" | grep -q "task 2 (attempt 3) was lost with its host k4 (loss 4 of 8; requeued, not counted as an attempt): worker k4 (.*) was lost with 1 task" ||
+    { api "/api/v1/jobs/$id"; fail "the job's log does not say task 2 was lost and requeued"; }
+"$GI" status "$id" | grep -q "0 retries, 4 lost with their host (requeued, not counted)" ||
+    { "$GI" status "$id"; fail "gi status does not show the losses"; }
+stop_farmd "$LOG"
+
+# 2. Task 1 kills every host it is given: after 3 losses (--max-task-losses
+# 3) the job fails, saying which task and on which hosts.
+LOG="$TMP/farmd2.log"
+start_farmd "$TMP/state2" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10 --max-task-losses 3
+hosts d "1:0,1:1,1:2" 3
+set +e
+"$GI" submit "$TMP/job.json" --wait --progress none >"$TMP/wait.log" 2>&1
+rc=$?
+set -e
+[ $rc -eq 1 ] || { cat "$TMP/wait.log"; fail "a task that kills its hosts: exit $rc"; }
+grep -q "task 1 was lost with its host 3 times (hosts d1, d2, d3): it may be taking its host down; last: worker d3 (.*) was lost with 1 task" \
+    "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "no clear error naming the task and hosts"; }
+[ "$(metric gi_farm_tasks_lost_total)" = 3 ] || fail "tasks_lost: $(metric gi_farm_tasks_lost_total)"
+stop_farmd "$LOG"
+echo "ok: 4 hosts lost under one task, job done and identical; a host killer fails its job"
