@@ -10,7 +10,9 @@
  *
  * With GI_FUZZ_CHECKPOINT_SEEDS=DIR in the environment it writes the seed
  * corpus instead: each job run in this process (an in-process worker) and
- * checkpointed after several numbers of merged tasks, then it exits. */
+ * checkpointed after several numbers of merged tasks (the next task lost
+ * with its host once), then it exits. The corpus keeps older versions'
+ * seeds too (the v6- ones are version 6's). */
 #define _XOPEN_SOURCE 700 /* nftw */
 #include <ftw.h>
 #include <stdio.h>
@@ -118,6 +120,13 @@ static int write_seeds(const char *seeds, int which, gi_error *err)
         if (rc || next == sizeof stops / sizeof stops[0] || ++done != stops[next])
             continue;
         next++;
+        /* The next task lost with its host once, so that its losses and
+         * their host are in the checkpoint (version 6). */
+        const gi_task *next_task = gi_jobrun_lease(&jr);
+        gi_error lost;
+        gi_fail(&lost, GI_ECRASH, "seed: host lost");
+        if (next_task)
+            gi_jobrun_lost(&jr, next_task->id, next_task->attempt, "seed-host", &lost);
         gi_buf ck;
         gi_buf_init(&ck);
         gi_buf_put_u8(&ck, (uint8_t)which);
