@@ -11,9 +11,10 @@
 #define DEFAULT_MAX_ATTEMPTS 4
 /* Losses are not the task's fault as a rule (spot hosts reclaimed, laptops
  * closed, kill -9): a chaos run of 4 allowed attempts failed one job in
- * ~220 only because a task had sat on 4 killed hosts. 8 makes such bad luck
- * some 200 times rarer still, while a task that really takes its host down
- * costs at most 8 host restarts before its job fails saying so. */
+ * ~220 only because a task had sat on 4 killed hosts. If each loss is
+ * independent bad luck, 8 makes that some 220 times rarer (p^8 = (p^4)^2),
+ * while a task that really takes its host down costs at most 8 host
+ * restarts before its job fails saying so. */
 #define DEFAULT_MAX_LOSSES 8
 /* Bytes of host names a task keeps for its losses' message; past it, ", ...". */
 #define LOST_ON_MAX 240

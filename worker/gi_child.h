@@ -27,5 +27,8 @@ int gi_child_main(int fd, const char *batch_root);
  * ID on that attempt kill its parent (the gi-worker, or `gi render`) with
  * SIGKILL, then itself, before running it: a task that takes its host down. */
 #define GI_FAULT_KILL_HOST_ENV "GI_FAULT_KILL_HOST_TASK"
+/* GI_FAULT_STOP_HOST_TASK, likewise, makes it SIGSTOP its parent, then run
+ * the task: a host gone silent (its leases expire) until SIGCONT. */
+#define GI_FAULT_STOP_HOST_ENV "GI_FAULT_STOP_HOST_TASK"
 
 #endif

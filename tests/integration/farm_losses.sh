@@ -2,9 +2,11 @@
 # more times than --max-attempts is requeued each time without counting an
 # attempt, and its job finishes with the image of `gi render`; a task lost
 # with its host --max-task-losses times fails its job, naming it and the
-# hosts. The task takes its host down by itself (GI_FAULT_KILL_HOST_TASK:
-# the pool child that gets it SIGKILLs its gi-worker), so the test needs no
-# timing: each gi-worker dies on that task, and the next one is started.
+# hosts; a task whose host goes silent (SIGSTOP) is lost when its lease
+# expires, with no attempt counted. The task takes its host down by itself
+# (GI_FAULT_KILL_HOST_TASK, GI_FAULT_STOP_HOST_TASK: the pool child that
+# gets it signals its gi-worker), so the test needs no timing but a lease
+# of 1 s: each gi-worker dies on that task, and the next one is started.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -63,4 +65,27 @@ grep -q "task 1 was lost with its host 3 times (hosts d1, d2, d3): it may be tak
     "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "no clear error naming the task and hosts"; }
 [ "$(metric gi_farm_tasks_lost_total)" = 3 ] || fail "tasks_lost: $(metric gi_farm_tasks_lost_total)"
 stop_farmd "$LOG"
-echo "ok: 4 hosts lost under one task, job done and identical; a host killer fails its job"
+
+# 3. A host gone silent (task 3 SIGSTOPs whichever gi-worker gets it): its
+# lease expires, the other host runs the task, and with --max-attempts 1 the
+# job is done all the same.
+LOG="$TMP/farmd3.log"
+start_farmd "$TMP/state3" "$LOG" -- --heartbeat 0.2 --lease 1 --dead 60 --max-attempts 1
+start_worker "$TMP/s1.log" env GI_FAULT_STOP_HOST_TASK=3:0 -- --connect "$WADDR" --procs 1 \
+    --queue 0 --cache "$TMP/cache-s1" --name s1
+S1=$WORKER_PID
+start_worker "$TMP/s2.log" env GI_FAULT_STOP_HOST_TASK=3:0 -- --connect "$WADDR" --procs 1 \
+    --queue 0 --cache "$TMP/cache-s2" --name s2
+S2=$WORKER_PID
+wait_workers 2
+"$GI" submit "$TMP/job.json" --wait --out "$TMP/out3" --progress none >"$TMP/wait3.log" 2>&1 ||
+    { cat "$TMP/wait3.log"; fail "the job of a task on a silent host did not finish"; }
+kill -CONT "$S1" "$S2"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "image differs after a silent host"
+[ "$(jnum 1 lease_expiries)" = 1 ] && [ "$(jnum 1 losses)" = 1 ] && [ "$(jnum 1 retries)" = 0 ] ||
+    { api /api/v1/jobs/1; fail "a lease expired on a silent host: not one loss"; }
+api /api/v1/jobs/1 | grep -q "task 3 (attempt 0) was lost with its host s[12] (loss 1 of 8; requeued, not counted as an attempt): lease expired on worker s[12]" ||
+    { api /api/v1/jobs/1; fail "the job's log does not say the lease expired"; }
+stop_farmd "$LOG"
+echo "ok: 4 hosts lost under one task, job done and identical; a host killer fails its job;"
+echo "a silent host's lease expired without an attempt counted"
