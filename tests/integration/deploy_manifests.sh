@@ -2,7 +2,8 @@
 # machine can check them without a container engine or a cluster:
 # - the image installs the package of every library the three programs link
 #   (their ELF NEEDED entries, mapped to Debian packages by dpkg -S);
-# - the manifest's images carry this build's version;
+# - the manifest's images carry this build's version, and its pods run as
+#   the image's user and group;
 # - the command lines and environment of its two containers (each `args:`
 #   line, gi-farmd's first) run as they are, with only the volumes' paths and
 #   the service's address mapped to this machine: the worker joins and a job
@@ -27,6 +28,18 @@ if command -v dpkg >/dev/null && command -v readelf >/dev/null; then
         done
     done
 fi
+
+# The pods' user is the image's, and the image names its group: USER
+# UID:GID, the group created with that gid and the user with both.
+user=$(sed -n 's/^USER \([0-9]*\):\([0-9]*\)$/\1 \2/p' "$CF")
+uid=${user% *} gid=${user#* }
+[ -n "$user" ] || fail "deploy/Containerfile has no USER UID:GID line"
+grep -q "groupadd --gid $gid " "$CF" && grep -q "useradd --uid $uid --gid $gid " "$CF" ||
+    fail "deploy/Containerfile does not create user $uid in group $gid"
+for k in runAsUser:$uid runAsGroup:$gid fsGroup:$gid; do
+    [ "$(grep -c "^ *${k%%:*}: ${k#*:}\$" "$K8S")" -eq 2 ] ||
+        fail "the manifest's ${k%%:*} is not the image's ${k#*:} in both pods"
+done
 
 version=$("$GI" --version | awk '{print $2}')
 [ "$(grep -c "image: gi-farm:$version\$" "$K8S")" -eq 2 ] ||
