@@ -3,8 +3,11 @@
  * Each round: poll the worker listener, every worker connection, MHD's
  * epoll descriptor and the checkers' pipes (timeout: the next timer, at
  * most TICK_MS); dispatch what is ready; run the timers (handshakes,
- * heartbeats, leases, checker deadlines, checkpoints); hand pending tasks
- * to workers with free slots; drop closed connections. */
+ * heartbeats, leases, checker deadlines, checkpoints, finishes that ended
+ * on their threads); hand pending tasks to workers with free slots; drop
+ * closed connections. How long each round keeps the loop from poll() is
+ * kept per second (gi_farm_loop_stall, GET /metrics): a round that takes
+ * long delays every merge, lease and answer behind it. */
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -12,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/eventfd.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -104,6 +108,11 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     gi_buf_init(&cfg->token);
     f->lock_fd = f->worker_fd = f->api_fd = -1;
     f->journal.fd = -1;
+    f->finish_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (f->finish_wake_fd < 0)
+        return gi_fail(err, GI_EIO, "eventfd: %s", strerror(errno));
+    const char *delay = getenv(GI_FAULT_FINISH_DELAY_ENV);
+    f->finish_delay_s = delay ? atof(delay) : 0;
     f->started = gi_now();
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;
@@ -141,9 +150,32 @@ void gi_farm_stop(gi_farm *f)
 
 /* One poll round's descriptors and what each belongs to. */
 typedef struct slot {
-    int kind; /* 0 listener, 1 api, 2 conn, 3 checker */
+    int kind; /* 0 listener, 1 api, 2 conn, 3 checker, 4 a finish thread's wake-up */
     void *ptr;
 } slot;
+
+static void stall_note(gi_farm *f, double now, double busy)
+{
+    int64_t sec = (int64_t)now;
+    int k = (int)(sec % GI_FARM_STALL_WINDOW);
+    if (f->stall_sec[k] != sec) {
+        f->stall_sec[k] = sec;
+        f->stall_max[k] = 0;
+    }
+    if (busy > f->stall_max[k])
+        f->stall_max[k] = busy;
+    if (busy > f->stall_max_ever)
+        f->stall_max_ever = busy;
+}
+
+double gi_farm_loop_stall(const gi_farm *f, double now)
+{
+    double worst = 0;
+    for (int k = 0; k < GI_FARM_STALL_WINDOW; k++)
+        if ((int64_t)now - f->stall_sec[k] < GI_FARM_STALL_WINDOW && f->stall_max[k] > worst)
+            worst = f->stall_max[k];
+    return worst;
+}
 
 int gi_farm_run(gi_farm *f, gi_error *err)
 {
@@ -151,10 +183,11 @@ int gi_farm_run(gi_farm *f, gi_error *err)
     struct pollfd *fds = NULL;
     slot *slots = NULL;
     int api_fd = gi_farm_api_fd(f);
+    double busy_since = 0; /* when the round began: poll's return */
     while (!f->stop) {
         size_t live_count;
         gi_farm_job **live = gi_farm_live_jobs(f, &live_count);
-        size_t need = 2 + f->conn_count + live_count;
+        size_t need = 3 + f->conn_count + live_count;
         if (need > cap) {
             cap = 2 * need;
             fds = gi_xrealloc(fds, cap * sizeof *fds);
@@ -167,6 +200,8 @@ int gi_farm_run(gi_farm *f, gi_error *err)
             fds[n] = (struct pollfd){.fd = api_fd, .events = POLLIN};
             slots[n++] = (slot){1, NULL};
         }
+        fds[n] = (struct pollfd){.fd = f->finish_wake_fd, .events = POLLIN};
+        slots[n++] = (slot){4, NULL};
         for (size_t i = 0; i < f->conn_count; i++) {
             gi_farm_conn *c = f->conns[i];
             if (c->fd < 0)
@@ -186,7 +221,10 @@ int gi_farm_run(gi_farm *f, gi_error *err)
         int at = gi_farm_api_timeout_ms(f);
         if (at >= 0 && at < timeout)
             timeout = at;
+        if (busy_since > 0)
+            stall_note(f, gi_now(), gi_now() - busy_since);
         int rc = poll(fds, (nfds_t)n, timeout);
+        busy_since = gi_now();
         if (rc < 0 && errno != EINTR) {
             gi_fail(err, GI_EIO, "poll: %s", strerror(errno));
             break;
@@ -210,6 +248,12 @@ int gi_farm_run(gi_farm *f, gi_error *err)
                 gi_farm_job *j = slots[i].ptr;
                 if (j->check_fd == fds[i].fd)
                     gi_farm_check_readable(f, j);
+                break;
+            }
+            case 4: { /* the tick below takes the finish in */
+                uint64_t count;
+                ssize_t got = read(f->finish_wake_fd, &count, sizeof count);
+                (void)got;
                 break;
             }
             default:
@@ -251,6 +295,8 @@ void gi_farm_close(gi_farm *f)
         close(f->worker_fd);
     if (f->lock_fd >= 0)
         close(f->lock_fd);
+    if (f->finish_wake_fd >= 0)
+        close(f->finish_wake_fd);
     free(f->assets_dir);
     free(f->jobs_dir);
     gi_frame_cache_free(&f->asset_frames);

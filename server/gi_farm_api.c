@@ -475,7 +475,7 @@ static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_re
     }
     cJSON *o = cJSON_CreateObject();
     cJSON_AddNumberToObject(o, "id", (double)j->id);
-    cJSON_AddStringToObject(o, "state", gi_fj_state_name(j->state));
+    cJSON_AddStringToObject(o, "state", gi_farm_job_state_name(j));
     char *json = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
     return send_json(conn, (unsigned)status, json);
@@ -498,7 +498,7 @@ static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_re
 {
     if (j->state != GI_FJ_DONE)
         return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT, "job %llu is %s, not done",
-                      (unsigned long long)j->id, gi_fj_state_name(j->state));
+                      (unsigned long long)j->id, gi_farm_job_state_name(j));
     char *path = gi_farm_job_output_path(j, r->name);
     if (!path)
         return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "job %llu has no output \"%s\"",
@@ -565,7 +565,7 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
             return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
                           "job %llu has ended (%s): `gi purge %llu` (DELETE "
                           "/api/v1/jobs/%llu?purge=1) removes it and its files",
-                          (unsigned long long)j->id, gi_fj_state_name(j->state),
+                          (unsigned long long)j->id, gi_farm_job_state_name(j),
                           (unsigned long long)j->id, (unsigned long long)j->id);
         {
             uint64_t id = j->id;

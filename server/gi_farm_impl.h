@@ -7,7 +7,10 @@
  *   gi_farm_check.c  the forked scene checker
  *   gi_farm_store.c  the content-addressed asset store on disk
  *   gi_farm_api.c    the HTTP API (libmicrohttpd), gi_farm_views.c its JSON
- * Everything runs on the loop's thread. */
+ * Everything runs on the loop's thread, but for writes handed to threads
+ * of their own: checkpoints (gi_file_writer) and a job's finish, its
+ * outputs (gi_jobrun_finish_on_thread), whose job the loop leaves alone
+ * meanwhile. */
 #ifndef GI_FARM_IMPL_H
 #define GI_FARM_IMPL_H
 
@@ -39,6 +42,10 @@ typedef enum {
 } gi_fj_state;
 
 const char *gi_fj_state_name(gi_fj_state s);
+/* What a job's views call its state: gi_fj_state_name, except "finishing"
+ * for a running job whose method->finish (its outputs) runs on its thread. */
+typedef struct gi_farm_job gi_farm_job;
+const char *gi_farm_job_state_name(const gi_farm_job *j);
 
 #define GI_FJ_LOG_KEEP 64    /* log lines kept in memory per job */
 #define GI_FJ_ERRORS_KEEP 32 /* task errors kept per job */
@@ -52,7 +59,7 @@ typedef struct gi_fj_task_error {
     char message[512];
 } gi_fj_task_error;
 
-typedef struct gi_farm_job {
+struct gi_farm_job {
     uint64_t id;
     gi_fj_state state;
     uint32_t priority;
@@ -87,6 +94,8 @@ typedef struct gi_farm_job {
      * first retention pass that needs them; disk_measured 0: not yet. */
     uint64_t disk_bytes;
     int disk_measured;
+    /* Such a retry's finish runs on its thread (gi_jobrun_finishing). */
+    int outputs_retrying;
 
     /* Checker. */
     pid_t check_pid;
@@ -144,7 +153,7 @@ typedef struct gi_farm_job {
      * of a farm's history of ended jobs would otherwise be empty rings. */
     gi_fj_task_error *errors;
     int err_start, err_count;
-} gi_farm_job;
+};
 
 /* ---- workers ----------------------------------------------------------- */
 
@@ -223,6 +232,8 @@ typedef struct gi_farm_metrics {
 
 /* ---- the context ------------------------------------------------------- */
 
+#define GI_FARM_STALL_WINDOW 60
+
 struct gi_farm {
     gi_farm_config cfg;
     uint8_t key[GI_AUTH_KEY_BYTES];
@@ -269,7 +280,21 @@ struct gi_farm {
     gi_frame_cache asset_frames;
 
     gi_farm_metrics m;
+
+    /* Written by a job's finish thread when it ends (gi_jobrun_finish_on_thread):
+     * an eventfd in the poll set, so that the loop takes the end in at once. */
+    int finish_wake_fd;
+    double finish_delay_s; /* GI_FAULT_FINISH_DELAY_ENV */
+    /* The loop's longest iteration (time out of poll) in each of the last
+     * GI_FARM_STALL_WINDOW seconds, by second, and since it started. */
+    double stall_max[GI_FARM_STALL_WINDOW];
+    int64_t stall_sec[GI_FARM_STALL_WINDOW];
+    double stall_max_ever;
 };
+
+/* The loop's longest iteration within the last GI_FARM_STALL_WINDOW
+ * seconds (GET /metrics). */
+double gi_farm_loop_stall(const gi_farm *f, double now);
 
 double gi_farm_wallnow(void); /* epoch seconds (monotonic time is gi_now) */
 
@@ -322,6 +347,10 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why);
  * environment, every checker crashes (SIGSEGV) as a hostile mesh might make
  * it. */
 #define GI_FAULT_CHECK_CRASH_ENV "GI_FAULT_CHECK_CRASH"
+/* Test hook: with GI_FAULT_FINISH_DELAY=S in gi-farmd's environment, every
+ * job's finish waits S seconds on its thread before it writes the outputs,
+ * so that tests can look at, cancel or stop a finishing job. */
+#define GI_FAULT_FINISH_DELAY_ENV "GI_FAULT_FINISH_DELAY"
 int gi_farm_check_start(gi_farm *f, gi_farm_job *j, gi_error *err);
 /* Reads what the checker wrote; at its end, calls gi_farm_job_checked. */
 void gi_farm_check_readable(gi_farm *f, gi_farm_job *j);

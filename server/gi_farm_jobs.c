@@ -9,7 +9,14 @@
  * and journaled once it is in place). A restarted
  * coordinator replays the journal, checks every unfinished job's scene
  * again, and restores it from its checkpoint, so tasks merged before the
- * checkpoint are not run again. */
+ * checkpoint are not run again.
+ *
+ * A job's method->finish (writing its outputs: a second for a 4 Mpx EXR)
+ * runs on a thread of its own (gi_jobrun_finish_on_thread); the job shows
+ * as "finishing" meanwhile, and the tick takes the finish's end in: DONE
+ * only once it returned with its outputs in place, and then END is
+ * journaled. No checkpoint is taken while it runs; a stopping coordinator
+ * waits for it; a cancel waits for it, then cancels. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -40,6 +47,13 @@ const char *gi_fj_state_name(gi_fj_state s)
     case GI_FJ_CANCELLED: return "cancelled";
     }
     return "unknown";
+}
+
+const char *gi_farm_job_state_name(const gi_farm_job *j)
+{
+    if (j->state == GI_FJ_RUNNING && j->loaded && gi_jobrun_finishing(&j->jr))
+        return "finishing";
+    return gi_fj_state_name(j->state);
 }
 
 static void start_checkers(gi_farm *f);
@@ -475,6 +489,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
     j->disk_measured = 0;
+    j->outputs_retrying = 0;
 }
 
 static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
@@ -1055,6 +1070,8 @@ static int load_for_run(gi_farm *f, gi_farm_job *j, gi_error *err)
     size_t n = strlen(j->dir) + 8;
     j->job.out_dir = gi_xmalloc(n);
     snprintf(j->job.out_dir, n, "%s/out", j->dir);
+    gi_jobrun_finish_on_thread(&j->jr, f->finish_wake_fd);
+    j->jr.finish_delay_s = f->finish_delay_s;
     return 0;
 }
 
@@ -1102,7 +1119,8 @@ static void run_failed(gi_farm *f, gi_farm_job *j)
 /* A job waiting for room to write its outputs tries again. */
 static void outputs_retry(gi_farm *f, gi_farm_job *j, double now)
 {
-    if (j->state != GI_FJ_RUNNING || !j->outputs_retry_at || now < j->outputs_retry_at)
+    if (j->state != GI_FJ_RUNNING || !j->outputs_retry_at || now < j->outputs_retry_at ||
+        j->outputs_retrying)
         return;
     gi_farm_job_logging(j);
     int rc = gi_jobrun_finish_again(&j->jr);
@@ -1111,8 +1129,38 @@ static void outputs_retry(gi_farm *f, gi_farm_job *j, double now)
         run_failed(f, j);
         return;
     }
+    if (gi_jobrun_finishing(&j->jr)) {
+        j->outputs_retrying = 1; /* finish_taken goes on */
+        return;
+    }
     j->outputs_retry_at = 0;
     gi_farm_job_log(j, "its outputs are written now");
+    gi_farm_job_settle(f, j);
+}
+
+/* Takes in the end of the job's finish on its thread, if it has ended
+ * (waiting for it if wait): the job is done, fails, or has follow-up tasks. */
+static void finish_taken(gi_farm *f, gi_farm_job *j, int wait)
+{
+    if (j->state != GI_FJ_RUNNING || !gi_jobrun_finishing(&j->jr))
+        return;
+    double f0 = j->jr.finish_seconds;
+    gi_farm_job_logging(j); /* the finish's warnings */
+    int running = gi_jobrun_finish_poll(&j->jr, wait);
+    gi_farm_job_logging(NULL);
+    if (running)
+        return;
+    j->finish_s += j->jr.finish_seconds - f0;
+    f->m.finish_s += j->jr.finish_seconds - f0;
+    if (j->outputs_retrying) {
+        j->outputs_retrying = 0;
+        if (j->jr.failed) {
+            run_failed(f, j); /* waits again, or fails the job */
+            return;
+        }
+        j->outputs_retry_at = 0;
+        gi_farm_job_log(j, "its outputs are written now");
+    }
     gi_farm_job_settle(f, j);
 }
 
@@ -1391,6 +1439,8 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
 {
     if (!checkpoint_finish(f, j, force) || j->state != GI_FJ_RUNNING)
         return;
+    if (gi_jobrun_finishing(&j->jr))
+        return; /* its state is the finish's; the job ends or goes on once it returns */
     if (j->outputs_retry_at && !force)
         return; /* its outputs' retries try a checkpoint as well (keep_result) */
     double every = gi_jobrun_checkpoint_interval(f->cfg.checkpoint_s, j->ckpt_cost_s);
@@ -1540,6 +1590,7 @@ void gi_farm_jobs_tick(gi_farm *f)
         gi_farm_job *j = live[i];
         if (j->state == GI_FJ_CHECKING)
             gi_farm_check_deadline(f, j, now);
+        finish_taken(f, j, 0);
         checkpoint_if_due(f, j, now, 0);
         outputs_retry(f, j, now);
         log_flush(j);
@@ -1565,8 +1616,13 @@ void gi_farm_jobs_tick(gi_farm *f)
 void gi_farm_jobs_checkpoint_all(gi_farm *f)
 {
     double now = gi_now();
-    for (size_t i = 0; i < f->job_count; i++)
+    for (size_t i = 0; i < f->job_count; i++) {
+        /* A finish under way is waited for: its job is then done (outputs
+         * in place, END journaled), or failed, or checkpointed below with
+         * the follow-up tasks it planned. */
+        finish_taken(f, f->jobs[i], 1);
         checkpoint_if_due(f, f->jobs[i], now, 1);
+    }
 }
 
 void gi_farm_jobs_free(gi_farm *f)

@@ -318,7 +318,10 @@ int gi_farm_asset_bytes(gi_farm *f, const char *hash, gi_buf *out, gi_error *err
 {
     for (size_t i = 0; i < f->job_count; i++) {
         gi_farm_job *j = f->jobs[i];
-        if (!j->loaded || !j->job.assets)
+        /* A finishing job's data is its finish thread's (it may publish):
+         * what its checkpoints need is in the store, and no task of it
+         * runs any more. */
+        if (!j->loaded || !j->job.assets || gi_jobrun_finishing(&j->jr))
             continue;
         const gi_buf *b = gi_asset_store_get(j->job.assets, hash);
         if (b) {

@@ -51,7 +51,7 @@ static cJSON *job_summary(const gi_farm_job *j)
     cJSON_AddNumberToObject(o, "id", (double)j->id);
     cJSON_AddStringToObject(o, "name", j->name ? j->name : "?");
     cJSON_AddStringToObject(o, "method", j->method ? j->method : "?");
-    cJSON_AddStringToObject(o, "state", gi_fj_state_name(j->state));
+    cJSON_AddStringToObject(o, "state", gi_farm_job_state_name(j));
     cJSON_AddNumberToObject(o, "priority", j->priority);
     gi_progress_at at;
     gi_farm_job_progress(j, &at);
@@ -303,6 +303,17 @@ char *gi_farm_view_metrics(gi_farm *f)
     gauge(&b, "gi_farm_tasks_leased", "Tasks leased to workers now.", (double)leased);
     gauge(&b, "gi_farm_asset_store_bytes", "Bytes in the asset store.", (double)f->store_bytes);
     gauge(&b, "gi_farm_uptime_seconds", "Seconds since gi-farmd started.", gi_now() - f->started);
+    size_t finishing = 0;
+    for (size_t i = 0; i < f->job_count; i++)
+        finishing += strcmp(gi_farm_job_state_name(f->jobs[i]), "finishing") == 0;
+    gauge(&b, "gi_farm_jobs_finishing",
+          "Running jobs whose finish (their outputs) runs on its thread now.", (double)finishing);
+    gauge(&b, "gi_farm_loop_stall_seconds",
+          "The coordinator loop's longest round (time out of poll: no merge, lease or answer "
+          "meanwhile) in the last 60 s.",
+          gi_farm_loop_stall(f, now));
+    gauge(&b, "gi_farm_loop_stall_max_seconds",
+          "The coordinator loop's longest round since gi-farmd started.", f->stall_max_ever);
     counter(&b, "gi_farm_jobs_submitted_total", "Jobs accepted.", (double)m->jobs_submitted);
     counter(&b, "gi_farm_jobs_done_total", "Jobs finished.", (double)m->jobs_done);
     counter(&b, "gi_farm_jobs_failed_total", "Jobs failed.", (double)m->jobs_failed);
@@ -324,7 +335,8 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_result_bytes_total", "Bytes of result data accepted.", (double)m->result_bytes);
     counter(&b, "gi_farm_merged_bytes_total", "Bytes of result data merged.", (double)m->merged_bytes);
     counter(&b, "gi_farm_merge_seconds_total", "Coordinator time in the methods' merge.", m->merge_s);
-    counter(&b, "gi_farm_finish_seconds_total", "Coordinator time in the methods' finish (outputs).",
+    counter(&b, "gi_farm_finish_seconds_total",
+            "Time in the methods' finish (outputs), on its thread.",
             m->finish_s);
     counter(&b, "gi_farm_checkpoints_total", "Checkpoints written.", (double)m->checkpoints);
     counter(&b, "gi_farm_checkpoint_failures_total", "Checkpoints that could not be written.",

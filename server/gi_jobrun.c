@@ -3,10 +3,12 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "gi_crc32c.h"
 #include "gi_log.h"
 #include "gi_progress.h"
+#include "gi_thread_call.h"
 
 #define DEFAULT_MAX_ATTEMPTS 4
 /* Losses are not the task's fault as a rule (spot hosts reclaimed, laptops
@@ -18,6 +20,24 @@
 #define DEFAULT_MAX_LOSSES 8
 /* Bytes of host names a task keeps for its losses' message; past it, ", ...". */
 #define LOST_ON_MAX 240
+
+/* A warning the finish logged, passed on to the caller's log hook. */
+typedef struct finish_line {
+    gi_log_level level;
+    char *msg;
+} finish_line;
+
+struct gi_jobrun_finisher {
+    gi_thread_call *call;
+    gi_job *job;
+    gi_task_queue q; /* its follow-up tasks */
+    double delay_s;
+    int rc;
+    gi_error err;
+    double seconds;
+    finish_line *lines;
+    size_t line_count;
+};
 
 static void pending_push(gi_jobrun *jr, uint64_t id, int front)
 {
@@ -105,10 +125,27 @@ static int job_fail(gi_jobrun *jr, const gi_error *e)
     return -1;
 }
 
+/* Clears the run for start or restore, keeping gi_jobrun_finish_on_thread. */
+static void run_init(gi_jobrun *jr, gi_job *job)
+{
+    int threaded = jr->finish_threaded, wake_fd = jr->finish_wake_fd;
+    double delay_s = jr->finish_delay_s;
+    memset(jr, 0, sizeof *jr);
+    jr->finish_threaded = threaded;
+    jr->finish_wake_fd = wake_fd;
+    jr->finish_delay_s = delay_s;
+    jr->job = job;
+}
+
+void gi_jobrun_finish_on_thread(gi_jobrun *jr, int wake_fd)
+{
+    jr->finish_threaded = 1;
+    jr->finish_wake_fd = wake_fd;
+}
+
 int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
 {
-    memset(jr, 0, sizeof *jr);
-    jr->job = job;
+    run_init(jr, job);
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
     jr->max_losses = DEFAULT_MAX_LOSSES;
     gi_task_queue q;
@@ -122,8 +159,14 @@ int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
     return rc;
 }
 
+static void finisher_free(gi_jobrun_finisher *fz);
+
 void gi_jobrun_free(gi_jobrun *jr)
 {
+    if (jr->finisher) {
+        gi_thread_call_join(jr->finisher->call);
+        finisher_free(jr->finisher);
+    }
     for (uint64_t i = 0; i < jr->task_count - jr->task_base; i++) {
         gi_task_free(&jr->tasks[i].task);
         gi_buf_free(&jr->tasks[i].result);
@@ -186,7 +229,25 @@ static void drop_merged(gi_jobrun *jr)
     jr->task_base = jr->merge_next;
 }
 
-/* Merges every result whose turn has come; calls finish when all is merged. */
+static void finisher_start(gi_jobrun *jr);
+
+/* A finish has returned rc, with its follow-up tasks in q: -1 if the run
+ * failed, 1 if it is finished, 0 if follow-up tasks were planned. */
+static int finish_end(gi_jobrun *jr, gi_task_queue *q, int rc, gi_error *err, double seconds)
+{
+    jr->finish_seconds += seconds;
+    if (rc == 0)
+        rc = absorb(jr, q, err);
+    if (rc)
+        return job_fail(jr, err);
+    if (jr->merge_next < jr->task_count)
+        return 0;
+    jr->finished = 1;
+    return 1;
+}
+
+/* Merges every result whose turn has come; calls finish when all is merged
+ * (or starts it on its thread). */
 static int advance(gi_jobrun *jr)
 {
     gi_job *job = jr->job;
@@ -220,21 +281,84 @@ static int advance(gi_jobrun *jr)
         drop_merged(jr);
         if (jr->merge_next < jr->task_count)
             return 0;
+        if (jr->finish_threaded) {
+            finisher_start(jr);
+            return 0;
+        }
         gi_task_queue q;
         gi_task_queue_init(&q, jr->task_count);
         double t0 = gi_now();
         int rc = job->method->finish(job, &q, &err);
-        jr->finish_seconds += gi_now() - t0;
-        if (rc == 0)
-            rc = absorb(jr, &q, &err);
+        rc = finish_end(jr, &q, rc, &err, gi_now() - t0);
         gi_task_queue_free(&q);
         if (rc)
-            return job_fail(jr, &err);
-        if (jr->merge_next == jr->task_count) {
-            jr->finished = 1;
-            return 0;
-        }
+            return rc < 0 ? -1 : 0;
     }
+}
+
+/* ---- finishing on a thread (gi_jobrun_finish_on_thread) ---------------- */
+
+static void finisher_free(gi_jobrun_finisher *fz)
+{
+    for (size_t i = 0; i < fz->line_count; i++)
+        free(fz->lines[i].msg);
+    free(fz->lines);
+    gi_task_queue_free(&fz->q);
+    free(fz);
+}
+
+/* gi_log_hook on the finish's thread: kept for the caller's thread, whose
+ * hook (a farm job's log) is not this thread's to call. At most 64 lines. */
+static void finisher_keep_line(void *ctx, gi_log_level level, const char *msg)
+{
+    gi_jobrun_finisher *fz = ctx;
+    if (fz->line_count == 64)
+        return;
+    fz->lines = gi_xrealloc(fz->lines, (fz->line_count + 1) * sizeof *fz->lines);
+    fz->lines[fz->line_count++] = (finish_line){level, gi_xstrdup(msg)};
+}
+
+static void finisher_main(void *arg)
+{
+    gi_jobrun_finisher *fz = arg;
+    gi_log_hook_set(finisher_keep_line, fz);
+    if (fz->delay_s > 0)
+        usleep((useconds_t)(fz->delay_s * 1e6));
+    double t0 = gi_now();
+    fz->rc = fz->job->method->finish(fz->job, &fz->q, &fz->err);
+    fz->seconds = gi_now() - t0;
+    gi_log_hook_set(NULL, NULL);
+}
+
+static void finisher_start(gi_jobrun *jr)
+{
+    gi_jobrun_finisher *fz = gi_xcalloc(1, sizeof *fz);
+    fz->job = jr->job;
+    fz->delay_s = jr->finish_delay_s;
+    gi_task_queue_init(&fz->q, jr->task_count);
+    gi_error_clear(&fz->err);
+    jr->finisher = fz;
+    fz->call = gi_thread_call_start(finisher_main, fz, jr->finish_wake_fd);
+}
+
+int gi_jobrun_finish_poll(gi_jobrun *jr, int wait)
+{
+    gi_jobrun_finisher *fz = jr->finisher;
+    if (!fz)
+        return 0;
+    if (!wait && !gi_thread_call_done(fz->call))
+        return 1;
+    gi_thread_call_join(fz->call);
+    jr->finisher = NULL;
+    gi_log_hook hook;
+    void *ctx;
+    gi_log_hook_get(&hook, &ctx);
+    for (size_t i = 0; hook && i < fz->line_count; i++)
+        hook(ctx, fz->lines[i].level, fz->lines[i].msg);
+    /* Follow-up tasks are pending now: nothing to merge before they run. */
+    finish_end(jr, &fz->q, fz->rc, &fz->err, fz->seconds);
+    finisher_free(fz);
+    return 0;
 }
 
 int gi_jobrun_finish_retryable(const gi_jobrun *jr)
@@ -419,6 +543,8 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
     const gi_job *job = jr->job;
     if (!job->method->save)
         return gi_fail(err, GI_EINTERNAL, "method %s cannot checkpoint", job->method->name);
+    if (jr->finisher) /* its state is the finish's thread's */
+        return gi_fail(err, GI_EINTERNAL, "%s: no checkpoint while it finishes", job->file);
     size_t start = out->len;
     gi_buf_put_u32(out, CHECKPOINT_MAGIC);
     gi_buf_put_u32(out, CHECKPOINT_VERSION);
@@ -461,8 +587,7 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
 
 int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err)
 {
-    memset(jr, 0, sizeof *jr);
-    jr->job = job;
+    run_init(jr, job);
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
     jr->max_losses = DEFAULT_MAX_LOSSES;
     if (!job->method->load)

@@ -31,6 +31,8 @@ typedef struct gi_jobrun_task {
     char *lost_on;     /* the hosts of those losses, ", "-separated (NULL: none) */
 } gi_jobrun_task;
 
+typedef struct gi_jobrun_finisher gi_jobrun_finisher;
+
 typedef struct gi_jobrun {
     gi_job *job;
     /* The tasks with ids [task_base, task_count), task id at
@@ -59,10 +61,37 @@ typedef struct gi_jobrun {
      * method->finish, for throughput figures. */
     double merge_seconds, finish_seconds;
     uint64_t merged_bytes;
+    /* gi_jobrun_finish_on_thread: method->finish runs on a thread of its
+     * own, and finisher is that finish while it runs. */
+    int finish_threaded, finish_wake_fd;
+    gi_jobrun_finisher *finisher;
+    /* Test hook (gi-farmd's GI_FAULT_FINISH_DELAY): the finish's thread
+     * sleeps this long before finish, so that tests can act meanwhile. */
+    double finish_delay_s;
 } gi_jobrun;
+
+/* From now on, method->finish runs on a thread of its own (gi-farmd's:
+ * writing a 4 Mpx EXR takes a second the loop must not wait): when the last
+ * task is merged, the run is "finishing" (gi_jobrun_finishing) until
+ * gi_jobrun_finish_poll takes the finish's end in. Meanwhile the method's
+ * state and job (its outputs, its published data) are the thread's: nothing
+ * may read them, nor checkpoint the run. The thread writes 8 bytes to
+ * wake_fd (>= 0: an eventfd) when it ends. Set before gi_jobrun_start or
+ * gi_jobrun_restore, which keep it (a restored run whose tasks were all
+ * merged finishes on the thread too), as they keep finish_delay_s;
+ * gi_jobrun_free forgets them. */
+void gi_jobrun_finish_on_thread(gi_jobrun *jr, int wake_fd);
+static inline int gi_jobrun_finishing(const gi_jobrun *jr) { return jr->finisher != NULL; }
+/* Takes in the end of the finish running on its thread, waiting for it if
+ * wait: merging goes on, and the run may be finished or failed now
+ * (gi_jobrun_done), or have follow-up tasks. The finish's warnings are
+ * passed to this thread's log hook (gi_log_hook_set), as if it had run
+ * here. Returns 1 while the finish still runs (wait = 0), else 0. */
+int gi_jobrun_finish_poll(gi_jobrun *jr, int wait);
 
 /* Plans the job (method->plan). */
 int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err);
+/* Waits for a finish running on its thread first. */
 void gi_jobrun_free(gi_jobrun *jr);
 
 /* The next task to run (its state becomes LEASED), or NULL if none is
@@ -117,7 +146,8 @@ static inline int gi_jobrun_done(const gi_jobrun *jr) { return jr->finished || j
  * from that writes the outputs without rendering anything again. */
 int gi_jobrun_finish_retryable(const gi_jobrun *jr);
 /* Calls finish again on such a run (the outputs may find room now): 0 if
- * it is finished, -1 if it failed again (or was not such a run). */
+ * it is finished (or finishing on its thread), -1 if it failed again (or
+ * was not such a run). */
 int gi_jobrun_finish_again(gi_jobrun *jr);
 /* Tasks waiting for a lease: those not merged, less the leased and held
  * ones (kept as counts: a job's view is asked for many times a second). */
@@ -132,9 +162,9 @@ void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX]);
 
 /* Checkpoints. The checkpoint holds the merge position, every task not yet
  * merged (id, kind, attempt, failures, losses and their hosts, cost,
- * payload), the statistics, and the method's state (method->save). Results
- * received but not yet merged are not in it: their tasks run again after a
- * restore. */
+ * payload), the statistics, and the method's state (method->save). Results received but not yet merged are
+ * not in it: their tasks run again after a restore. Refused while the run
+ * is finishing on its thread. */
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
 /* Rebuilds the run of `job` (parsed and loaded again from the same text and
  * assets) from a checkpoint, in place of gi_jobrun_start. A checkpoint of

@@ -35,7 +35,7 @@ wait_merged_tasks() {
         [ $n -lt 1200 ] || fail "job $1 did not reach $2 merged tasks"
         sleep 0.05
     done
-    [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
+    unended "$1" || fail "job $1 ended too soon; make it longer"
 }
 
 OPTS="--heartbeat 0.2 --lease 3 --dead 3 --checkpoint 0.2"

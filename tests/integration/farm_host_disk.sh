@@ -40,7 +40,7 @@ start_worker "$TMP/full.log" sh "$TMP/own_disk.sh" "$TMP/full" -- --connect "$WA
 wait_workers 1
 id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
 wait_log "$LOG" "worker full blocklisted"
-[ "$(jstate "$id")" = running ] || { api "/api/v1/jobs/$id"; fail "the job did not wait for a host"; }
+unended "$id" || { api "/api/v1/jobs/$id"; fail "the job did not wait for a host"; }
 [ "$(jnum "$id" host_disk_errors)" -ge 3 ] || { api "/api/v1/jobs/$id"; fail "host disk errors"; }
 [ "$(jnum "$id" retries)" = 0 ] || { api "/api/v1/jobs/$id"; fail "a full disk took attempts"; }
 api "/api/v1/jobs/$id" | grep -q "No space left on device (that host's disk: not counted as an attempt)" ||

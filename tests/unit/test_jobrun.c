@@ -1,11 +1,18 @@
 /* Unit tests: the job state machine (ordered merge, retries, follow-ups) and
  * its progress clock. */
 #include <math.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
 
 #include "gi_crc32c.h"
 #include "gi_jobrun.h"
+#include "gi_log.h"
 #include "gi_rng.h"
 #include "gi_test.h"
 
@@ -929,4 +936,145 @@ GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
     GI_CHECK(gi_jobrun_checkpoint_interval(1.0, 1.0) == 20.0);
     GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 1.0) == 30.0);
     GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 5.0) == 100.0);
+}
+
+/* ---- finish on a thread (gi_jobrun_finish_on_thread, gi-farmd's) ---------- */
+
+static atomic_int gate_open;        /* the threaded finish waits for it */
+static pthread_t loop_thread;       /* the test's own: finish must not run there */
+static atomic_int finish_on_loop;   /* a finish ran on the test's thread */
+static atomic_int threaded_finishes;
+
+/* Like fake_finish, on a thread: waits for the gate, warns, and fails its
+ * second call as a full disk would (GI_EIO). */
+static int gated_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    while (!atomic_load(&gate_open))
+        usleep(1000);
+    if (pthread_equal(pthread_self(), loop_thread))
+        atomic_store(&finish_on_loop, 1);
+    atomic_fetch_add(&threaded_finishes, 1);
+    gi_warn("finish %d warns", atomic_load(&threaded_finishes));
+    fake_state *st = job->state;
+    if (st->finish_calls++ == 0) {
+        gi_task_queue_add(fq, 3, 1.0);
+        return 0;
+    }
+    return gi_fail(err, GI_EIO, "no room for the outputs");
+}
+
+static const gi_method gated_method = {
+    .name = "fake", .plan = fake_plan, .merge = fake_merge, .finish = gated_finish,
+    .save = fake_save, .load = fake_load, .release = fake_release,
+};
+
+static char hooked[4][128];
+static int hooked_count;
+
+static void hook_keep(void *ctx, gi_log_level level, const char *msg)
+{
+    (void)ctx;
+    if (hooked_count < 4 && level == GI_LOG_WARN)
+        snprintf(hooked[hooked_count++], sizeof hooked[0], "%s", msg);
+}
+
+/* Leases and completes every task pending now. */
+static void complete_all_pending(gi_jobrun *jr)
+{
+    const gi_task *t;
+    uint64_t ids[256];
+    int n = 0;
+    while (n < 256 && (t = gi_jobrun_lease(jr)))
+        ids[n++] = t->id;
+    for (int i = 0; i < n; i++)
+        complete(jr, ids[i], 0);
+}
+
+/* Waits (up to 10 s) for the finish thread's wake-up on fd. */
+static int woken(int fd)
+{
+    struct pollfd p = {.fd = fd, .events = POLLIN};
+    if (poll(&p, 1, 10000) != 1)
+        return 0;
+    uint64_t count;
+    return read(fd, &count, sizeof count) == (ssize_t)sizeof count && count >= 1;
+}
+
+GI_TEST(test_jobrun_finishes_on_a_thread_and_takes_its_end_in)
+{
+    loop_thread = pthread_self();
+    int wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    GI_REQUIRE(wake >= 0);
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.method = &gated_method;
+    gi_jobrun jr;
+    memset(&jr, 0, sizeof jr);
+    gi_jobrun_finish_on_thread(&jr, wake);
+    gi_error err;
+    GI_REQUIRE(gi_jobrun_start(&jr, &job, &err) == 0);
+    GI_CHECK(jr.finish_threaded); /* start keeps it */
+    gi_log_hook_set(hook_keep, NULL);
+
+    complete_all_pending(&jr);
+    complete_all_pending(&jr); /* the merge's follow-ups */
+    /* Everything merged: the finish runs on its thread, behind the gate. */
+    GI_CHECK(jr.merge_next == jr.task_count);
+    GI_CHECK(gi_jobrun_finishing(&jr) && !gi_jobrun_done(&jr));
+    GI_CHECK(gi_jobrun_lease(&jr) == NULL);
+    complete(&jr, 0, 0); /* a late duplicate: ignored */
+    GI_CHECK(gi_jobrun_finishing(&jr) && !gi_jobrun_done(&jr));
+    gi_buf cp;
+    gi_buf_init(&cp);
+    GI_CHECK(gi_jobrun_checkpoint(&jr, &cp, &err) == -1); /* its state is the thread's */
+    gi_buf_free(&cp);
+    GI_CHECK(gi_jobrun_finish_poll(&jr, 0) == 1);
+    GI_CHECK(hooked_count == 0);
+
+    atomic_store(&gate_open, 1);
+    GI_CHECK(woken(wake));
+    GI_CHECK(gi_jobrun_finish_poll(&jr, 0) == 0);
+    GI_CHECK(!gi_jobrun_finishing(&jr) && !gi_jobrun_done(&jr));
+    /* Its warning reached this thread's hook; its follow-up is pending. */
+    GI_CHECK_MSG(hooked_count == 1 && strcmp(hooked[0], "finish 1 warns") == 0, "%d: %s",
+                 hooked_count, hooked[0]);
+    GI_CHECK(gi_jobrun_pending_count(&jr) == 1);
+
+    /* The second finish fails writing: the run fails with its error, and
+     * can be finished again (every task is merged). */
+    complete_all_pending(&jr);
+    GI_CHECK(gi_jobrun_finishing(&jr));
+    GI_CHECK(gi_jobrun_finish_poll(&jr, 1) == 0);
+    GI_CHECK(jr.failed && jr.error.code == GI_EIO);
+    GI_CHECK_MSG(strstr(jr.error.msg, "no room") != NULL, "%s", jr.error.msg);
+    GI_CHECK(hooked_count == 2);
+    GI_CHECK(jr.finish_seconds > 0);
+    GI_CHECK(!atomic_load(&finish_on_loop) && atomic_load(&threaded_finishes) == 2);
+
+    GI_CHECK(gi_jobrun_finish_poll(&jr, 1) == 0); /* nothing runs: nothing to take */
+    gi_log_hook_set(NULL, NULL);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    close(wake);
+}
+
+GI_TEST(test_jobrun_freed_while_it_finishes_waits_for_the_thread)
+{
+    loop_thread = pthread_self();
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.method = &gated_method;
+    gi_jobrun jr;
+    memset(&jr, 0, sizeof jr);
+    gi_jobrun_finish_on_thread(&jr, -1);
+    gi_error err;
+    GI_REQUIRE(gi_jobrun_start(&jr, &job, &err) == 0);
+    complete_all_pending(&jr);
+    complete_all_pending(&jr);
+    GI_REQUIRE(gi_jobrun_finishing(&jr));
+    atomic_store(&gate_open, 1); /* free joins the thread, which then ends */
+    gi_jobrun_free(&jr);
+    GI_CHECK(atomic_load(&threaded_finishes) == 1);
+    GI_CHECK(!jr.finish_threaded && !gi_jobrun_finishing(&jr));
+    gi_job_free(&job);
 }

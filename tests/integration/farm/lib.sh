@@ -112,6 +112,11 @@ jstate() {
     api "/api/v1/jobs/$1" | grep -o '"state":"[a-z]*"' | head -n 1 | cut -d'"' -f4
 }
 
+# unended ID: the job is running, or finishing (its outputs being written)
+unended() {
+    case $(jstate "$1") in running | finishing) return 0 ;; *) return 1 ;; esac
+}
+
 # wait_state ID STATE SECONDS
 wait_state() {
     n=0
@@ -216,7 +221,7 @@ wait_merged() {
         [ $n -lt 600 ] || fail "job $1 did not progress"
         sleep 0.05
     done
-    [ "$(jstate "$1")" = running ] || fail "job $1 ended too soon; make it longer"
+    unended "$1" || fail "job $1 ended too soon; make it longer"
 }
 
 # need_own_disk SIZE: root and a tmpfs in a mount namespace, or exits 77

@@ -1,0 +1,78 @@
+# A job's finish (writing its outputs) runs on a thread of gi-farmd's, not
+# on its loop; GI_FAULT_FINISH_DELAY holds each finish there 2 s here.
+# 1. Meanwhile the job shows as "finishing" (its view, `gi status`, the
+#    metrics), its outputs are not served yet, and the API answers; then it
+#    is done with the image `gi render` gives, and the loop's longest round
+#    is in the metrics.
+# 2. An output that cannot be written while the thread writes (a directory
+#    in the way): the job fails with its whole result in a checkpoint, and a
+#    retry once the way is clear writes the outputs without running a task.
+# 3. Cancelled while finishing: the job ends cancelled; a retry ends done,
+#    with the same image.
+# 4. gi-farmd stopped (SIGTERM) while a job finishes: it waits for the
+#    finish and journals the job done; restarted, it serves the outputs.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+cornell_job "$TMP/job.json" 7 64 48 64
+LOG="$TMP/farmd.log"
+OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_DELAY=2 -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+submit() {
+    "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log" || { cat "$TMP/submit.log"; fail "submit"; }
+}
+
+# 1. Finishing, then done.
+id=$(submit)
+wait_state "$id" finishing 120
+[ "$(metric gi_farm_jobs_finishing)" = 1 ] || { api /metrics; fail "no finishing job in the metrics"; }
+"$GI" status "$id" | grep -q "^job $id: .*, finishing, " || { "$GI" status "$id"; fail "gi status"; }
+code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
+[ "$code" = 409 ] || fail "an output of a finishing job was answered $code"
+[ "$(jnum "$id" merged)" = "$(jnum "$id" total)" ] || fail "finishing before every task merged"
+wait_state "$id" done 60
+"$GI" fetch "$id" --out "$TMP/o1" >/dev/null || fail "fetch 1"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/o1/img.exr" || fail "the image differs from gi render"
+[ "$(metric gi_farm_jobs_finishing)" = 0 ] || fail "still a finishing job in the metrics"
+stall=$(metric gi_farm_loop_stall_max_seconds)
+awk -v s="$stall" 'BEGIN {exit !(s > 0)}' || fail "no loop stall metric ($stall)"
+
+# 2. The output cannot be written while the thread writes it.
+id=$(submit)
+wait_state "$id" finishing 120
+mkdir -p "$TMP/state/jobs/$id/out/img.exr"
+wait_state "$id" failed 60
+api "/api/v1/jobs/$id" |
+    grep -q 'img.exr: rename.*the whole result is kept in checkpoint [0-9]*: a retry only writes' ||
+    { api "/api/v1/jobs/$id"; fail "no reason, or the result was not kept"; }
+[ "$(jckpt "$id" merged)" = "$(jnum "$id" total)" ] || fail "the checkpoint lacks part of the result"
+rmdir "$TMP/state/jobs/$id/out/img.exr"
+"$GI" retry "$id" --wait --out "$TMP/o2" --progress none >"$TMP/retry2.log" 2>&1 ||
+    { cat "$TMP/retry2.log"; fail "gi retry --wait"; }
+[ "$(jnum "$id" results_this_run)" = 0 ] || fail "the retry ran tasks again"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/o2/img.exr" || fail "the retried image differs"
+
+# 3. Cancelled while finishing.
+id=$(submit)
+wait_state "$id" finishing 120
+"$GI" cancel "$id" >/dev/null || fail "gi cancel of a finishing job"
+[ "$(jstate "$id")" = cancelled ] || fail "not cancelled: $(jstate "$id")"
+"$GI" retry "$id" --wait --out "$TMP/o3" --progress none >"$TMP/retry3.log" 2>&1 ||
+    { cat "$TMP/retry3.log"; fail "gi retry --wait of the cancelled job"; }
+cmp "$TMP/job.json.ref/img.exr" "$TMP/o3/img.exr" || fail "the image after cancel + retry differs"
+
+# 4. Stopped while finishing.
+id=$(submit)
+wait_state "$id" finishing 120
+stop_farmd "$LOG"
+grep -q " done: " "$TMP/state/jobs/$id/log" ||
+    { cat "$TMP/state/jobs/$id/log"; fail "the stop did not wait for the finish"; }
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" -- $OPTS $PORTS
+[ "$(jstate "$id")" = done ] || fail "job $id is $(jstate "$id") after the restart, not done"
+"$GI" fetch "$id" --out "$TMP/o4" >/dev/null || fail "fetch 4"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/o4/img.exr" || fail "the image after the stop differs"
+stop_farmd "$LOG"
