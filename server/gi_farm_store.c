@@ -321,7 +321,7 @@ int gi_farm_asset_bytes(gi_farm *f, const char *hash, gi_buf *out, gi_error *err
         /* A finishing job's data is its finish thread's (it may publish):
          * what its checkpoints need is in the store, and no task of it
          * runs any more. */
-        if (!j->loaded || !j->job.assets || gi_jobrun_finishing(&j->jr))
+        if (!j->loaded || gi_jobrun_finishing(&j->jr) || !j->job.assets)
             continue;
         const gi_buf *b = gi_asset_store_get(j->job.assets, hash);
         if (b) {
