@@ -9,7 +9,7 @@
  *   gi_farm_api.c    the HTTP API (libmicrohttpd), gi_farm_views.c its JSON
  * Everything runs on the loop's thread, but for writes handed to threads
  * of their own: checkpoints (gi_file_writer) and a job's finish, its
- * outputs (gi_jobrun_finish_on_thread), whose job the loop leaves alone
+ * outputs (gi_jobrun_opts.finish_threaded), whose job the loop leaves alone
  * meanwhile. */
 #ifndef GI_FARM_IMPL_H
 #define GI_FARM_IMPL_H
@@ -281,7 +281,7 @@ struct gi_farm {
 
     gi_farm_metrics m;
 
-    /* Written by a job's finish thread when it ends (gi_jobrun_finish_on_thread):
+    /* Written by a job's finish thread when it ends (gi_jobrun_opts):
      * an eventfd in the poll set, so that the loop takes the end in at once. */
     int finish_wake_fd;
     double finish_delay_s; /* GI_FAULT_FINISH_DELAY_ENV */

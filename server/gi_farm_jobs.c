@@ -12,7 +12,7 @@
  * checkpoint are not run again.
  *
  * A job's method->finish (writing its outputs: a second for a 4 Mpx EXR)
- * runs on a thread of its own (gi_jobrun_finish_on_thread); the job shows
+ * runs on a thread of its own (gi_jobrun_opts); the job shows
  * as "finishing" meanwhile, and the tick takes the finish's end in: DONE
  * only once it returned with its outputs in place, and then END is
  * journaled. No checkpoint is taken while it runs; a stopping coordinator
@@ -1070,9 +1070,14 @@ static int load_for_run(gi_farm *f, gi_farm_job *j, gi_error *err)
     size_t n = strlen(j->dir) + 8;
     j->job.out_dir = gi_xmalloc(n);
     snprintf(j->job.out_dir, n, "%s/out", j->dir);
-    gi_jobrun_finish_on_thread(&j->jr, f->finish_wake_fd);
-    j->jr.finish_delay_s = f->finish_delay_s;
     return 0;
+}
+
+/* Every run's finish goes to a thread of its own, waking the loop. */
+static gi_jobrun_opts run_opts(const gi_farm *f)
+{
+    return (gi_jobrun_opts){.finish_threaded = 1, .finish_wake_fd = f->finish_wake_fd,
+                            .finish_delay_s = f->finish_delay_s};
 }
 
 /* The job failed writing its outputs, its whole result in its checkpoint. */
@@ -1179,8 +1184,10 @@ static int restore(gi_farm *f, gi_farm_job *j, gi_error *err)
     gi_buf_init(&cp);
     int rc = gi_read_file(ck, (size_t)1 << 40, &cp, err);
     free(ck);
-    if (rc == 0)
-        rc = gi_jobrun_restore(&j->jr, &j->job, &cp, err);
+    if (rc == 0) {
+        gi_jobrun_opts opts = run_opts(f);
+        rc = gi_jobrun_restore_opts(&j->jr, &j->job, &cp, &opts, err);
+    }
     gi_buf_free(&cp);
     if (rc == 0) {
         char *ap = affinity_path(j);
@@ -1229,10 +1236,11 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why)
     gi_error err;
     gi_error_clear(&err);
     gi_farm_job_logging(j);
+    gi_jobrun_opts opts = run_opts(f);
     int resumed = load_for_run(f, j, &err) ? -1 : restore(f, j, &err);
     int rc = resumed < 0  ? -1
              : resumed ? (j->jr.failed ? -1 : 0)
-                       : gi_jobrun_start(&j->jr, &j->job, &err);
+                       : gi_jobrun_start_opts(&j->jr, &j->job, &opts, &err);
     gi_farm_job_logging(NULL);
     if (resumed < 0) {
         gi_farm_job_fail(f, j, &err);

@@ -125,27 +125,25 @@ static int job_fail(gi_jobrun *jr, const gi_error *e)
     return -1;
 }
 
-/* Clears the run for start or restore, keeping gi_jobrun_finish_on_thread. */
-static void run_init(gi_jobrun *jr, gi_job *job)
+/* Clears the run for start or restore. */
+static void run_init(gi_jobrun *jr, gi_job *job, const gi_jobrun_opts *opts)
 {
-    int threaded = jr->finish_threaded, wake_fd = jr->finish_wake_fd;
-    double delay_s = jr->finish_delay_s;
     memset(jr, 0, sizeof *jr);
-    jr->finish_threaded = threaded;
-    jr->finish_wake_fd = wake_fd;
-    jr->finish_delay_s = delay_s;
     jr->job = job;
-}
-
-void gi_jobrun_finish_on_thread(gi_jobrun *jr, int wake_fd)
-{
-    jr->finish_threaded = 1;
-    jr->finish_wake_fd = wake_fd;
+    jr->opts.finish_wake_fd = -1;
+    if (opts)
+        jr->opts = *opts;
 }
 
 int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err)
 {
-    run_init(jr, job);
+    return gi_jobrun_start_opts(jr, job, NULL, err);
+}
+
+int gi_jobrun_start_opts(gi_jobrun *jr, gi_job *job, const gi_jobrun_opts *opts,
+                         gi_error *err)
+{
+    run_init(jr, job, opts);
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
     jr->max_losses = DEFAULT_MAX_LOSSES;
     gi_task_queue q;
@@ -281,7 +279,7 @@ static int advance(gi_jobrun *jr)
         drop_merged(jr);
         if (jr->merge_next < jr->task_count)
             return 0;
-        if (jr->finish_threaded) {
+        if (jr->opts.finish_threaded) {
             finisher_start(jr);
             return 0;
         }
@@ -296,7 +294,7 @@ static int advance(gi_jobrun *jr)
     }
 }
 
-/* ---- finishing on a thread (gi_jobrun_finish_on_thread) ---------------- */
+/* ---- finishing on a thread (gi_jobrun_opts.finish_threaded) ------------ */
 
 static void finisher_free(gi_jobrun_finisher *fz)
 {
@@ -334,11 +332,11 @@ static void finisher_start(gi_jobrun *jr)
 {
     gi_jobrun_finisher *fz = gi_xcalloc(1, sizeof *fz);
     fz->job = jr->job;
-    fz->delay_s = jr->finish_delay_s;
+    fz->delay_s = jr->opts.finish_delay_s;
     gi_task_queue_init(&fz->q, jr->task_count);
     gi_error_clear(&fz->err);
     jr->finisher = fz;
-    fz->call = gi_thread_call_start(finisher_main, fz, jr->finish_wake_fd);
+    fz->call = gi_thread_call_start(finisher_main, fz, jr->opts.finish_wake_fd);
 }
 
 int gi_jobrun_finish_poll(gi_jobrun *jr, int wait)
@@ -587,7 +585,13 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)
 
 int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err)
 {
-    run_init(jr, job);
+    return gi_jobrun_restore_opts(jr, job, in, NULL, err);
+}
+
+int gi_jobrun_restore_opts(gi_jobrun *jr, gi_job *job, const gi_buf *in,
+                           const gi_jobrun_opts *opts, gi_error *err)
+{
+    run_init(jr, job, opts);
     jr->max_attempts = DEFAULT_MAX_ATTEMPTS;
     jr->max_losses = DEFAULT_MAX_LOSSES;
     if (!job->method->load)

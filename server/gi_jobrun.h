@@ -33,6 +33,22 @@ typedef struct gi_jobrun_task {
 
 typedef struct gi_jobrun_finisher gi_jobrun_finisher;
 
+/* How a run finishes (gi_jobrun_start_opts, gi_jobrun_restore_opts).
+ * finish_threaded: method->finish runs on a thread of its own (gi-farmd's:
+ * writing a 4 Mpx EXR takes a second its loop must not wait): when the last
+ * task is merged, the run is "finishing" (gi_jobrun_finishing) until
+ * gi_jobrun_finish_poll takes the finish's end in. Meanwhile the method's
+ * state and job (its outputs, its published data) are the thread's: nothing
+ * may read them, nor checkpoint the run. The thread writes 8 bytes to
+ * finish_wake_fd (>= 0: an eventfd) when it ends. finish_delay_s: a test
+ * hook (gi-farmd's GI_FAULT_FINISH_DELAY): the thread sleeps this long
+ * before finish, so that tests can act meanwhile. */
+typedef struct gi_jobrun_opts {
+    int finish_threaded;
+    int finish_wake_fd;
+    double finish_delay_s;
+} gi_jobrun_opts;
+
 typedef struct gi_jobrun {
     gi_job *job;
     /* The tasks with ids [task_base, task_count), task id at
@@ -61,26 +77,10 @@ typedef struct gi_jobrun {
      * method->finish, for throughput figures. */
     double merge_seconds, finish_seconds;
     uint64_t merged_bytes;
-    /* gi_jobrun_finish_on_thread: method->finish runs on a thread of its
-     * own, and finisher is that finish while it runs. */
-    int finish_threaded, finish_wake_fd;
-    gi_jobrun_finisher *finisher;
-    /* Test hook (gi-farmd's GI_FAULT_FINISH_DELAY): the finish's thread
-     * sleeps this long before finish, so that tests can act meanwhile. */
-    double finish_delay_s;
+    gi_jobrun_opts opts;
+    gi_jobrun_finisher *finisher; /* the finish on its thread, while it runs */
 } gi_jobrun;
 
-/* From now on, method->finish runs on a thread of its own (gi-farmd's:
- * writing a 4 Mpx EXR takes a second the loop must not wait): when the last
- * task is merged, the run is "finishing" (gi_jobrun_finishing) until
- * gi_jobrun_finish_poll takes the finish's end in. Meanwhile the method's
- * state and job (its outputs, its published data) are the thread's: nothing
- * may read them, nor checkpoint the run. The thread writes 8 bytes to
- * wake_fd (>= 0: an eventfd) when it ends. Set before gi_jobrun_start or
- * gi_jobrun_restore, which keep it (a restored run whose tasks were all
- * merged finishes on the thread too), as they keep finish_delay_s;
- * gi_jobrun_free forgets them. */
-void gi_jobrun_finish_on_thread(gi_jobrun *jr, int wake_fd);
 static inline int gi_jobrun_finishing(const gi_jobrun *jr) { return jr->finisher != NULL; }
 /* Takes in the end of the finish running on its thread, waiting for it if
  * wait: merging goes on, and the run may be finished or failed now
@@ -89,8 +89,11 @@ static inline int gi_jobrun_finishing(const gi_jobrun *jr) { return jr->finisher
  * here. Returns 1 while the finish still runs (wait = 0), else 0. */
 int gi_jobrun_finish_poll(gi_jobrun *jr, int wait);
 
-/* Plans the job (method->plan). */
+/* Plans the job (method->plan); finishes in place. */
 int gi_jobrun_start(gi_jobrun *jr, gi_job *job, gi_error *err);
+/* The same, finishing as opts say (NULL: in place). */
+int gi_jobrun_start_opts(gi_jobrun *jr, gi_job *job, const gi_jobrun_opts *opts,
+                         gi_error *err);
 /* Waits for a finish running on its thread first. */
 void gi_jobrun_free(gi_jobrun *jr);
 
@@ -170,6 +173,10 @@ int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
  * assets) from a checkpoint, in place of gi_jobrun_start. A checkpoint of
  * another job (another identity, version 5 on) is refused. */
 int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *err);
+/* The same, finishing as opts say (NULL: in place): a run whose tasks were
+ * all merged starts its finish on its thread before this returns. */
+int gi_jobrun_restore_opts(gi_jobrun *jr, gi_job *job, const gi_buf *in,
+                           const gi_jobrun_opts *opts, gi_error *err);
 /* Seconds between periodic checkpoints: every_s, or 20 times as long as the
  * last one took (serialized by the loop, then written by a thread) if that
  * was a quarter second or more. A big image's sums on a slow disk thus take

@@ -938,7 +938,7 @@ GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
     GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 5.0) == 100.0);
 }
 
-/* ---- finish on a thread (gi_jobrun_finish_on_thread, gi-farmd's) ---------- */
+/* ---- finish on a thread (gi_jobrun_opts.finish_threaded, gi-farmd's) ----- */
 
 static atomic_int gate_open;        /* the threaded finish waits for it */
 static pthread_t loop_thread;       /* the test's own: finish must not run there */
@@ -1009,11 +1009,9 @@ GI_TEST(test_jobrun_finishes_on_a_thread_and_takes_its_end_in)
     memset(&job, 0, sizeof job);
     job.method = &gated_method;
     gi_jobrun jr;
-    memset(&jr, 0, sizeof jr);
-    gi_jobrun_finish_on_thread(&jr, wake);
+    gi_jobrun_opts opts = {.finish_threaded = 1, .finish_wake_fd = wake};
     gi_error err;
-    GI_REQUIRE(gi_jobrun_start(&jr, &job, &err) == 0);
-    GI_CHECK(jr.finish_threaded); /* start keeps it */
+    GI_REQUIRE(gi_jobrun_start_opts(&jr, &job, &opts, &err) == 0);
     gi_log_hook_set(hook_keep, NULL);
 
     complete_all_pending(&jr);
@@ -1045,6 +1043,7 @@ GI_TEST(test_jobrun_finishes_on_a_thread_and_takes_its_end_in)
     complete_all_pending(&jr);
     GI_CHECK(gi_jobrun_finishing(&jr));
     GI_CHECK(gi_jobrun_finish_poll(&jr, 1) == 0);
+    GI_CHECK(woken(wake)); /* written before the thread ended */
     GI_CHECK(jr.failed && jr.error.code == GI_EIO);
     GI_CHECK_MSG(strstr(jr.error.msg, "no room") != NULL, "%s", jr.error.msg);
     GI_CHECK(hooked_count == 2);
@@ -1053,8 +1052,31 @@ GI_TEST(test_jobrun_finishes_on_a_thread_and_takes_its_end_in)
 
     GI_CHECK(gi_jobrun_finish_poll(&jr, 1) == 0); /* nothing runs: nothing to take */
     gi_log_hook_set(NULL, NULL);
+
+    /* Its checkpoint (every task merged: what gi-farmd keeps when outputs
+     * fail) restored with the same options finishes on the thread again,
+     * before the restore returns; restored in place, it finishes there. */
+    gi_buf kept;
+    gi_buf_init(&kept);
+    GI_REQUIRE(gi_jobrun_checkpoint(&jr, &kept, &err) == 0);
     gi_jobrun_free(&jr);
     gi_job_free(&job);
+    for (int threaded = 1; threaded >= 0; threaded--) {
+        memset(&job, 0, sizeof job);
+        job.method = &gated_method;
+        int rc = gi_jobrun_restore_opts(&jr, &job, &kept, threaded ? &opts : NULL, &err);
+        GI_CHECK(rc == (threaded ? 0 : -1));
+        GI_CHECK(gi_jobrun_finishing(&jr) == threaded);
+        if (threaded) {
+            GI_CHECK(woken(wake));
+            GI_CHECK(gi_jobrun_finish_poll(&jr, 0) == 0);
+        }
+        GI_CHECK(jr.failed && jr.error.code == GI_EIO);
+        gi_jobrun_free(&jr);
+        gi_job_free(&job);
+    }
+    GI_CHECK(atomic_load(&finish_on_loop) == 1); /* the one restored in place */
+    gi_buf_free(&kept);
     close(wake);
 }
 
@@ -1065,16 +1087,15 @@ GI_TEST(test_jobrun_freed_while_it_finishes_waits_for_the_thread)
     memset(&job, 0, sizeof job);
     job.method = &gated_method;
     gi_jobrun jr;
-    memset(&jr, 0, sizeof jr);
-    gi_jobrun_finish_on_thread(&jr, -1);
+    gi_jobrun_opts opts = {.finish_threaded = 1, .finish_wake_fd = -1};
     gi_error err;
-    GI_REQUIRE(gi_jobrun_start(&jr, &job, &err) == 0);
+    GI_REQUIRE(gi_jobrun_start_opts(&jr, &job, &opts, &err) == 0);
     complete_all_pending(&jr);
     complete_all_pending(&jr);
     GI_REQUIRE(gi_jobrun_finishing(&jr));
     atomic_store(&gate_open, 1); /* free joins the thread, which then ends */
     gi_jobrun_free(&jr);
     GI_CHECK(atomic_load(&threaded_finishes) == 1);
-    GI_CHECK(!jr.finish_threaded && !gi_jobrun_finishing(&jr));
+    GI_CHECK(!gi_jobrun_finishing(&jr));
     gi_job_free(&job);
 }
