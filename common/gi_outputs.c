@@ -1,17 +1,16 @@
 /* gi_outputs: image and JSON outputs of a job (gi_outputs.h). */
 #include "gi_outputs.h"
 
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gi_fs.h"
+#include "gi_thread_call.h"
 
 /* A frame's image outputs: their paths (as the job names them when the
  * write starts), the image, and how the write went. */
 struct gi_image_writer {
-    pthread_t thread;
-    int running;           /* a thread was started and not yet joined */
+    gi_thread_call *call;  /* the write on its thread, until joined */
     gi_image owned;        /* the image, when the writer took it */
     const gi_image *img;   /* what is written: &owned, or the caller's */
     char *exr, *png;       /* paths, or NULL */
@@ -42,11 +41,7 @@ static void write_all(gi_image_writer *w)
         w->rc = gi_png_write(w->png, w->img, w->exposure, &w->err);
 }
 
-static void *writer_main(void *arg)
-{
-    write_all(arg);
-    return NULL;
-}
+static void writer_main(void *arg) { write_all(arg); }
 
 int gi_write_image_outputs(gi_job *job, const gi_image *img, gi_error *err)
 {
@@ -61,9 +56,7 @@ gi_image_writer *gi_image_writer_start(gi_job *job, gi_image *img)
     w->owned = *img;
     w->img = &w->owned;
     memset(img, 0, sizeof *img);
-    w->running = pthread_create(&w->thread, NULL, writer_main, w) == 0;
-    if (!w->running)
-        write_all(w); /* no thread: write here */
+    w->call = gi_thread_call_start(writer_main, w, -1); /* no thread: written here */
     return w;
 }
 
@@ -71,10 +64,8 @@ int gi_image_writer_wait(gi_image_writer *w)
 {
     if (!w)
         return 0;
-    if (w->running) {
-        pthread_join(w->thread, NULL);
-        w->running = 0;
-    }
+    gi_thread_call_join(w->call);
+    w->call = NULL;
     return w->rc;
 }
 
