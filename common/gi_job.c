@@ -52,8 +52,9 @@ static int parse_outputs(gi_jv *v, gi_job *job, const cJSON *outs)
             const char *kind = m->default_outputs[i];
             int report = strcmp(kind, "report") == 0 || strcmp(kind, "json") == 0;
             char file[300];
-            snprintf(file, sizeof file, "%s%s", job->name, report ? "-report.json" : "");
-            if (!report)
+            if (report)
+                snprintf(file, sizeof file, "%s-report.json", job->name);
+            else
                 snprintf(file, sizeof file, "%s.%s", job->name, kind);
             job->outputs[job->output_count].kind = gi_xstrdup(m->default_outputs[i]);
             job->outputs[job->output_count].file = gi_xstrdup(file);
