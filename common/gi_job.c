@@ -119,8 +119,9 @@ int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi
                               "parameters for method \"%s\", but the job's method is \"%s\"",
                               other->name, job->method->name);
     }
-    const char *keys[] = {"name",   "description", "scene",   "method", "seed",
-                          "image",  "camera",      "outputs", job->method->name, NULL};
+    const char *keys[] = {"name",   "description", "scene",   "method",          "seed",
+                          "image",  "camera",      "outputs", "task_timeout", job->method->name,
+                          NULL};
     if (gi_jv_keys(&v, root, "", keys))
         return -1;
 
@@ -131,6 +132,8 @@ int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi
         gi_jv_string(&v, root, "", "description", 0, &desc) ||
         gi_jv_string(&v, root, "", "scene", 1, &scene) ||
         gi_jv_int(&v, root, "", "seed", 0, 0, ((int64_t)1 << 53) - 1, &seed) ||
+        gi_jv_number(&v, root, "", "task_timeout", 0, GI_JOB_MIN_TASK_TIMEOUT,
+                     GI_JOB_MAX_TASK_TIMEOUT, &job->task_timeout) ||
         gi_jv_member_object(&v, root, "", "image", 0, &image) ||
         gi_jv_member_object(&v, root, "", "camera", 0, &camera) ||
         gi_jv_member_object(&v, root, "", "outputs", 0, &outputs) ||

@@ -21,6 +21,9 @@
  * coordinator holds each until it is merged. Methods refuse parameters
  * that would plan more (gi_job_check_tasks) rather than run out of memory. */
 #define GI_JOB_MAX_TASKS (1u << 20)
+/* The range of a task_timeout (seconds), the job's and the coordinators'. */
+#define GI_JOB_MIN_TASK_TIMEOUT 1.0
+#define GI_JOB_MAX_TASK_TIMEOUT 1e6
 
 typedef struct gi_output_spec {
     char *kind; /* "exr", "png", "ply", ... */
@@ -35,6 +38,9 @@ struct gi_job {
     char *scene_name; /* asset name of the scene, relative to the job */
     const gi_method *method;
     uint64_t seed;
+    /* Seconds a task may run before it is stopped and its run failed
+     * (0: no limit of its own; the coordinator's default applies). */
+    double task_timeout;
     int width, height;
     double exposure; /* PNG preview, in stops */
     int has_camera;  /* job overrides the scene's camera */

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Line and column (from 1) of text[off]. */
@@ -189,6 +190,19 @@ int gi_jv_keys(gi_jv *v, const cJSON *obj, const char *path, const char *const *
 }
 
 
+/* d with as few digits as give it back (%g alone rounds to 6: 1000001
+ * would read "1e+06", inside a range it is said to be out of). */
+static const char *fmt_number(char buf[32], double d)
+{
+    for (int digits = 6; digits < 17; digits++) {
+        snprintf(buf, 32, "%.*g", digits, d);
+        if (strtod(buf, NULL) == d)
+            return buf;
+    }
+    snprintf(buf, 32, "%.17g", d);
+    return buf;
+}
+
 int gi_jv_value_number(gi_jv *v, const cJSON *item, const char *path, double lo,
                        double hi, double *out)
 {
@@ -197,8 +211,9 @@ int gi_jv_value_number(gi_jv *v, const cJSON *item, const char *path, double lo,
     double d = item->valuedouble;
     if (!isfinite(d))
         return gi_jv_fail(v, path, "number is not finite");
+    char num[32];
     if (d < lo || d > hi)
-        return gi_jv_fail(v, path, "%g is out of range [%g, %g]", d, lo, hi);
+        return gi_jv_fail(v, path, "%s is out of range [%g, %g]", fmt_number(num, d), lo, hi);
     *out = d;
     return 0;
 }
