@@ -54,7 +54,7 @@ static double render(const char *name, int size, const char *method, const char 
         exit(1);
     }
     job.out_dir = gi_xstrdup(out_dir);
-    gi_local_opts opts = {2, GI_PROGRESS_NONE, -1.0, 0}; /* no checkpoint files */
+    gi_local_opts opts = {2, GI_PROGRESS_NONE, -1.0, 0, 0.0}; /* no checkpoint files */
     gi_local_summary sum;
     double t0 = gi_bench_now();
     int rc = gi_render_local(&job, &opts, &sum, &err);

@@ -452,6 +452,18 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
     return 0;
 }
 
+double gi_jobrun_task_timeout(const gi_jobrun *jr, double default_s)
+{
+    return jr->job && jr->job->task_timeout > 0 ? jr->job->task_timeout : default_s;
+}
+
+void gi_jobrun_timeout_error(gi_error *e, uint64_t task_id, double limit_s, const char *where)
+{
+    /* GI_ECRASH: retried like a crashed run, never taken for bad input. */
+    gi_fail(e, GI_ECRASH, "task %llu ran longer than its task_timeout of %g s on %s: stopped",
+            (unsigned long long)task_id, limit_s, where);
+}
+
 /* Adds host to the task's list of hosts it was lost with, once. */
 static void note_lost_on(gi_jobrun_task *jt, const char *host)
 {

@@ -128,6 +128,15 @@ int gi_jobrun_fail(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const gi_e
  * the hosts (host: the lost one's name, for that message). */
 int gi_jobrun_lost(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const char *host,
                    const gi_error *why);
+/* Task time limits. A task whose run lasts longer than its job's
+ * task_timeout (or default_s, the coordinator's, when the job sets none;
+ * 0: no limit) is stopped by its coordinator, which fails the run with
+ * gi_jobrun_timeout_error: a hang is the task's doing, like a crash, so the
+ * run counts as an attempt (gi_jobrun_fail). */
+double gi_jobrun_task_timeout(const gi_jobrun *jr, double default_s);
+/* The error of a run of task_id stopped after limit_s seconds on `where`
+ * ("worker NAME", or the pool child). */
+void gi_jobrun_timeout_error(gi_error *e, uint64_t task_id, double limit_s, const char *where);
 /* A lease given back without running (worker shutting down). */
 void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id);
 

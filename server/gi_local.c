@@ -10,6 +10,11 @@
  * untouched for GI_BATCH_DIR_MAX_AGE_S (gi_batch_root.h). Affinity keys are
  * ignored here: one host, one disk.
  *
+ * Task time limits (the job's task_timeout, else --task-timeout): a pool
+ * child whose task ran longer is killed and replaced, and the run fails as
+ * an attempt (stop_overdue). The clock starts when the task is sent to the
+ * child, which starts it at once (a child holds one task at a time).
+ *
  * Checkpoints (gi_local_checkpoint.h) are written every few seconds (on a
  * thread of their own: the loop only encodes them) and when the render is
  * stopped, so that `gi render --resume` continues it.
@@ -78,6 +83,31 @@ static void on_crash(void *user, int child, uint64_t job_id, uint64_t task_id,
     gi_error e;
     gi_fail(&e, GI_ECRASH, "%s", why);
     gi_jobrun_fail(&lr->jr, task_id, attempt, &e);
+}
+
+/* Kills the children whose task ran longer than limit_s (gi_jobrun.h:
+ * task time limits) and fails those runs; their replacements are forked
+ * here, outside the respawn budget, which bounds crashes: each timeout is
+ * an attempt of its task, bounded by max_attempts. */
+static int stop_overdue(local_run *lr, double limit_s, double now, gi_error *err)
+{
+    for (int i = 0; i < lr->pool.count; i++) {
+        const gi_pool_child *k = &lr->pool.kids[i];
+        if (!k->pid || !k->busy || now - k->started < limit_s)
+            continue;
+        uint64_t task = k->task_id;
+        uint32_t attempt = k->attempt;
+        char where[64];
+        snprintf(where, sizeof where, "pool child %d (pid %ld)", i, (long)k->pid);
+        gi_pool_kill(&lr->pool, i);
+        gi_error e;
+        gi_jobrun_timeout_error(&e, task, limit_s, where);
+        gi_warn("%s", e.msg);
+        gi_jobrun_fail(&lr->jr, task, attempt, &e);
+        if (gi_pool_spawn(&lr->pool, i, err))
+            return -1;
+    }
+    return 0;
 }
 
 static const gi_buf *on_asset(void *user, const char *hash)
@@ -356,6 +386,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
     gi_progress prog;
     gi_progress_init(&prog, opts->progress, stderr, job->name, job->method->unit);
     gi_pool_events ev = {&lr, on_result, on_fail, on_crash, on_asset, NULL};
+    double limit_s = gi_jobrun_task_timeout(&lr.jr, opts->task_timeout_s);
     int rc = 0;
     double last_ckpt = gi_now(), last_touch = last_ckpt;
     uint64_t ckpt_merged = lr.jr.merge_next;
@@ -392,6 +423,10 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
         }
         gi_pool_poll(&lr.pool, 200, &ev);
         double now = gi_now();
+        if (limit_s > 0 && stop_overdue(&lr, limit_s, now, err)) {
+            rc = -1;
+            break;
+        }
         int writer_idle = periodic_finish(&lr, 0); /* first: it adds the write's time */
         double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, lr.ckpt_cost);
         if (writer_idle && checkpoints && opts->checkpoint_s > 0 &&

@@ -17,6 +17,10 @@ typedef struct gi_local_opts {
      * checkpoint file at all (not read, written or removed). */
     double checkpoint_s;
     int resume;
+    /* Seconds a task may run in a pool child before the child is killed and
+     * the run failed (an attempt), for a job that sets no task_timeout of
+     * its own; 0: no limit. */
+    double task_timeout_s;
 } gi_local_opts;
 
 typedef struct gi_local_summary {

@@ -1,7 +1,7 @@
 /* gi: the command line.
  *
  *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE] [--checkpoint S]
- *             [--resume]
+ *             [--resume] [--task-timeout S]
  *   gi validate JOB.json
  *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] ...
  *   gi methods
@@ -30,7 +30,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
-            "                          [--checkpoint S] [--resume]\n"
+            "                          [--checkpoint S] [--resume] [--task-timeout S]\n"
             "       gi validate JOB.json | SCENE\n"
             "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images]\n"
             "                 [--workers N] [--threads N]\n"
@@ -44,6 +44,8 @@ static void usage(FILE *out)
             "          A checkpoint, DIR/.NAME.checkpoint, is written when the render is\n"
             "          stopped and every S seconds (30; 0: only then); --resume continues it\n"
             "          (an animation's photon batches are kept under $TMPDIR for it)\n"
+            "          --task-timeout S: a task running longer than S seconds is stopped and\n"
+            "          retried, as a crash is (default 0: none); a job's task_timeout wins\n"
             "validate  checks a job and its scene without rendering (or a scene alone: a scene\n"
             "          JSON, OBJ, PLY or glTF file)\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
@@ -114,14 +116,15 @@ static void json_output(void *ctx, const char *kind, const char *path)
 static int cmd_render(int argc, char **argv)
 {
     const char *job_path = NULL, *out_dir = "out", *progress = "auto", *workers_s = NULL;
-    const char *checkpoint_s = NULL;
+    const char *checkpoint_s = NULL, *timeout_s = NULL;
     int resume = 0;
     for (int i = 2; i < argc; i++) {
         const char *v;
         if (arg_value(argc, argv, &i, "--workers", &workers_s) ||
             arg_value(argc, argv, &i, "--out", &out_dir) ||
             arg_value(argc, argv, &i, "--progress", &progress) ||
-            arg_value(argc, argv, &i, "--checkpoint", &checkpoint_s))
+            arg_value(argc, argv, &i, "--checkpoint", &checkpoint_s) ||
+            arg_value(argc, argv, &i, "--task-timeout", &timeout_s))
             continue;
         if (strcmp(argv[i], "--resume") == 0) {
             resume = 1;
@@ -142,7 +145,7 @@ static int cmd_render(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    gi_local_opts opts = {0, GI_PROGRESS_AUTO, 30.0, resume};
+    gi_local_opts opts = {0, GI_PROGRESS_AUTO, 30.0, resume, 0.0};
     if (checkpoint_s) {
         char *end;
         double v = strtod(checkpoint_s, &end);
@@ -152,6 +155,13 @@ static int cmd_render(int argc, char **argv)
             return 2;
         }
         opts.checkpoint_s = v;
+    }
+    double *limit = &opts.task_timeout_s;
+    if (timeout_s && (gi_args_number(timeout_s, 0, GI_JOB_MAX_TASK_TIMEOUT, limit) ||
+                      (*limit > 0 && *limit < GI_JOB_MIN_TASK_TIMEOUT))) {
+        fprintf(stderr, "gi render: --task-timeout must be 0 (no limit) or seconds in [%g, %g], "
+                "got \"%s\"\n", GI_JOB_MIN_TASK_TIMEOUT, GI_JOB_MAX_TASK_TIMEOUT, timeout_s);
+        return 2;
     }
     if (workers_s) {
         char *end;

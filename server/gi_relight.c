@@ -162,7 +162,7 @@ static int relight(const relight_args *a, gi_error *err)
         p->relight_factor = &f;
         p->relight_emissions = &em;
         /* No checkpoint: relighting is fast, and its state lives in memory. */
-        gi_local_opts opts = {a->workers, a->progress, -1.0, 0};
+        gi_local_opts opts = {a->workers, a->progress, -1.0, 0, 0.0};
         job.out_dir = gi_xstrdup(a->out);
         gi_local_summary sum;
         double t1 = now_ms();

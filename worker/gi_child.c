@@ -187,6 +187,12 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
                 (unsigned long long)m.task.id, (long)getppid());
         kill(getppid(), SIGSTOP);
     }
+    if (rc == 0 && fault_requested(GI_FAULT_HANG_ENV, m.task.id, m.task.attempt)) {
+        gi_warn("fault injection: task %llu hangs this child (pid %ld)",
+                (unsigned long long)m.task.id, (long)getpid());
+        for (;;)
+            pause();
+    }
     if (rc == 0)
         rc = gi_worker_run_task(&c->ctx, &m.task, &result, &terr);
     if (rc == 0 && fault_requested(GI_FAULT_CRASH_ENV, m.task.id, m.task.attempt)) {

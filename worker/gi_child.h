@@ -30,5 +30,9 @@ int gi_child_main(int fd, const char *batch_root);
 /* GI_FAULT_STOP_HOST_TASK, likewise, makes it SIGSTOP its parent, then run
  * the task: a host gone silent (its leases expire) until SIGCONT. */
 #define GI_FAULT_STOP_HOST_ENV "GI_FAULT_STOP_HOST_TASK"
+/* GI_FAULT_HANG_TASK, likewise, makes the child that gets task ID on that
+ * attempt hang (sleep until killed) instead of running it: a task that
+ * never ends, for task time limits (task_timeout). */
+#define GI_FAULT_HANG_ENV "GI_FAULT_HANG_TASK"
 
 #endif

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "gi_child.h"
+#include "gi_clock.h"
 #include "gi_log.h"
 #include "gi_netio.h"
 
@@ -205,6 +206,7 @@ int gi_pool_assign(gi_pool *p, int i, uint64_t job_id, const char *job_file,
     k->job_id = job_id;
     k->task_id = task->id;
     k->attempt = task->attempt;
+    k->started = gi_now();
     return rc;
 }
 

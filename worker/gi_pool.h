@@ -25,6 +25,7 @@ typedef struct gi_pool_child {
     int busy;
     uint64_t job_id, task_id;
     uint32_t attempt;
+    double started; /* monotonic (gi_now): when its task was sent (task time limits) */
     uint64_t jobs_sent[8]; /* recent jobs whose JOB this child has */
     int jobs_sent_count;
     /* The process whose descriptor the last gi_pool_pollfds listed: a child

@@ -1099,3 +1099,34 @@ GI_TEST(test_jobrun_freed_while_it_finishes_waits_for_the_thread)
     GI_CHECK(!gi_jobrun_finishing(&jr));
     gi_job_free(&job);
 }
+
+/* Task time limits: the job's own task_timeout wins over the coordinator's
+ * default; a run stopped for its limit is an attempt of the task (retried,
+ * then the job fails saying why), never taken for bad input. */
+GI_TEST(test_jobrun_timeouts_are_attempts)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    GI_CHECK(gi_jobrun_task_timeout(&jr, 0) == 0);
+    GI_CHECK(gi_jobrun_task_timeout(&jr, 30) == 30);
+    job.task_timeout = 2;
+    GI_CHECK(gi_jobrun_task_timeout(&jr, 30) == 2);
+    GI_CHECK(gi_jobrun_task_timeout(&jr, 0) == 2);
+    for (uint32_t attempt = 0; attempt < jr.max_attempts; attempt++) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t && t->id == 0 && t->attempt == attempt);
+        gi_error e;
+        gi_jobrun_timeout_error(&e, t->id, 2, "worker w1");
+        GI_CHECK(e.code != GI_EINVAL && e.code != GI_EHOST);
+        gi_jobrun_fail(&jr, 0, attempt, &e);
+        GI_CHECK(jr.failed == (attempt + 1 == jr.max_attempts));
+    }
+    GI_CHECK(jr.retries == jr.max_attempts - 1);
+    GI_CHECK_MSG(strstr(jr.error.msg, "task 0 failed 4 times; last error: task 0 ran longer than "
+                                      "its task_timeout of 2 s on worker w1: stopped") != NULL,
+                 "%s", jr.error.msg);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
