@@ -605,6 +605,9 @@ static int cmd_status(client *c, uint64_t id)
     printf("  tasks: %.0f total, %.0f merged, %.0f leased, %.0f pending, %.0f retries",
            num(t, "total", 0), num(t, "merged", 0), num(t, "leased", 0), num(t, "pending", 0),
            num(t, "retries", 0));
+    if (num(t, "timeouts", 0) > 0)
+        printf(" (%.0f run%s stopped for the task_timeout)", num(t, "timeouts", 0),
+               num(t, "timeouts", 0) == 1 ? "" : "s");
     if (num(t, "losses", 0) > 0)
         printf(", %.0f lost with their host (requeued, not counted)", num(t, "losses", 0));
     if (num(t, "resumed_merged", 0) > 0)

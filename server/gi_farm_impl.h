@@ -114,6 +114,7 @@ struct gi_farm_job {
     uint64_t resumed_merged; /* tasks merged before a restart (from a checkpoint) */
     uint64_t results_accepted, results_late, leases, lease_expiries;
     uint64_t host_disk_errors; /* tasks a host's full disk sent elsewhere */
+    uint64_t task_timeouts;    /* runs stopped for their time limit (gi_farm_sched.c) */
     double merge_s, finish_s; /* coordinator time in method merge / finish */
     uint64_t result_bytes;    /* result data accepted */
     uint64_t merged_bytes;    /* result data merged (in task order) */
@@ -170,6 +171,7 @@ typedef struct gi_farm_lease {
     uint32_t attempt;
     double deadline; /* monotonic */
     double est_s;    /* worker-seconds charged to the job's pass when leased */
+    double leased;   /* monotonic: when it was sent (task time limits count from it) */
 } gi_farm_lease;
 
 /* A worker by name: what outlives its connections (blocklisting). */
@@ -219,6 +221,7 @@ typedef struct gi_farm_metrics {
     uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
     uint64_t requeued;
     uint64_t tasks_lost; /* runs lost with their host: requeued, not counted as attempts */
+    uint64_t task_timeouts; /* runs stopped for their time limit: failed (attempts) */
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;

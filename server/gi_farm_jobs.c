@@ -485,7 +485,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     memset(&j->final_progress, 0, sizeof j->final_progress);
     j->resumed_merged = j->results_accepted = j->results_late = 0;
     j->leases = j->lease_expiries = j->result_bytes = j->merged_bytes = 0;
-    j->host_disk_errors = 0;
+    j->host_disk_errors = j->task_timeouts = 0;
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
     j->disk_measured = 0;

@@ -21,6 +21,19 @@
  * a wide margin. A pool child's crash is a FAIL the worker reports: the
  * task's fault, counted as an attempt.
  *
+ * Time limits. A lease held longer than its task's time limit (the job's
+ * task_timeout, else --task-timeout; none by default) ends too: the
+ * coordinator CANCELs the task on its worker, which kills the pool child
+ * running it, and fails the run (gi_jobrun_timeout_error): a task that
+ * hangs on its input hangs anywhere, so this is the task's fault, an
+ * attempt, not a loss. It is not counted against the host (host_failure):
+ * a pathological task would otherwise blocklist every host it visits,
+ * long after the fact; the run's next attempt goes to another host if one
+ * can take it (leave_host), which is what a slow host needs. The limit
+ * counts from the lease, not from the run's start, which workers do not
+ * report: a task queued on its worker (--queue) waits on the clock, so a
+ * limit should leave room for a queued task's wait (about one task time).
+ *
  * A RESULT or FAIL for a task the connection no longer holds is late: it is
  * counted and discarded, never merged, so a task's result is merged exactly
  * once (gi_jobrun also refuses stale attempts, and a lost run's attempt
@@ -374,7 +387,8 @@ void gi_farm_schedule(gi_farm *f)
             if (!t)
                 continue;
             affinity_own(j, t->affinity, c->host, "its owner cannot take work");
-            gi_farm_lease l = {j->id, t->id, t->attempt, now + f->cfg.lease_s, j->est_task_s};
+            gi_farm_lease l = {j->id,           t->id, t->attempt, now + f->cfg.lease_s,
+                               j->est_task_s, now};
             lease_add(c, &l);
             charge(j, j->est_task_s);
             j->leases++;
@@ -627,10 +641,62 @@ void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *w
     }
 }
 
+static int worker_conn(const gi_farm_conn *c)
+{
+    return c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING);
+}
+
+/* Tells a worker to drop task `task_id` of job `id`, or every task of it
+ * (GI_MSG_ALL_TASKS: the job is over, its batch directories go too;
+ * GI_MSG_JOB_STOPPED: they stay). */
+static void send_cancel(gi_farm_conn *c, uint64_t id, uint64_t task_id)
+{
+    gi_msg_cancel m = {id, task_id};
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_cancel_encode(&b, &m);
+    gi_farm_conn_send(c, GI_MSG_CANCEL, &b, 0);
+    gi_buf_free(&b);
+}
+
+/* Lease i of c has run past its task's time limit (see the header): the
+ * worker stops the task, and its run fails. The job is charged the time
+ * the worker spent on it. */
+static void lease_overdue(gi_farm *f, gi_farm_conn *c, size_t i, gi_farm_job *j, double limit,
+                          double now)
+{
+    gi_farm_lease l = lease_take(c, i);
+    send_cancel(c, l.job_id, l.task_id);
+    j->task_timeouts++;
+    f->m.task_timeouts++;
+    charge(j, (now - l.leased) - l.est_s);
+    char where[GI_MSG_MAX_NAME + 16];
+    snprintf(where, sizeof where, "worker %s", conn_name(c));
+    gi_error e;
+    gi_jobrun_timeout_error(&e, l.task_id, limit, where);
+    task_failed(f, c, j, &l, &e);
+}
+
+/* The leases of c that ran past their task's time limit. */
+static void stop_overdue(gi_farm *f, gi_farm_conn *c, double now)
+{
+    for (size_t i = 0; i < c->lease_count;) {
+        const gi_farm_lease *l = &c->leases[i];
+        gi_farm_job *j = running_job(f, l->job_id);
+        double limit = j ? gi_jobrun_task_timeout(&j->jr, f->cfg.task_timeout_s) : 0;
+        if (limit > 0 && now - l->leased >= limit)
+            lease_overdue(f, c, i, j, limit, now); /* takes lease i: the next is at i */
+        else
+            i++;
+    }
+}
+
 void gi_farm_sched_expire(gi_farm *f, double now)
 {
     for (size_t ci = 0; ci < f->conn_count; ci++) {
         gi_farm_conn *c = f->conns[ci];
+        if (worker_conn(c))
+            stop_overdue(f, c, now);
         for (size_t i = 0; i < c->lease_count;) {
             if (c->leases[i].deadline > now) {
                 i++;
@@ -651,23 +717,6 @@ void gi_farm_sched_expire(gi_farm *f, double now)
     }
 }
 
-/* Tells a worker to drop task `task_id` of job `id`, or every task of it
- * (GI_MSG_ALL_TASKS: the job is over, its batch directories go too;
- * GI_MSG_JOB_STOPPED: they stay). */
-static void send_cancel(gi_farm_conn *c, uint64_t id, uint64_t task_id)
-{
-    gi_msg_cancel m = {id, task_id};
-    gi_buf b;
-    gi_buf_init(&b);
-    gi_msg_cancel_encode(&b, &m);
-    gi_farm_conn_send(c, GI_MSG_CANCEL, &b, 0);
-    gi_buf_free(&b);
-}
-
-static int worker_conn(const gi_farm_conn *c)
-{
-    return c->fd >= 0 && (c->state == GI_FC_ACTIVE || c->state == GI_FC_DRAINING);
-}
 
 /* A failed job is likely to be retried once its cause is mended, and its
  * batches then save the hosts tracing them again: they are kept until it is

@@ -108,6 +108,7 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     cJSON_AddNumberToObject(t, "late_results", (double)j->results_late);
     cJSON_AddNumberToObject(t, "lease_expiries", (double)j->lease_expiries);
     cJSON_AddNumberToObject(t, "host_disk_errors", (double)j->host_disk_errors);
+    cJSON_AddNumberToObject(t, "timeouts", (double)j->task_timeouts);
 
     cJSON *s = cJSON_AddObjectToObject(o, "stats");
     cJSON_AddNumberToObject(s, "rays", (double)st.rays);
@@ -331,6 +332,9 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_late_results_total", "Results and failures discarded: lease no longer held.",
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);
+    counter(&b, "gi_farm_task_timeouts_total",
+            "Task runs stopped for running longer than their task_timeout: failed.",
+            (double)m->task_timeouts);
     counter(&b, "gi_farm_tasks_requeued_total", "Tasks handed back unrun.", (double)m->requeued);
     counter(&b, "gi_farm_result_bytes_total", "Bytes of result data accepted.", (double)m->result_bytes);
     counter(&b, "gi_farm_merged_bytes_total", "Bytes of result data merged.", (double)m->merged_bytes);

@@ -17,6 +17,7 @@
 #include "gi_auth.h"
 #include "gi_blas_threads.h"
 #include "gi_farm.h"
+#include "gi_job.h"
 #include "gi_log.h"
 #include "gi_version.h"
 
@@ -40,6 +41,9 @@ static void usage(FILE *out)
             "  --heartbeat S --lease S --dead S       worker timing (2, 30, 120)\n"
             "  --checkpoint S              checkpoint running jobs every S seconds (30)\n"
             "  --max-attempts N            failed runs of a task before its job fails (4)\n"
+            "  --task-timeout S            stop a task running longer than S seconds (from its\n"
+            "                              lease) and fail that run, for jobs that set no\n"
+            "                              task_timeout of their own (default 0: no limit)\n"
             "  --max-task-losses N         runs of a task lost with their host (killed, cut\n"
             "                              off, lease expired) before its job fails (8);\n"
             "                              such runs are requeued, not counted as attempts\n"
@@ -82,6 +86,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--check-timeout", offsetof(gi_farm_config, check_timeout_s), 1, 86400},
         {"--api-head-seconds", offsetof(gi_farm_config, api_head_s), 0.1, 3600},
         {"--refusal-log-window", offsetof(gi_farm_config, refusal_window_s), 0, 3600},
+        {"--task-timeout", offsetof(gi_farm_config, task_timeout_s), 0, GI_JOB_MAX_TASK_TIMEOUT},
     };
     static const struct {
         const char *name;
@@ -204,6 +209,11 @@ int main(int argc, char **argv)
     }
     if (cfg.lease_s < 2 * cfg.heartbeat_s || cfg.dead_s < cfg.lease_s) {
         fprintf(stderr, "gi-farmd: need --lease >= 2 x --heartbeat and --dead >= --lease\n");
+        return 2;
+    }
+    if (cfg.task_timeout_s > 0 && cfg.task_timeout_s < GI_JOB_MIN_TASK_TIMEOUT) {
+        fprintf(stderr, "gi-farmd: --task-timeout must be 0 (no limit) or seconds in [%g, %g]\n",
+                GI_JOB_MIN_TASK_TIMEOUT, GI_JOB_MAX_TASK_TIMEOUT);
         return 2;
     }
     gi_error err;
