@@ -55,7 +55,8 @@
  *
  * Blocklisting. A worker (by name, across reconnections) whose tasks fail
  * `blocklist_failures` times in a row gets no tasks for `blocklist_s`.
- * Failures that are the job's fault (GI_EINVAL: bad input) do not count. */
+ * Failures that are the job's fault (GI_EINVAL: bad input) do not count,
+ * nor do timeouts (lease_overdue does not report them as host failures). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
