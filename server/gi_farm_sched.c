@@ -32,7 +32,8 @@
  * can take it (leave_host), which is what a slow host needs. The limit
  * counts from the lease, not from the run's start, which workers do not
  * report: a task queued on its worker (--queue) waits on the clock, so a
- * limit should leave room for a queued task's wait (about one task time).
+ * limit should leave room for a queued task's wait (about one task time
+ * with the default queue) on top of its run.
  *
  * A RESULT or FAIL for a task the connection no longer holds is late: it is
  * counted and discarded, never merged, so a task's result is merged exactly
@@ -388,8 +389,8 @@ void gi_farm_schedule(gi_farm *f)
             if (!t)
                 continue;
             affinity_own(j, t->affinity, c->host, "its owner cannot take work");
-            gi_farm_lease l = {j->id,           t->id, t->attempt, now + f->cfg.lease_s,
-                               j->est_task_s, now};
+            gi_farm_lease l = {j->id, t->id, t->attempt, now + f->cfg.lease_s, j->est_task_s,
+                               now};
             lease_add(c, &l);
             charge(j, j->est_task_s);
             j->leases++;
@@ -717,7 +718,6 @@ void gi_farm_sched_expire(gi_farm *f, double now)
         }
     }
 }
-
 
 /* A failed job is likely to be retried once its cause is mended, and its
  * batches then save the hosts tracing them again: they are kept until it is
