@@ -174,9 +174,9 @@ void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX]);
 
 /* Checkpoints. The checkpoint holds the merge position, every task not yet
  * merged (id, kind, attempt, failures, losses and their hosts, cost,
- * payload), the statistics, and the method's state (method->save). Results received but not yet merged are
- * not in it: their tasks run again after a restore. Refused while the run
- * is finishing on its thread. */
+ * payload), the statistics, and the method's state (method->save).
+ * Results received but not yet merged are not in it: their tasks run again
+ * after a restore. Refused while the run is finishing on its thread. */
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err);
 /* Rebuilds the run of `job` (parsed and loaded again from the same text and
  * assets) from a checkpoint, in place of gi_jobrun_start. A checkpoint of

@@ -190,7 +190,8 @@ GI_TEST(test_quad_default_outputs_are_named_by_kind)
     gi_job job;
     gi_error err;
     GI_REQUIRE(gi_job_parse(text, strlen(text), "hall.json", &job, &err) == 0);
-    const char *want[][2] = {{"exr", "hall.exr"}, {"png", "hall.png"}, {"report", "hall-report.json"}};
+    const char *want[][2] = {
+        {"exr", "hall.exr"}, {"png", "hall.png"}, {"report", "hall-report.json"}};
     GI_CHECK(job.output_count == 3);
     for (int i = 0; i < job.output_count && i < 3; i++) {
         GI_CHECK_MSG(strcmp(job.outputs[i].kind, want[i][0]) == 0, "kind %s", job.outputs[i].kind);
