@@ -51,7 +51,7 @@ typedef struct local_run {
     gi_jobrun jr;
     gi_pool pool;
     char *batch_root; /* private temporary directory */
-    uint64_t crashes;
+    uint64_t crashes, timeouts;
     unsigned respawn_budget;
     int ckpt_ours; /* the checkpoint file holds this run's work (resumed or written) */
     gi_file_writer *ckpt_w; /* a periodic checkpoint being written */
@@ -100,6 +100,7 @@ static int stop_overdue(local_run *lr, double limit_s, double now, gi_error *err
         char where[64];
         snprintf(where, sizeof where, "pool child %d (pid %ld)", i, (long)k->pid);
         gi_pool_kill(&lr->pool, i);
+        lr->timeouts++;
         gi_error e;
         gi_jobrun_timeout_error(&e, task, limit_s, where);
         gi_warn("%s", e.msg);
@@ -305,6 +306,7 @@ static int local_end(local_run *lr, char *ckpt, int checkpoints, double t0,
     summary->tasks = lr->jr.task_count;
     summary->retries = lr->jr.retries;
     summary->crashes = lr->crashes;
+    summary->timeouts = lr->timeouts;
     summary->stats = lr->jr.stats;
     gi_jobrun_free(&lr->jr);
     free(ckpt);

@@ -25,7 +25,7 @@ typedef struct gi_local_opts {
 
 typedef struct gi_local_summary {
     double seconds; /* this run's */
-    uint64_t tasks, retries, crashes;
+    uint64_t tasks, retries, crashes, timeouts; /* timeouts: runs stopped at their limit */
     gi_task_stats stats; /* the whole job's */
     int workers;
     /* A resumed render: what its checkpoint held (rates count this run's). */

@@ -99,9 +99,13 @@ static void print_summary(const gi_job *job, const gi_local_summary *s)
     printf("%srays (%srays/s, %srays per worker-second)\n", gi_si((double)s->stats.rays, c, sizeof c),
            gi_si(rays / secs, d, sizeof d), gi_si(rays / worker_secs, e, sizeof e));
     printf("  %llu task%s", (unsigned long long)s->tasks, s->tasks == 1 ? "" : "s");
-    if (s->retries)
-        printf(", %llu retried (%llu worker crashes)", (unsigned long long)s->retries,
+    if (s->retries) {
+        printf(", %llu retried (%llu worker crashes", (unsigned long long)s->retries,
                (unsigned long long)s->crashes);
+        if (s->timeouts)
+            printf(", %llu stopped at their time limit", (unsigned long long)s->timeouts);
+        printf(")");
+    }
     printf("\n");
     for (int i = 0; i + 1 < job->written_count; i += 2)
         printf("  %-4s %s\n", job->written[i], job->written[i + 1]);
