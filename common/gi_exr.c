@@ -240,11 +240,18 @@ static void *zip_worker(void *arg)
     return NULL;
 }
 
-/* Threads for an image of `chunks` chunks: the host's cores (at most 8),
+/* The CPUs this process may use, read once (gi_cores reads /proc and the
+ * cgroup's files): an animation writes an image every frame. */
+static int usable_cores;
+static pthread_once_t usable_cores_once = PTHREAD_ONCE_INIT;
+static void read_usable_cores(void) { usable_cores = gi_cores_usable(); }
+
+/* Threads for an image of `chunks` chunks: the usable cores (at most 8),
  * none beyond one per 4 chunks. */
 static int zip_threads(int chunks)
 {
-    long t = gi_cores_usable();
+    pthread_once(&usable_cores_once, read_usable_cores);
+    long t = usable_cores;
     if (t > 8)
         t = 8;
     if (t > chunks / 4)
