@@ -7,7 +7,8 @@
 #   make test     build (release + ASan/UBSan) and run the whole suite
 #   make bench    build and run the benchmark drivers (bench/)
 #   make fuzz     long fuzzing runs of every fuzz target
-#   make install  install gi, gi-farmd, gi-worker into $(PREFIX)/bin
+#   make install  build and install gi, gi-farmd, gi-worker (only those) into
+#                 $(PREFIX)/bin
 #
 # Public targets call deps, then re-enter make so pkg-config sees the
 # packages deps just installed.
@@ -17,7 +18,7 @@ BUILD  ?= build
 OUT    ?= out
 JOBS   ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: all deps demo test check-asan bench fuzz install clean binaries
+.PHONY: all deps demo test check-asan bench fuzz install clean binaries programs
 .DEFAULT_GOAL := all
 
 all: deps
@@ -45,7 +46,10 @@ fuzz: deps
 	@$(MAKE) --no-print-directory -j$(JOBS) fuzzers
 	@sh tests/fuzz/run.sh $(BUILD)/fuzz long
 
-install: all
+# The three programs alone: an image or a package needs neither the tests
+# nor the tools.
+install: deps
+	@$(MAKE) --no-print-directory -j$(JOBS) programs CFG=release
 	install -d $(DESTDIR)$(PREFIX)/bin
 	for p in $(PROGRAMS); do \
 	  install -m 755 $(BUILD)/release/$$p $(DESTDIR)$(PREFIX)/bin/ || exit 1; \
@@ -106,6 +110,7 @@ SCENE_TOOL_SRC := $(wildcard scenes/tools/*.c)
 SCENE_TOOL_BIN := $(SCENE_TOOL_SRC:scenes/tools/%.c=$(O)/scenes/%)
 
 binaries: $(PROG_BIN) $(O)/gi-tests $(TOOL_BIN) $(BENCH_BIN) $(SCENE_TOOL_BIN)
+programs: $(PROG_BIN)
 
 Q = $(if $(V),,@)
 
