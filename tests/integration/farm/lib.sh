@@ -7,6 +7,7 @@ WORKER_ASAN=$BUILD/asan/gi-worker
 RAWPEER=$BUILD/release/tools/gi_rawpeer
 NETNS=$SRC/deploy/netns-farm.sh
 FARM_PIDS=""
+WORKER_PIDS="" # the gi-worker processes started (pools_stop)
 FARM_NS=""
 FARM_EXEC="" # a prefix that runs API clients where the API is reachable (a namespace)
 
@@ -79,6 +80,7 @@ start_worker() {
     # shellcheck disable=SC2086
     $pre "$WORKER" --backoff-max 0.5 "$@" >>"$log" 2>&1 &
     WORKER_PID=$!
+    WORKER_PIDS="$WORKER_PIDS $WORKER_PID"
     FARM_PIDS="$FARM_PIDS $WORKER_PID"
 }
 
@@ -209,19 +211,54 @@ JOB
 }
 
 # wait_merged ID DIVISOR [checkpoint]: until at least total/DIVISOR tasks are
-# merged (or, with "checkpoint", are in the last checkpoint), and the job is
-# still running (for a test that must act mid-job). Sets merged and total.
+# merged (or, with "checkpoint", are in the last checkpoint: wait_checkpoint),
+# and the job is still running (for a test that must act mid-job). Sets
+# merged and total.
 wait_merged() {
-    n=0
+    t0=$(date +%s)
     while :; do
-        if [ "${3:-}" = checkpoint ]; then merged=$(jckpt "$1" merged); else merged=$(jnum "$1" merged); fi
+        merged=$(jnum "$1" merged)
         total=$(jnum "$1" total)
         [ "${total:-0}" -gt 0 ] && [ "${merged:-0}" -ge $((total / $2)) ] && break
-        n=$((n + 1))
-        [ $n -lt 600 ] || fail "job $1 did not progress"
+        [ $(($(date +%s) - t0)) -lt 120 ] || fail "job $1 did not progress in 120 s"
         sleep 0.05
     done
+    [ "${3:-}" = checkpoint ] && wait_checkpoint "$1" $((total / $2))
     unended "$1" || fail "job $1 ended too soon; make it longer"
+}
+
+# pools_stop, pools_cont: stop (SIGSTOP) and continue the pool children of
+# the test's workers. No task runs meanwhile, so a job cannot progress nor
+# end, while the workers themselves go on heartbeating: no lease expires and
+# no task runs twice. (Their children exist once they have connected.)
+pools_stop() {
+    STOPPED_KIDS=$(for w in $WORKER_PIDS; do pgrep -P "$w" || true; done | tr '\n' ' ')
+    [ -n "$STOPPED_KIDS" ] || fail "no pool children to stop"
+    # shellcheck disable=SC2086
+    kill -STOP $STOPPED_KIDS
+}
+pools_cont() {
+    # shellcheck disable=SC2086
+    kill -CONT $STOPPED_KIDS
+}
+
+# wait_checkpoint ID N: once N tasks of the job are merged, until its last
+# checkpoint holds at least N (sets merged to what it holds). A periodic
+# checkpoint comes --checkpoint seconds after the last one, or 20 times as
+# long as that one took (gi_jobrun_checkpoint_interval): on a busy disk one
+# slow checkpoint spaces the next by seconds, time enough for a short job to
+# end in between. So the pools are stopped meanwhile.
+wait_checkpoint() {
+    pools_stop
+    t0=$(date +%s)
+    until [ "$(jckpt "$1" merged)" -ge "$2" ] 2>/dev/null; do
+        [ $(($(date +%s) - t0)) -lt 120 ] ||
+            { api "/api/v1/jobs/$1"; fail "job $1: no checkpoint of $2 tasks in 120 s"; }
+        unended "$1" || break
+        sleep 0.05
+    done
+    merged=$(jckpt "$1" merged)
+    pools_cont
 }
 
 # need_own_disk SIZE: root and a tmpfs in a mount namespace, or exits 77
