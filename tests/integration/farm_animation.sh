@@ -91,12 +91,9 @@ done
 
 # The coordinator killed once a checkpoint holds part of the animation.
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 2"; }
-n=0
-until [ "$(jckpt "$id" merged)" -ge 30 ] 2>/dev/null; do
-    n=$((n + 1))
-    [ $n -lt 1200 ] || fail "no checkpoint past 30 tasks"
-    sleep 0.05
-done
+wait_merged_tasks "$id" 30
+wait_checkpoint "$id" 30
+unended "$id" || fail "job $id ended before its checkpoint of 30 tasks"
 kill -9 "$FARMD_PID"
 wait "$FARMD_PID" 2>/dev/null || true
 # shellcheck disable=SC2086
@@ -107,8 +104,11 @@ same_as_ref "$TMP/restarted" "coordinator restarted"
 
 # A job that fails (frame 4's image cannot be written) keeps its batches on
 # the workers; `gi retry` resumes it without tracing them again.
+# (Its way blocked while no task can run, so before frame 4 is written.)
+pools_stop
 id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP/submit.log"; fail "submit 3"; }
-mkdir -p "$TMP/state/jobs/$id/out/img.0004.exr"
+mkdir "$TMP/state/jobs/$id/out/img.0004.exr"
+pools_cont
 wait_state "$id" failed 300
 ls "$TMP"/ca/batches/"$id"-*/b* "$TMP"/cb/batches/"$id"-*/b* >/dev/null 2>&1 ||
     { ls -R "$TMP/ca/batches" "$TMP/cb/batches"; fail "the failed job's batch files are gone"; }
