@@ -19,9 +19,11 @@ JOB
     { cat "$TMP/s1.log"; fail "submit"; }
 
 # The API's 64 slots of this address, each held by a submission whose body
-# never comes (not idle: no slot is given up for a newcomer), for 3 s.
-python3 - "$API" "$(cat "$TMP/token")" >"$TMP/hold.out" 2>&1 <<'PY' &
-import socket, sys, time
+# never comes (not idle: no slot is given up for a newcomer), until the
+# file $TMP/release appears (the clients below were all turned away), 30 s
+# at most.
+python3 - "$API" "$(cat "$TMP/token")" "$TMP/release" >"$TMP/hold.out" 2>&1 <<'PY' &
+import os, socket, sys, time
 host, port = sys.argv[1].rsplit(":", 1)
 token = sys.argv[2].encode()
 held = []
@@ -50,7 +52,10 @@ for _ in range(200):
 else:
     sys.exit("the slots never filled")
 print("holding", flush=True)
-time.sleep(3)
+for _ in range(300):
+    if os.path.exists(sys.argv[3]):
+        break
+    time.sleep(0.1)
 for s in held:
     s.close()
 print("released", flush=True)
@@ -73,6 +78,17 @@ p1=$!
 p2=$!
 "$GI" submit "$TMP/job.json" >"$TMP/submit.out" 2>"$TMP/submit.err" &
 p3=$!
+# Each is turned away (it says so) before the slots free up: a fixed hold
+# would race their start on a busy machine.
+turned_away() {
+    for e in status wait submit; do grep -q "asking again" "$TMP/$e.err" 2>/dev/null || return 1; done
+}
+n=0
+until turned_away; do
+    n=$((n + 1)); [ $n -lt 400 ] || fail "gi status, wait and submit were not all turned away"
+    sleep 0.05
+done
+: >"$TMP/release"
 wait $p1 || { cat "$TMP/status.err"; fail "gi status while the API was full"; }
 wait $p2 || { cat "$TMP/wait.err"; fail "gi wait while the API was full"; }
 wait $p3 || { cat "$TMP/submit.err"; fail "gi submit while the API was full"; }
