@@ -12,9 +12,11 @@ id=$($FARM_EXEC "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || { cat "$TMP
 wait_merged "$id" 30
 sh "$NETNS" cut "$P" w1
 echo "cut host1 at $merged of $total tasks merged"
-# Longer than two leases. (The others may finish the job meanwhile: host1's
-# tasks can only complete by being given to them once its leases expire.)
-sleep 2.5
+# Until its leases expired, however long a busy coordinator takes to see
+# it (a fixed time could plug the link back first: no late result). (The
+# others may finish the job meanwhile: host1's tasks can only complete by
+# being given to them once its leases expire.)
+wait_log "$TMP/farmd.log" "lease expired on worker host1"
 sh "$NETNS" plug "$P" w1
 wait_state "$id" done 120
 # The late results come with TCP's retransmissions after the link is back.
