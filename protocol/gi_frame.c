@@ -58,7 +58,7 @@ void gi_frame_header_write(uint8_t hdr[GI_FRAME_HEADER_SIZE], uint16_t type, uin
                            const void *wire, size_t wire_len)
 {
     memcpy(hdr, frame_magic, 4);
-    gi_le_put_u16(hdr + 4, GI_PROTO_VERSION);
+    gi_le_put_u16(hdr + 4, GI_FRAME_VERSION);
     gi_le_put_u16(hdr + 6, type);
     gi_le_put_u32(hdr + 8, flags);
     gi_le_put_u64(hdr + 12, (uint64_t)wire_len);
@@ -155,9 +155,9 @@ static void header_done(gi_frame_decoder *d)
         return;
     }
     uint16_t version = gi_le_get_u16(h + 4);
-    if (version != GI_PROTO_VERSION) {
-        broken(d, GI_EPROTO, "protocol version %u is not supported (this build speaks version %u)",
-               version, GI_PROTO_VERSION);
+    if (version != GI_FRAME_VERSION) {
+        broken(d, GI_EPROTO, "frame version %u is not supported (this build frames version %u)",
+               version, GI_FRAME_VERSION);
         return;
     }
     uint16_t type = gi_le_get_u16(h + 6);

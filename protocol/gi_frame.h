@@ -5,7 +5,7 @@
  *
  *   offset  size  field
  *        0     4  magic "GIF1"
- *        4     2  version (u16 LE) = GI_PROTO_VERSION
+ *        4     2  version (u16 LE) = GI_FRAME_VERSION
  *        6     2  type (u16 LE), a gi_msg_type
  *        8     4  flags (u32 LE): bit 0 GI_FRAME_ZSTD, all others zero
  *       12     8  length (u64 LE) of the payload as sent
@@ -27,7 +27,10 @@
 #include "gi_crc32c.h"
 #include "gi_error.h"
 
-#define GI_PROTO_VERSION 1
+/* The framing's version: the layout above. The message set's version is
+ * another matter, negotiated in the handshake (gi_msg_ctrl.h: GI_PROTO_*);
+ * its versions so far change payloads only, so every frame keeps this one. */
+#define GI_FRAME_VERSION 1
 #define GI_FRAME_HEADER_SIZE 24
 #define GI_FRAME_CRC_OFFSET 20 /* the CRC covers the header bytes before it */
 

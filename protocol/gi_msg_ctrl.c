@@ -65,6 +65,12 @@ void gi_msg_hello_free(gi_msg_hello *m)
     m->name = m->version = NULL;
 }
 
+uint32_t gi_msg_proto_choose(uint32_t min, uint32_t max)
+{
+    uint32_t v = max < GI_PROTO_MAX ? max : GI_PROTO_MAX;
+    return v >= min && v >= GI_PROTO_MIN ? v : 0;
+}
+
 void gi_msg_challenge_encode(gi_buf *out, const gi_msg_challenge *m)
 {
     gi_buf_put_u32(out, m->proto);
@@ -122,7 +128,7 @@ int gi_msg_welcome_decode(const gi_buf *in, gi_msg_welcome *out, gi_error *err)
 }
 
 void gi_msg_tasklist_encode(gi_buf *out, uint64_t seq, const gi_msg_taskref *refs,
-                            uint32_t count)
+                            uint32_t count, int runs)
 {
     gi_buf_put_u64(out, seq);
     gi_buf_put_u32(out, count);
@@ -130,10 +136,14 @@ void gi_msg_tasklist_encode(gi_buf *out, uint64_t seq, const gi_msg_taskref *ref
         gi_buf_put_u64(out, refs[i].job_id);
         gi_buf_put_u64(out, refs[i].task_id);
         gi_buf_put_u32(out, refs[i].attempt);
+        if (runs) {
+            gi_buf_put_u8(out, refs[i].running);
+            gi_buf_put_u32(out, refs[i].running ? refs[i].run_ms : 0);
+        }
     }
 }
 
-int gi_msg_tasklist_decode(const gi_buf *in, const char *what, gi_msg_tasklist *out,
+int gi_msg_tasklist_decode(const gi_buf *in, const char *what, int runs, gi_msg_tasklist *out,
                            gi_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -144,17 +154,32 @@ int gi_msg_tasklist_decode(const gi_buf *in, const char *what, gi_msg_tasklist *
     if (r.failed)
         return gi_reader_finish(&r, err);
     /* Bounded, and checked against the bytes present before allocating. */
-    if (n > GI_MSG_MAX_TASKREFS || n > r.left / 20)
+    size_t size = runs ? 25 : 20;
+    if (n > GI_MSG_MAX_TASKREFS || n > r.left / size)
         return gi_fail(err, GI_EPROTO, "%s: %u task references (limit %u, %zu bytes left)",
                        what, n, GI_MSG_MAX_TASKREFS, r.left);
     out->refs = gi_xcalloc(n ? n : 1, sizeof *out->refs);
     out->count = n;
+    int bad = -1;
     for (uint32_t i = 0; i < n; i++) {
-        out->refs[i].job_id = gi_get_u64(&r);
-        out->refs[i].task_id = gi_get_u64(&r);
-        out->refs[i].attempt = gi_get_u32(&r);
+        gi_msg_taskref *t = &out->refs[i];
+        t->job_id = gi_get_u64(&r);
+        t->task_id = gi_get_u64(&r);
+        t->attempt = gi_get_u32(&r);
+        if (!runs)
+            continue;
+        t->running = gi_get_u8(&r);
+        t->run_ms = gi_get_u32(&r);
+        if (bad < 0 && (t->running > 1 || (!t->running && t->run_ms)))
+            bad = (int)i;
     }
-    if (gi_reader_finish(&r, err)) {
+    int rc = gi_reader_finish(&r, err);
+    if (rc == 0 && bad >= 0)
+        rc = gi_fail(err, GI_EPROTO,
+                     "%s: task reference %d: running %u, run_ms %u (running is 0 or 1; a "
+                     "queued task has run 0 ms)",
+                     what, bad, out->refs[bad].running, out->refs[bad].run_ms);
+    if (rc) {
         gi_msg_tasklist_free(out);
         return -1;
     }

@@ -10,9 +10,16 @@
  * Both sides prove they know the farm secret; neither sends it.
  *
  * Versioning: a message set version is negotiated in the handshake (HELLO
- * lists [proto_min, proto_max], CHALLENGE names the one chosen) and every
- * later frame carries it in its header. The HELLO frame itself is always in
- * version-1 framing so that any coordinator can read it and refuse cleanly.
+ * lists [proto_min, proto_max], CHALLENGE names the one chosen: the highest
+ * both speak, gi_msg_proto_choose) and decides the payloads' forms for the
+ * rest of the connection. Frames keep their own version (GI_FRAME_VERSION:
+ * the header layout, which no message set version has changed), so the
+ * HELLO frame of any worker can be read by any coordinator, which refuses
+ * cleanly when they have no version in common. The versions:
+ *   1  the first;
+ *   2  a worker's HEARTBEAT says of each task it holds whether its pool runs
+ *      it and for how long (gi_msg_taskref.running, run_ms): task time
+ *      limits count from the run's start, not from the lease.
  * Every field is explicit; decoders check every length and refuse trailing
  * bytes. */
 #ifndef GI_MSG_CTRL_H
@@ -22,6 +29,10 @@
 
 #include "gi_buf.h"
 #include "gi_error.h"
+
+#define GI_PROTO_MIN 1  /* the message set versions this build speaks */
+#define GI_PROTO_MAX 2
+#define GI_PROTO_RUNS 2 /* the first whose HEARTBEAT tells which held tasks run */
 
 #define GI_MSG_NONCE_BYTES 32
 #define GI_MSG_MAC_BYTES 32
@@ -48,6 +59,10 @@ void gi_msg_hello_encode(gi_buf *out, const gi_msg_hello *m);
 int gi_msg_hello_decode(const gi_buf *in, gi_msg_hello *out, gi_error *err);
 void gi_msg_hello_free(gi_msg_hello *m);
 
+/* The version a coordinator picks for a worker speaking [min, max]: the
+ * highest this build speaks too, or 0 when there is none. */
+uint32_t gi_msg_proto_choose(uint32_t min, uint32_t max);
+
 typedef struct gi_msg_challenge {
     uint32_t proto; /* the version chosen */
     uint8_t nonce[GI_MSG_NONCE_BYTES];
@@ -70,16 +85,23 @@ typedef struct gi_msg_welcome {
 void gi_msg_welcome_encode(gi_buf *out, const gi_msg_welcome *m);
 int gi_msg_welcome_decode(const gi_buf *in, gi_msg_welcome *out, gi_error *err);
 
-/* A task a worker holds. */
+/* A task a worker holds. running and run_ms are on the wire only in a
+ * list with runs (below); elsewhere they are 0. */
 typedef struct gi_msg_taskref {
     uint64_t job_id, task_id;
     uint32_t attempt;
+    uint8_t running; /* 1: a pool child runs it; 0: it waits in the worker's queue */
+    uint32_t run_ms; /* running: for how long so far (saturated); queued: 0 */
 } gi_msg_taskref;
 
 /* HEARTBEAT: a sequence number and, from a worker, the tasks it holds
  * (running or queued): their leases are renewed. From a coordinator the
  * list is empty. DRAIN (worker -> coordinator): the worker is shutting
- * down; the listed tasks are handed back unrun, the rest will be finished. */
+ * down; the listed tasks are handed back unrun, the rest will be finished.
+ *
+ * runs != 0 (a HEARTBEAT in protocol GI_PROTO_RUNS and later) adds to each
+ * reference a u8 running flag (0 or 1) and a u32 run_ms (0 when queued);
+ * DRAIN never has them (what it hands back never ran). */
 typedef struct gi_msg_tasklist {
     uint64_t seq; /* HEARTBEAT: increasing; DRAIN: 0 */
     gi_msg_taskref *refs;
@@ -87,9 +109,9 @@ typedef struct gi_msg_tasklist {
 } gi_msg_tasklist;
 
 void gi_msg_tasklist_encode(gi_buf *out, uint64_t seq, const gi_msg_taskref *refs,
-                            uint32_t count);
+                            uint32_t count, int runs);
 /* what names the message in errors ("HEARTBEAT message"). */
-int gi_msg_tasklist_decode(const gi_buf *in, const char *what, gi_msg_tasklist *out,
+int gi_msg_tasklist_decode(const gi_buf *in, const char *what, int runs, gi_msg_tasklist *out,
                            gi_error *err);
 void gi_msg_tasklist_free(gi_msg_tasklist *m);
 

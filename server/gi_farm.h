@@ -40,8 +40,9 @@ typedef struct gi_farm_config {
     uint64_t keep_ended_bytes;
     uint32_t max_attempts;       /* failed runs of a task before its job fails */
     uint32_t max_task_losses;    /* runs of a task lost with their host, likewise */
-    /* A task running longer than this (from its lease) is stopped and its
-     * run failed, unless its job sets its own task_timeout; 0: no limit. */
+    /* A task running longer than this (from the start of its run on the
+     * worker's pool) is stopped and its run failed, unless its job sets its
+     * own task_timeout; 0: no limit. */
     double task_timeout_s;
     uint32_t blocklist_failures; /* consecutive task failures that blocklist a worker */
     double blocklist_s;          /* for how long */

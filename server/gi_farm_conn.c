@@ -220,16 +220,17 @@ static void on_hello(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
         return;
     }
     c->have_hello = 1;
-    if (c->hello.proto_min > GI_PROTO_VERSION || c->hello.proto_max < GI_PROTO_VERSION) {
+    c->proto = gi_msg_proto_choose(c->hello.proto_min, c->hello.proto_max);
+    if (!c->proto) {
         f->m.workers_refused++;
         gi_farm_conn_close(f, c, GI_EPROTO,
-                           "worker speaks protocol versions %u-%u; this coordinator speaks %u",
-                           c->hello.proto_min, c->hello.proto_max, GI_PROTO_VERSION);
+                           "worker speaks protocol versions %u-%u; this coordinator speaks %u-%u",
+                           c->hello.proto_min, c->hello.proto_max, GI_PROTO_MIN, GI_PROTO_MAX);
         return;
     }
     gi_buf_put(&c->hello_raw, fr->payload.data, fr->payload.len);
     gi_auth_random(c->nonce, sizeof c->nonce);
-    gi_msg_challenge ch = {.proto = GI_PROTO_VERSION};
+    gi_msg_challenge ch = {.proto = c->proto};
     memcpy(ch.nonce, c->nonce, sizeof c->nonce);
     gi_buf b;
     gi_buf_init(&b);
@@ -310,9 +311,10 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     c->next_heartbeat = gi_now() + f->cfg.heartbeat_s;
     f->m.workers_accepted++;
     gi_farm_sched_welcome(f, c);
-    gi_info("worker %s (%s) joined: %u processes, %u slots, %u cores, %.1f GiB, version %s%s",
+    gi_info("worker %s (%s) joined: %u processes, %u slots, %u cores, %.1f GiB, protocol %u, "
+            "version %s%s",
             c->hello.name, c->peer, c->hello.procs, c->hello.slots, c->hello.cores,
-            (double)c->hello.memory / (1u << 30), c->hello.version,
+            (double)c->hello.memory / (1u << 30), c->proto, c->hello.version,
             strcmp(c->hello.version, GI_VERSION) ? " (differs from the coordinator's)" : "");
 }
 
@@ -421,9 +423,9 @@ static void on_frame(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     case GI_MSG_HEARTBEAT:
     case GI_MSG_DRAIN: {
         gi_msg_tasklist tl;
-        if (gi_msg_tasklist_decode(&fr->payload, fr->type == GI_MSG_DRAIN ? "DRAIN message"
-                                                                            : "HEARTBEAT message",
-                                   &tl, &err)) {
+        int hb = fr->type == GI_MSG_HEARTBEAT;
+        if (gi_msg_tasklist_decode(&fr->payload, hb ? "HEARTBEAT message" : "DRAIN message",
+                                   hb && c->proto >= GI_PROTO_RUNS, &tl, &err)) {
             gi_farm_conn_close(f, c, GI_EPROTO, "%s", err.msg);
             return;
         }
@@ -533,7 +535,8 @@ void gi_farm_conns_tick(gi_farm *f)
             if (now >= c->next_heartbeat) {
                 gi_buf b;
                 gi_buf_init(&b);
-                gi_msg_tasklist_encode(&b, (uint64_t)(now * 1000.0), NULL, 0);
+                gi_msg_tasklist_encode(&b, (uint64_t)(now * 1000.0), NULL, 0,
+                                       c->proto >= GI_PROTO_RUNS);
                 gi_farm_conn_send(c, GI_MSG_HEARTBEAT, &b, 0);
                 gi_buf_free(&b);
                 c->next_heartbeat = now + f->cfg.heartbeat_s;

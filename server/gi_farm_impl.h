@@ -171,7 +171,11 @@ typedef struct gi_farm_lease {
     uint32_t attempt;
     double deadline; /* monotonic */
     double est_s;    /* worker-seconds charged to the job's pass when leased */
-    double leased;   /* monotonic: when it was sent (task time limits count from it) */
+    double leased;   /* monotonic: when it was sent */
+    /* Monotonic: when the worker's pool began running it, as its HEARTBEAT
+     * said (protocol GI_PROTO_RUNS); 0 while it is queued or unreported.
+     * Task time limits count from it (from `leased` for older workers). */
+    double started;
 } gi_farm_lease;
 
 /* A worker by name: what outlives its connections (blocklisting). */
@@ -197,6 +201,7 @@ typedef struct gi_farm_conn {
     double next_heartbeat;
     gi_msg_hello hello;
     int have_hello;
+    uint32_t proto; /* the message set version chosen for it (gi_msg_ctrl.h) */
     gi_buf hello_raw;
     uint8_t nonce[GI_MSG_NONCE_BYTES];
     gi_farm_host *host;

@@ -21,7 +21,7 @@
  * a wide margin. A pool child's crash is a FAIL the worker reports: the
  * task's fault, counted as an attempt.
  *
- * Time limits. A lease held longer than its task's time limit (the job's
+ * Time limits. A task that runs longer than its time limit (the job's
  * task_timeout, else --task-timeout; none by default) ends too: the
  * coordinator CANCELs the task on its worker, which kills the pool child
  * running it, and fails the run (gi_jobrun_timeout_error): a task that
@@ -30,10 +30,15 @@
  * a pathological task would otherwise blocklist every host it visits,
  * long after the fact; the run's next attempt goes to another host if one
  * can take it (leave_host), which is what a slow host needs. The limit
- * counts from the lease, not from the run's start, which workers do not
- * report: a task queued on its worker (--queue) waits on the clock, so a
- * limit should leave room for a queued task's wait (about one task time
- * with the default queue) on top of its run.
+ * counts from the start of the run on the worker's pool, as gi render's
+ * does (gi_local.c), not from the lease: a task queued on its worker
+ * (--queue) waits off the clock however long. Workers speaking protocol
+ * GI_PROTO_RUNS say in each HEARTBEAT which held tasks run and for how
+ * long; the lease's `started` is dated back by that, so a run is stopped
+ * at its limit, or at the first heartbeat after it when the limit is
+ * shorter than a heartbeat (never more than a heartbeat late). A task not
+ * yet reported running has no clock. For older workers (protocol 1) the
+ * limit counts from the lease, as those builds did.
  *
  * A RESULT or FAIL for a task the connection no longer holds is late: it is
  * counted and discarded, never merged, so a task's result is merged exactly
@@ -390,7 +395,7 @@ void gi_farm_schedule(gi_farm *f)
                 continue;
             affinity_own(j, t->affinity, c->host, "its owner cannot take work");
             gi_farm_lease l = {j->id, t->id, t->attempt, now + f->cfg.lease_s, j->est_task_s,
-                               now};
+                               now, 0};
             lease_add(c, &l);
             charge(j, j->est_task_s);
             j->leases++;
@@ -594,11 +599,21 @@ void gi_farm_sched_fail(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
 
 void gi_farm_sched_heartbeat(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *hb)
 {
-    double deadline = gi_now() + f->cfg.lease_s;
+    double now = gi_now(), deadline = now + f->cfg.lease_s;
     for (uint32_t k = 0; k < hb->count; k++) {
-        long i = lease_find(c, hb->refs[k].job_id, hb->refs[k].task_id, hb->refs[k].attempt);
-        if (i >= 0)
-            c->leases[i].deadline = deadline;
+        const gi_msg_taskref *r = &hb->refs[k];
+        long i = lease_find(c, r->job_id, r->task_id, r->attempt);
+        if (i < 0)
+            continue;
+        gi_farm_lease *l = &c->leases[i];
+        l->deadline = deadline;
+        /* The run's start, dated back by what the worker says it has run
+         * (a duration: no clocks compared), never before the lease. */
+        if (r->running && l->started == 0) {
+            l->started = now - r->run_ms / 1000.0;
+            if (l->started < l->leased)
+                l->started = l->leased;
+        }
     }
 }
 
@@ -661,6 +676,14 @@ static void send_cancel(gi_farm_conn *c, uint64_t id, uint64_t task_id)
     gi_buf_free(&b);
 }
 
+/* When lease l's task time limit started counting (see the header), or 0
+ * while it does not: the run's start, which workers speaking protocol
+ * GI_PROTO_RUNS report; the lease for older ones. */
+static double limit_from(const gi_farm_conn *c, const gi_farm_lease *l)
+{
+    return c->proto >= GI_PROTO_RUNS ? l->started : l->leased;
+}
+
 /* Lease i of c has run past its task's time limit (see the header): the
  * worker stops the task, and its run fails. The job is charged the time
  * the worker spent on it. */
@@ -671,7 +694,7 @@ static void lease_overdue(gi_farm *f, gi_farm_conn *c, size_t i, gi_farm_job *j,
     send_cancel(c, l.job_id, l.task_id);
     j->task_timeouts++;
     f->m.task_timeouts++;
-    charge(j, (now - l.leased) - l.est_s);
+    charge(j, (now - limit_from(c, &l)) - l.est_s);
     char where[GI_MSG_MAX_NAME + 16];
     snprintf(where, sizeof where, "worker %s", conn_name(c));
     gi_error e;
@@ -686,7 +709,8 @@ static void stop_overdue(gi_farm *f, gi_farm_conn *c, double now)
         const gi_farm_lease *l = &c->leases[i];
         gi_farm_job *j = running_job(f, l->job_id);
         double limit = j ? gi_jobrun_task_timeout(&j->jr, f->cfg.task_timeout_s) : 0;
-        if (limit > 0 && now - l->leased >= limit)
+        double from = limit_from(c, l);
+        if (limit > 0 && from > 0 && now - from >= limit)
             lease_overdue(f, c, i, j, limit, now); /* takes lease i: the next is at i */
         else
             i++;

@@ -216,7 +216,12 @@ char *gi_farm_view_workers(gi_farm *f)
         cJSON_AddNumberToObject(o, "slots", c->hello.slots);
         cJSON_AddNumberToObject(o, "cores", c->hello.cores);
         cJSON_AddNumberToObject(o, "memory_bytes", (double)c->hello.memory);
+        cJSON_AddNumberToObject(o, "protocol", c->proto);
         cJSON_AddNumberToObject(o, "tasks_leased", (double)c->lease_count);
+        size_t running = 0;
+        for (size_t k = 0; k < c->lease_count; k++)
+            running += c->leases[k].started > 0;
+        cJSON_AddNumberToObject(o, "tasks_running", (double)running);
         cJSON_AddNumberToObject(o, "tasks_done", (double)c->tasks_done);
         cJSON_AddNumberToObject(o, "tasks_failed", (double)c->tasks_failed);
         cJSON_AddNumberToObject(o, "result_bytes", (double)c->result_bytes);

@@ -132,7 +132,9 @@ int gi_jobrun_lost(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, const char
  * task_timeout (or default_s, the coordinator's, when the job sets none;
  * 0: no limit) is stopped by its coordinator, which fails the run with
  * gi_jobrun_timeout_error: a hang is the task's doing, like a crash, so the
- * run counts as an attempt (gi_jobrun_fail). */
+ * run counts as an attempt (gi_jobrun_fail). The run lasts from when a
+ * pool process got the task: time queued before is not counted (gi_local.c,
+ * gi_farm_sched.c). */
 double gi_jobrun_task_timeout(const gi_jobrun *jr, double default_s);
 /* The error of a run of task_id stopped after limit_s seconds on `where`
  * ("worker NAME", or the pool child). */

@@ -13,7 +13,10 @@
  * Task time limits (the job's task_timeout, else --task-timeout): a pool
  * child whose task ran longer is killed and replaced, and the run fails as
  * an attempt (stop_overdue). The clock starts when the task is sent to the
- * child, which starts it at once (a child holds one task at a time).
+ * child, which starts it at once (a child holds one task at a time); a
+ * task waiting for a free child is off the clock. The farm follows the
+ * same rule: its workers report when their pool starts each task
+ * (gi_farm_sched.c, "Time limits").
  *
  * Checkpoints (gi_local_checkpoint.h) are written every few seconds (on a
  * thread of their own: the loop only encodes them) and when the render is

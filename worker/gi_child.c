@@ -1,9 +1,11 @@
 /* gi_child: pool child task loop. */
 #include "gi_child.h"
 
+#include <errno.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "gi_batch_dir.h"
@@ -192,6 +194,17 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
                 (unsigned long long)m.task.id, (long)getpid());
         for (;;)
             pause();
+    }
+    if (rc == 0 && fault_requested(GI_FAULT_SLOW_ENV, m.task.id, m.task.attempt)) {
+        const char *v = getenv(GI_FAULT_SLOW_S_ENV);
+        double secs = v ? atof(v) : 1.0;
+        gi_debug("fault injection: task %llu sleeps %.2f s first", (unsigned long long)m.task.id,
+                 secs);
+        if (secs > 0) {
+            struct timespec ts = {(time_t)secs, (long)((secs - (double)(time_t)secs) * 1e9)};
+            while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
+                ;
+        }
     }
     if (rc == 0)
         rc = gi_worker_run_task(&c->ctx, &m.task, &result, &terr);

@@ -34,5 +34,10 @@ int gi_child_main(int fd, const char *batch_root);
  * attempt hang (sleep until killed) instead of running it: a task that
  * never ends, for task time limits (task_timeout). */
 #define GI_FAULT_HANG_ENV "GI_FAULT_HANG_TASK"
+/* GI_FAULT_SLOW_TASK, likewise, makes the child sleep GI_FAULT_SLOW_S
+ * seconds (default 1) before running task ID on that attempt: a task that
+ * takes long and ends, so that others wait queued behind it. */
+#define GI_FAULT_SLOW_ENV "GI_FAULT_SLOW_TASK"
+#define GI_FAULT_SLOW_S_ENV "GI_FAULT_SLOW_S"
 
 #endif

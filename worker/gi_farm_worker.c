@@ -78,6 +78,7 @@ typedef struct worker {
     double last_heard, next_hb;
     uint64_t hb_seq;
     double heartbeat_s, lease_s;
+    uint32_t proto; /* the message set version the coordinator chose */
     job_def *defs;
     size_t def_count;
     queued_task *q;
@@ -200,7 +201,7 @@ static void def_add(worker *w, gi_msg_job *m)
 
 static gi_msg_taskref ref_of(uint64_t job, const gi_task *t)
 {
-    gi_msg_taskref r = {job, t->id, t->attempt};
+    gi_msg_taskref r = {job, t->id, t->attempt, 0, 0};
     return r;
 }
 
@@ -209,7 +210,7 @@ static void hand_back(worker *w, const gi_msg_taskref *refs, uint32_t n)
 {
     gi_buf b;
     gi_buf_init(&b);
-    gi_msg_tasklist_encode(&b, 0, refs, n);
+    gi_msg_tasklist_encode(&b, 0, refs, n, 0);
     send_frame(w, GI_MSG_DRAIN, &b, 0);
     gi_buf_free(&b);
 }
@@ -522,7 +523,8 @@ static void on_coord_frame(worker *w, const gi_frame *fr)
         break;
     case GI_MSG_HEARTBEAT: {
         gi_msg_tasklist tl;
-        if (gi_msg_tasklist_decode(&fr->payload, "HEARTBEAT message", &tl, &err))
+        if (gi_msg_tasklist_decode(&fr->payload, "HEARTBEAT message", w->proto >= GI_PROTO_RUNS,
+                                   &tl, &err))
             lose(w, "%s", err.msg);
         gi_msg_tasklist_free(&tl);
         break;
@@ -660,7 +662,12 @@ static int handshake(worker *w, gi_error *err)
     double deadline = gi_now() + HANDSHAKE_S;
     gi_msg_hello h;
     memset(&h, 0, sizeof h);
-    h.proto_min = h.proto_max = GI_PROTO_VERSION;
+    h.proto_min = GI_PROTO_MIN;
+    h.proto_max = GI_PROTO_MAX;
+    /* For tests of a mixed farm: this worker speaks as an older build. */
+    const char *older = getenv(GI_FAULT_PROTO_MAX_ENV);
+    if (older && atoi(older) >= GI_PROTO_MIN && atoi(older) < GI_PROTO_MAX)
+        h.proto_max = (uint32_t)atoi(older);
     gi_auth_random(h.nonce, sizeof h.nonce);
     h.name = w->name;
     h.version = (char *)GI_VERSION;
@@ -679,8 +686,9 @@ static int handshake(worker *w, gi_error *err)
         rc = gi_msg_challenge_decode(&fr.payload, &ch, err);
         gi_frame_free(&fr);
     }
-    if (rc == 0 && ch.proto != GI_PROTO_VERSION)
-        rc = gi_fail(err, GI_EPROTO, "the coordinator chose protocol version %u", ch.proto);
+    if (rc == 0 && (ch.proto < h.proto_min || ch.proto > h.proto_max))
+        rc = gi_fail(err, GI_EPROTO, "the coordinator chose protocol version %u (this worker "
+                     "speaks %u-%u)", ch.proto, h.proto_min, h.proto_max);
     if (rc == 0) {
         uint8_t mac[GI_MSG_MAC_BYTES];
         gi_auth_worker_mac(w->key, ch.nonce, h.nonce, hello.data, hello.len, mac);
@@ -708,6 +716,7 @@ static int handshake(worker *w, gi_error *err)
         return -1;
     w->heartbeat_s = wm.heartbeat_ms / 1000.0;
     w->lease_s = wm.lease_ms / 1000.0;
+    w->proto = ch.proto;
     gi_info("connected to %s as worker %llu (heartbeat %.2f s, lease %.1f s)", w->o->connect,
             (unsigned long long)wm.worker_id, w->heartbeat_s, w->lease_s);
     return 0;
@@ -719,18 +728,25 @@ static void heartbeat(worker *w)
 {
     size_t n = 0;
     gi_msg_taskref *refs = gi_xcalloc(w->q_count + (size_t)w->pool.count + 1, sizeof *refs);
-    for (size_t i = 0; i < w->q_count; i++)
-        refs[n++] = ref_of(w->q[i].job_id, &w->q[i].task);
+    /* The running ones first (never cut by the list's limit), saying for
+     * how long: the coordinator counts their time limits from there (a
+     * queued task waits off the clock). */
+    double now = gi_now();
     for (int i = 0; i < w->pool.count; i++) {
         const gi_pool_child *k = &w->pool.kids[i];
-        if (k->pid && k->busy)
-            refs[n++] = (gi_msg_taskref){k->job_id, k->task_id, k->attempt};
+        if (!k->pid || !k->busy)
+            continue;
+        double ms = (now - k->started) * 1000.0;
+        uint32_t run_ms = ms <= 0 ? 0 : ms >= (double)UINT32_MAX ? UINT32_MAX : (uint32_t)ms;
+        refs[n++] = (gi_msg_taskref){k->job_id, k->task_id, k->attempt, 1, run_ms};
     }
+    for (size_t i = 0; i < w->q_count; i++)
+        refs[n++] = ref_of(w->q[i].job_id, &w->q[i].task);
     if (n > GI_MSG_MAX_TASKREFS)
         n = GI_MSG_MAX_TASKREFS;
     gi_buf b;
     gi_buf_init(&b);
-    gi_msg_tasklist_encode(&b, ++w->hb_seq, refs, (uint32_t)n);
+    gi_msg_tasklist_encode(&b, ++w->hb_seq, refs, (uint32_t)n, w->proto >= GI_PROTO_RUNS);
     send_frame(w, GI_MSG_HEARTBEAT, &b, 0);
     gi_buf_free(&b);
     free(refs);
@@ -776,7 +792,7 @@ static int stop_now(worker *w, int kill_running)
         for (int i = 0; i < w->pool.count && n < GI_ARRAY_LEN(refs); i++) {
             const gi_pool_child *k = &w->pool.kids[i];
             if (k->pid && k->busy) {
-                refs[n++] = (gi_msg_taskref){k->job_id, k->task_id, k->attempt};
+                refs[n++] = (gi_msg_taskref){k->job_id, k->task_id, k->attempt, 0, 0};
                 replace_child(w, i);
             }
         }

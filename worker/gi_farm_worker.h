@@ -12,8 +12,10 @@
  *   - serves the children's ASSET_NEED from its disk cache, fetching what
  *     it lacks from the coordinator (one request per hash, however many
  *     children wait for it);
- *   - sends HEARTBEATs listing the tasks it holds (renewing their leases) and
- *     gives up on a coordinator silent for 4 leases;
+ *   - sends HEARTBEATs listing the tasks it holds (renewing their leases),
+ *     each running one with how long it has run (protocol 2: time limits
+ *     count from a run's start), and gives up on a coordinator silent for
+ *     4 leases;
  *   - gives each job a batch directory (gi_batch_dir.h) that its children
  *     share; removes it when the coordinator says the job is over (CANCEL
  *     of all its tasks), and sweeps directories idle for
@@ -44,6 +46,11 @@ typedef struct gi_worker_opts {
     int once;              /* exit instead of reconnecting (tests) */
     gi_buf secret;
 } gi_worker_opts;
+
+/* Tests of a farm with older workers: GI_FAULT_PROTO_MAX=N (N from
+ * GI_PROTO_MIN to below GI_PROTO_MAX) makes the worker offer protocol
+ * versions up to N only, as a build of that version would. */
+#define GI_FAULT_PROTO_MAX_ENV "GI_FAULT_PROTO_MAX"
 
 /* Runs until drained (SIGTERM) or, with once, until the first session ends.
  * Returns 0 after a clean drain. */

@@ -1,5 +1,6 @@
 /* fuzz_ctrl: libFuzzer target for the farm's control message decoders
- * (HELLO, CHALLENGE, AUTH, WELCOME, HEARTBEAT / DRAIN task lists, CANCEL).
+ * (HELLO, CHALLENGE, AUTH, WELCOME, HEARTBEAT / DRAIN task lists in both
+ * forms, CANCEL).
  * The first byte picks the decoder, the rest is the payload. A payload
  * that decodes must encode back to the same bytes: every field is
  * explicit, nothing is dropped or defaulted. */
@@ -24,7 +25,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_buf_init(&out);
     gi_buf_put(&in, data + 1, size - 1);
     gi_error err;
-    switch (data[0] % 6) {
+    switch (data[0] % 7) {
     case 0: {
         gi_msg_hello m;
         if (gi_msg_hello_decode(&in, &m, &err) == 0) {
@@ -58,10 +59,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         break;
     }
-    case 4: {
+    case 4:
+    case 6: { /* a list in version 1's form, and with runs (protocol 2's HEARTBEAT) */
+        int runs = data[0] % 7 == 6;
         gi_msg_tasklist m;
-        if (gi_msg_tasklist_decode(&in, "HEARTBEAT message", &m, &err) == 0) {
-            gi_msg_tasklist_encode(&out, m.seq, m.refs, m.count);
+        if (gi_msg_tasklist_decode(&in, "HEARTBEAT message", runs, &m, &err) == 0) {
+            gi_msg_tasklist_encode(&out, m.seq, m.refs, m.count, runs);
             same(&in, &out);
             gi_msg_tasklist_free(&m);
         }

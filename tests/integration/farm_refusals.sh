@@ -48,7 +48,7 @@ peer oversized "HELLO frame payload of 1073741824 bytes exceeds the limit of 655
 peer badcrc "HELLO frame CRC32C mismatch"
 peer unknown-type "frame type 99 is unknown"
 peer garbage 'bad magic "GET "'
-peer version "worker speaks protocol versions 2-3; this coordinator speaks 1"
+peer version "worker speaks protocol versions 3-4; this coordinator speaks 1-2"
 peer result-first "RESULT frames are not accepted on this connection"
 peer auth-oversized-result "RESULT frame payload of 67108864 bytes exceeds the limit of 16777216 bytes"
 peer auth-badcrc "HELLO frames are not accepted on this connection"

@@ -3,9 +3,10 @@
 # task_timeout (or --task-timeout when the job sets none): the child is
 # killed and replaced, the run fails as an attempt, and the retry finishes
 # the render with the image of an undisturbed one; a task that hangs on
-# every run fails the render with the timeout after its attempts. Bad
-# limits are refused naming the flag or the field. `timeout` turns a
-# render that would wait forever into a failure.
+# every run fails the render with the timeout after its attempts. Tasks
+# waiting for a free child are off the clock. Bad limits are refused naming
+# the flag or the field. `timeout` turns a render that would wait forever
+# into a failure.
 . "$(dirname "$0")/lib.sh"
 write_job "$TMP/job.json" <<JOB
 {
@@ -29,6 +30,17 @@ grep -q "task 2 ran longer than its task_timeout of 2 s on pool child [01] (pid 
     "$TMP/once.log" || { cat "$TMP/once.log"; fail "the timeout is not reported"; }
 grep -q "16 tasks, 1 retried (0 worker crashes, 1 stopped at their time limit)" "$TMP/once.log" || { cat "$TMP/once.log"; fail "no retry counted"; }
 cmp "$TMP/ref/img.exr" "$TMP/once/img.exr" || fail "image differs after the timeout"
+
+# 1b. The limit counts from a run's start in its pool child, never from
+# the wait for a free child: one child, every task sleeping 0.5 s first
+# (GI_FAULT_SLOW_TASK), so the last waits ~8 s, four times the limit;
+# only the hung run of task 2 is stopped.
+GI_FAULT_SLOW_TASK=$(seq -s, 0 15) GI_FAULT_SLOW_S=0.5 GI_FAULT_HANG_TASK=2:0 timeout 120 \
+    "$GI" render "$TMP/job.json" --workers 1 --out "$TMP/queued" --progress none \
+    >"$TMP/queued.log" 2>&1 || { cat "$TMP/queued.log"; fail "render with one child and a hang"; }
+grep -q "16 tasks, 1 retried (0 worker crashes, 1 stopped at their time limit)" "$TMP/queued.log" ||
+    { cat "$TMP/queued.log"; fail "waiting tasks were stopped, or the hang was not"; }
+cmp "$TMP/ref/img.exr" "$TMP/queued/img.exr" || fail "image differs (one child)"
 
 # 2. --task-timeout for a job with no limit of its own; task 2 hangs every
 # time: after 4 runs (gi render's attempts) the render fails, saying why.

@@ -60,11 +60,11 @@ static void send_bad(int fd, const char *mode)
         const char g[] = "GET / HTTP/1.1\r\nHost: x\r\n\r\n";
         gi_write_all(fd, g, sizeof g - 1, NULL);
     } else if (strcmp(mode, "version") == 0) {
-        /* A worker from the future: speaks only versions 2-3. */
+        /* A worker from the future: speaks only versions 3-4. */
         gi_msg_hello h;
         memset(&h, 0, sizeof h);
-        h.proto_min = 2;
-        h.proto_max = 3;
+        h.proto_min = 3;
+        h.proto_max = 4;
         h.name = "future";
         h.version = "9.0";
         h.procs = h.slots = h.cores = 1;
@@ -93,7 +93,8 @@ static int authenticate(int fd, gi_error *err)
     gi_secret_free(&secret);
     gi_msg_hello h;
     memset(&h, 0, sizeof h);
-    h.proto_min = h.proto_max = GI_PROTO_VERSION;
+    h.proto_min = GI_PROTO_MIN;
+    h.proto_max = GI_PROTO_MAX;
     gi_auth_random(h.nonce, sizeof h.nonce);
     h.name = "rawpeer";
     h.version = "test";

@@ -122,27 +122,31 @@ GI_TEST(test_msg_handshake_roundtrips)
 
 GI_TEST(test_msg_tasklist_and_cancel)
 {
-    gi_msg_taskref refs[3] = {{1, 2, 0}, {1, 7, 3}, {UINT64_MAX, 0, UINT32_MAX}};
+    gi_msg_taskref refs[3] = {{1, 2, 0, 0, 0}, {1, 7, 3, 0, 0}, {UINT64_MAX, 0, UINT32_MAX, 0, 0}};
     gi_buf b;
     gi_buf_init(&b);
-    gi_msg_tasklist_encode(&b, 99, refs, 3);
+    gi_msg_tasklist_encode(&b, 99, refs, 3, 0);
+    GI_CHECK(b.len == 12 + 3 * 20); /* version 1's form: no running flags */
     gi_msg_tasklist tl;
     gi_error err;
-    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", &tl, &err));
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 0, &tl, &err));
     GI_CHECK(tl.seq == 99 && tl.count == 3);
     for (int i = 0; i < 3; i++)
         GI_CHECK(tl.refs[i].job_id == refs[i].job_id && tl.refs[i].task_id == refs[i].task_id &&
-                 tl.refs[i].attempt == refs[i].attempt);
+                 tl.refs[i].attempt == refs[i].attempt && !tl.refs[i].running &&
+                 !tl.refs[i].run_ms);
     gi_msg_tasklist_free(&tl);
+    /* Read as a list with runs, version 1's bytes do not fit. */
+    GI_CHECK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 1, &tl, &err) != 0);
     /* A count the bytes cannot hold is refused before anything is allocated. */
     gi_buf_reset(&b);
     gi_buf_put_u64(&b, 1);
     gi_buf_put_u32(&b, 4000);
-    GI_CHECK(gi_msg_tasklist_decode(&b, "DRAIN message", &tl, &err) != 0);
+    GI_CHECK(gi_msg_tasklist_decode(&b, "DRAIN message", 0, &tl, &err) != 0);
     GI_CHECK(strstr(err.msg, "DRAIN message: 4000 task references") != NULL);
     gi_buf_reset(&b);
-    gi_msg_tasklist_encode(&b, 0, NULL, 0);
-    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "DRAIN message", &tl, &err));
+    gi_msg_tasklist_encode(&b, 0, NULL, 0, 0);
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "DRAIN message", 0, &tl, &err));
     GI_CHECK(tl.count == 0);
     gi_msg_tasklist_free(&tl);
 
@@ -152,6 +156,58 @@ GI_TEST(test_msg_tasklist_and_cancel)
     GI_REQUIRE_OK(gi_msg_cancel_decode(&b, &c2, &err));
     GI_CHECK(c2.job_id == 5 && c2.task_id == GI_MSG_ALL_TASKS);
     gi_buf_free(&b);
+}
+
+/* Protocol 2's HEARTBEAT: each held task says whether it runs and for how
+ * long; the coordinator counts task time limits from there. */
+GI_TEST(test_msg_tasklist_runs)
+{
+    gi_msg_taskref refs[3] = {{1, 2, 0, 1, 1500}, {1, 7, 3, 0, 0}, {4, 5, 6, 1, UINT32_MAX}};
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_msg_tasklist_encode(&b, 7, refs, 3, 1);
+    GI_CHECK(b.len == 12 + 3 * 25);
+    gi_msg_tasklist tl;
+    gi_error err;
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 1, &tl, &err));
+    GI_CHECK(tl.seq == 7 && tl.count == 3);
+    for (int i = 0; i < 3; i++)
+        GI_CHECK(tl.refs[i].job_id == refs[i].job_id && tl.refs[i].task_id == refs[i].task_id &&
+                 tl.refs[i].attempt == refs[i].attempt && tl.refs[i].running == refs[i].running &&
+                 tl.refs[i].run_ms == refs[i].run_ms);
+    gi_msg_tasklist_free(&tl);
+    /* Read as version 1's form, the bytes do not fit. */
+    GI_CHECK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 0, &tl, &err) != 0);
+    /* A flag other than 0 or 1, and a queued task that has run, are refused
+     * naming the reference. */
+    size_t flag1 = 12 + 25 + 20; /* the second reference's running flag */
+    b.data[flag1] = 2;
+    GI_CHECK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 1, &tl, &err) != 0);
+    GI_CHECK(strstr(err.msg, "HEARTBEAT message: task reference 1: running 2") != NULL);
+    b.data[flag1] = 0;
+    b.data[flag1 + 1] = 9;
+    GI_CHECK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 1, &tl, &err) != 0);
+    GI_CHECK(strstr(err.msg, "task reference 1: running 0, run_ms 9") != NULL);
+    /* A queued task's run_ms is never sent, whatever the struct holds. */
+    refs[1].run_ms = 5;
+    gi_buf_reset(&b);
+    gi_msg_tasklist_encode(&b, 7, refs, 3, 1);
+    GI_REQUIRE_OK(gi_msg_tasklist_decode(&b, "HEARTBEAT message", 1, &tl, &err));
+    GI_CHECK(tl.refs[1].run_ms == 0);
+    gi_msg_tasklist_free(&tl);
+    gi_buf_free(&b);
+}
+
+/* The version a coordinator picks: the highest both speak. */
+GI_TEST(test_msg_proto_choose)
+{
+    GI_CHECK(gi_msg_proto_choose(1, 1) == 1);              /* an older worker */
+    GI_CHECK(gi_msg_proto_choose(1, 2) == 2);              /* this build's */
+    GI_CHECK(gi_msg_proto_choose(1, 9) == GI_PROTO_MAX);   /* a newer one that speaks ours */
+    GI_CHECK(gi_msg_proto_choose(2, 2) == 2);
+    GI_CHECK(gi_msg_proto_choose(3, 4) == 0);              /* none in common */
+    GI_CHECK(gi_msg_proto_choose(0, 0) == 0);
+    GI_CHECK(GI_PROTO_MIN <= GI_PROTO_RUNS && GI_PROTO_RUNS <= GI_PROTO_MAX);
 }
 
 /* A FAIL keeps its code: a host's full disk (GI_EHOST) must reach the

@@ -472,7 +472,7 @@ GI_TEST(frame_refuses_bad_header_fields)
     expect_refused(NULL, &b, "bad magic \"\\x00\\xffGI\"", __LINE__);
     gi_buf_reset(&b);
     raw_frame(&b, "GIF1", 2, GI_MSG_HELLO, 0, 2, "hi", 2, 0);
-    expect_refused(NULL, &b, "protocol version 2 is not supported (this build speaks version 1)",
+    expect_refused(NULL, &b, "frame version 2 is not supported (this build frames version 1)",
                    __LINE__);
     gi_buf_reset(&b);
     raw_frame(&b, "GIF1", 1, 0, 0, 2, "hi", 2, 0);
