@@ -53,6 +53,7 @@ void gi_farm_config_default(gi_farm_config *c)
     c->max_attempts = 4;
     c->max_task_losses = 8; /* why 8: gi_jobrun.c, DEFAULT_MAX_LOSSES */
     c->blocklist_failures = 5;
+    c->blocklist_losses = 3; /* why 3: gi_farm_sched.c, Blocklisting */
     c->blocklist_s = 600.0;
     c->max_asset_bytes = (uint64_t)1 << 30;
     c->max_store_bytes = (uint64_t)64 << 30;

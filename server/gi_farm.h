@@ -45,6 +45,7 @@ typedef struct gi_farm_config {
      * own task_timeout; 0: no limit. */
     double task_timeout_s;
     uint32_t blocklist_failures; /* consecutive task failures that blocklist a worker */
+    uint32_t blocklist_losses;   /* losses of a host in a row (no result between), likewise */
     double blocklist_s;          /* for how long */
     uint64_t max_asset_bytes;    /* one uploaded asset */
     uint64_t max_store_bytes;    /* all uploaded assets together */

@@ -183,6 +183,10 @@ typedef struct gi_farm_host {
     char name[GI_MSG_MAX_NAME + 1];
     uint32_t consecutive_failures;
     uint64_t failures, successes;
+    /* Losses with tasks held (gi_farm_sched.c, Blocklisting); consecutive:
+     * since its last result. */
+    uint32_t consecutive_losses;
+    uint64_t losses;
     double blocked_until; /* monotonic; 0 = not blocklisted */
     /* Set by each scheduling round: an authenticated, active connection of
      * this host can take work now or when a slot frees (affinity owners). */
@@ -216,6 +220,7 @@ typedef struct gi_farm_conn {
     char (*asset_q)[GI_HASH_HEX];
     size_t asset_q_head, asset_q_count, asset_q_cap;
     uint64_t tasks_done, tasks_failed, result_bytes;
+    double lost_at; /* monotonic: when a loss of its host was last counted for it; 0: never */
     char close_reason[256];
 } gi_farm_conn;
 
@@ -226,6 +231,7 @@ typedef struct gi_farm_metrics {
     uint64_t tasks_leased, task_results, task_failures, late_results, lease_expiries;
     uint64_t requeued;
     uint64_t tasks_lost; /* runs lost with their host: requeued, not counted as attempts */
+    uint64_t host_losses; /* hosts lost with tasks held, once per loss (blocklisting) */
     uint64_t task_timeouts; /* runs stopped for their time limit: failed (attempts) */
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;

@@ -62,7 +62,22 @@
  * Blocklisting. A worker (by name, across reconnections) whose tasks fail
  * `blocklist_failures` times in a row gets no tasks for `blocklist_s`.
  * Failures that are the job's fault (GI_EINVAL: bad input) do not count,
- * nor do timeouts (lease_overdue does not report them as host failures). */
+ * nor do timeouts (lease_overdue does not report them as host failures).
+ * So does a host lost with tasks held `blocklist_losses` times (3 by
+ * default) with no result accepted from it in between (host_lost): a
+ * machine that keeps dying (bad memory, an OOM killer, a flapping link)
+ * would otherwise take tasks again and again and lose them. A loss is one
+ * event however many tasks it held: a connection lost or closed for an
+ * error while holding leases, or leases of a connection expiring (those
+ * expiring within a lease time of a counted loss of that connection are
+ * the same loss). One network blip or one kill-and-restart is one loss,
+ * and the host's next result wipes it; a worker that drains (SIGTERM)
+ * hands back or finishes what it holds and loses nothing; a connection
+ * ended by BYE requeues what it held without a loss. Why 3: two losses in
+ * a row happen to a healthy host (a reboot during a network outage), a
+ * third without one task finished between them rarely does. A task that
+ * takes every host down can blocklist a host it meets three times before
+ * that host finishes anything, but max_losses (8) fails its job soon. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -415,6 +430,19 @@ void gi_farm_schedule(gi_farm *f)
 
 /* ---- what workers report ------------------------------------------------- */
 
+/* Blocklists h after `count` of `what` in a row (see the header), unless
+ * it is already. */
+static void host_block(gi_farm *f, gi_farm_host *h, uint32_t count, uint32_t bound,
+                       const char *what, const char *last)
+{
+    double now = gi_now();
+    if (count < bound || gi_farm_host_blocked(h, now))
+        return;
+    h->blocked_until = now + f->cfg.blocklist_s;
+    gi_warn("worker %s blocklisted for %.0f s after %u %s in a row; last: %s", h->name,
+            f->cfg.blocklist_s, count, what, last);
+}
+
 static void host_failure(gi_farm *f, gi_farm_conn *c, const gi_error *e)
 {
     gi_farm_host *h = c->host;
@@ -423,11 +451,24 @@ static void host_failure(gi_farm *f, gi_farm_conn *c, const gi_error *e)
     h->failures++;
     h->consecutive_failures++;
     snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
-    if (h->consecutive_failures >= f->cfg.blocklist_failures && !gi_farm_host_blocked(h, gi_now())) {
-        h->blocked_until = gi_now() + f->cfg.blocklist_s;
-        gi_warn("worker %s blocklisted for %.0f s after %u consecutive task failures; last: %s",
-                h->name, f->cfg.blocklist_s, h->consecutive_failures, e->msg);
-    }
+    host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures, "task failures", e->msg);
+}
+
+/* c's host was lost with tasks held (see the header: Blocklisting). Leases
+ * of one connection expiring within a lease time of a counted loss are the
+ * same loss (they were sent at different times, so expire apart). */
+static void host_lost(gi_farm *f, gi_farm_conn *c, double now, const char *why)
+{
+    gi_farm_host *h = c->host;
+    if (!h || (c->lost_at > 0 && now - c->lost_at < f->cfg.lease_s))
+        return;
+    c->lost_at = now;
+    h->losses++;
+    h->consecutive_losses++;
+    f->m.host_losses++;
+    snprintf(h->last_error, sizeof h->last_error, "%.500s", why);
+    host_block(f, h, h->consecutive_losses, f->cfg.blocklist_losses,
+               "losses with tasks held (no result in between)", why);
 }
 
 static void late(gi_farm *f, gi_farm_conn *c, const char *what, uint64_t job, uint64_t task,
@@ -546,6 +587,7 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
     }
     if (c->host) {
         c->host->consecutive_failures = 0;
+        c->host->consecutive_losses = 0;
         c->host->successes++;
     }
     const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l.task_id);
@@ -640,6 +682,12 @@ void gi_farm_sched_drain(gi_farm *f, gi_farm_conn *c, const gi_msg_tasklist *bac
 void gi_farm_sched_release(gi_farm *f, gi_farm_conn *c, int crash, const char *why)
 {
     size_t held = c->lease_count;
+    if (crash && held) {
+        char what[400];
+        snprintf(what, sizeof what, "lost with %zu task%s: %.300s", held, held == 1 ? "" : "s",
+                 why);
+        host_lost(f, c, gi_now(), what);
+    }
     while (c->lease_count) {
         gi_farm_lease l = lease_take(c, c->lease_count - 1);
         gi_farm_job *j = running_job(f, l.job_id);
@@ -729,6 +777,7 @@ void gi_farm_sched_expire(gi_farm *f, double now)
                 continue;
             }
             gi_farm_lease l = lease_take(c, i);
+            host_lost(f, c, now, "its leases expired: not renewed in time");
             gi_farm_job *j = running_job(f, l.job_id);
             if (!j)
                 continue;

@@ -231,6 +231,8 @@ char *gi_farm_view_workers(gi_farm *f)
         const gi_farm_host *h = c->host;
         int blocked = h && gi_farm_host_blocked(h, now);
         cJSON_AddNumberToObject(o, "consecutive_failures", h ? h->consecutive_failures : 0);
+        cJSON_AddNumberToObject(o, "losses", h ? (double)h->losses : 0);
+        cJSON_AddNumberToObject(o, "consecutive_losses", h ? h->consecutive_losses : 0);
         cJSON_AddNumberToObject(o, "blocklisted_seconds",
                                 blocked ? floor(h->blocked_until - now) : 0);
         if (h && h->last_error[0]) /* null when there is none, as in a job's view */
@@ -334,6 +336,10 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_tasks_lost_total",
             "Task runs lost with their host (connection lost, lease expired): requeued.",
             (double)m->tasks_lost);
+    counter(&b, "gi_farm_host_losses_total",
+            "Hosts lost with tasks held (connection lost, leases expired), once per loss "
+            "however many tasks: they count towards blocklisting.",
+            (double)m->host_losses);
     counter(&b, "gi_farm_late_results_total", "Results and failures discarded: lease no longer held.",
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);

@@ -49,6 +49,9 @@ static void usage(FILE *out)
             "                              off, lease expired) before its job fails (8);\n"
             "                              such runs are requeued, not counted as attempts\n"
             "  --blocklist-failures N --blocklist-seconds S   (5, 600)\n"
+            "  --blocklist-losses N        a host lost with tasks held (connection lost, leases\n"
+            "                              expired) N times in a row, no result in between, is\n"
+            "                              blocklisted too (3; a drain loses nothing)\n"
             "  --max-asset-bytes B --max-store-bytes B --max-result-bytes B  (1G, 64G, 1G)\n"
             "  --max-pixels N --max-jobs N --max-workers N    (64M, 1000, 1024)\n"
             "  --max-jobs-memory B         what all jobs kept may hold, ended ones too (1G)\n"
@@ -109,6 +112,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--max-attempts", offsetof(gi_farm_config, max_attempts), 1, 100},
         {"--max-task-losses", offsetof(gi_farm_config, max_task_losses), 1, 1000},
         {"--blocklist-failures", offsetof(gi_farm_config, blocklist_failures), 1, 1000000},
+        {"--blocklist-losses", offsetof(gi_farm_config, blocklist_losses), 1, 1000000},
         {"--max-jobs", offsetof(gi_farm_config, max_jobs), 1, 1000000},
         {"--max-workers", offsetof(gi_farm_config, max_workers), 1, 100000},
     };

@@ -7,6 +7,9 @@
 # (GI_FAULT_KILL_HOST_TASK, GI_FAULT_STOP_HOST_TASK: the pool child that
 # gets it signals its gi-worker), so the test needs no timing but a lease
 # of 1 s: each gi-worker dies on that task, and the next one is started.
+# Losses count towards a host's blocklisting (--blocklist-losses): one loss
+# does not blocklist, the host's next result wipes it, a drain loses
+# nothing; a host lost 3 times in a row, finishing nothing, is blocklisted.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -87,5 +90,83 @@ cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "image differs after
 api /api/v1/jobs/1 | grep -q "task 3 (attempt 0) was lost with its host s[12] (loss 1 of 8; requeued, not counted as an attempt): lease expired on worker s[12]" ||
     { api /api/v1/jobs/1; fail "the job's log does not say the lease expired"; }
 stop_farmd "$LOG"
+
+"$FARMD" --state "$TMP/bad" --blocklist-losses 0 >"$TMP/flag.log" 2>&1 && fail "--blocklist-losses 0"
+grep -q -- '--blocklist-losses: "0" is not an integer in \[1, 1000000\]' "$TMP/flag.log" ||
+    { cat "$TMP/flag.log"; fail "no clear error for --blocklist-losses 0"; }
+"$FARMD" --help | grep -q -- "--blocklist-losses N" || fail "--help does not name --blocklist-losses"
+
+# worker_view NAME: the last entry of GET /api/v1/workers for NAME.
+worker_view() {
+    api /api/v1/workers | grep -o "{[^{}]*\"name\":\"$1\"[^{}]*}" | tail -n 1
+}
+
+# 4. Losses and blocklisting (--blocklist-losses 3). Host "flaky" dies once
+# (task 2 kills it), comes back under its name and finishes the job: one
+# loss, wiped by its results, no blocklisting.
+LOG="$TMP/farmd4.log"
+start_farmd "$TMP/state4" "$LOG" -- --heartbeat 0.2 --lease 3 --dead 10 --blocklist-losses 3
+id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
+GI_FAULT_KILL_HOST_TASK=2:0 "$WORKER" --once --connect "$WADDR" --procs 1 --queue 0 \
+    --cache "$TMP/cache-flaky" --name flaky >>"$TMP/flaky.log" 2>&1 || true
+n=0
+until [ "$(metric gi_farm_host_losses_total)" = 1 ]; do
+    n=$((n + 1))
+    [ $n -lt 100 ] || fail "host losses after flaky died: $(metric gi_farm_host_losses_total)"
+    sleep 0.1
+done
+# Every task of this incarnation sleeps 0.3 s first, so it still holds one
+# when told to drain below.
+start_worker "$TMP/flaky.log" env GI_FAULT_SLOW_TASK="$(seq -s, 0 15)" GI_FAULT_SLOW_S=0.3 -- \
+    --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/cache-flaky" --name flaky
+FLAKY=$WORKER_PID
+"$GI" wait "$id" --out "$TMP/out4" --progress none >"$TMP/wait4.log" 2>&1 ||
+    { cat "$TMP/wait4.log"; fail "the job of a host lost once did not finish"; }
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out4/img.exr" || fail "image differs after a host lost once"
+v=$(worker_view flaky)
+echo "$v" | grep -q '"state":"active".*"losses":1,"consecutive_losses":0,' ||
+    fail "flaky after one loss and its results: $v"
+# A drain loses nothing: SIGTERM while flaky runs a task of a second job.
+id2=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
+wait_merged "$id2" 16
+kill -TERM "$FLAKY"
+wait "$FLAKY" || fail "flaky did not drain cleanly"
+grep -q "draining: 0 queued tasks handed back, finishing 1 running ones" "$TMP/flaky.log" ||
+    fail "flaky held no task when it drained"
+wait_log "$LOG" "worker flaky (.*) left: said goodbye"
+[ "$(metric gi_farm_host_losses_total)" = 1 ] ||
+    fail "a drain counted as a loss: $(metric gi_farm_host_losses_total)"
+# Host "bad" dies on every task it gets: after its third loss in a row,
+# nothing finished in between, it is blocklisted; its fourth incarnation
+# gets no task, and host "good" finishes the job.
+spec=$(for t in $(seq 0 15); do for a in $(seq 0 9); do printf '%s:%s,' "$t" "$a"; done; done)
+(
+    for i in 1 2 3 4; do
+        GI_FAULT_KILL_HOST_TASK="$spec" "$WORKER" --once --connect "$WADDR" --procs 1 \
+            --queue 0 --cache "$TMP/cache-bad" --name bad >>"$TMP/bad.log" 2>&1 || true
+    done
+) &
+FARM_PIDS="$FARM_PIDS $!"
+show_on_failure "$TMP/bad.log"
+wait_log "$LOG" "worker bad blocklisted for 600 s after 3 losses with tasks held (no result in between) in a row; last: lost with 1 task"
+[ "$(metric gi_farm_host_losses_total)" = 4 ] || fail "host losses: $(metric gi_farm_host_losses_total)"
+n=0
+until worker_view bad | grep -q '"state":"blocklisted"'; do
+    n=$((n + 1))
+    [ $n -lt 100 ] || { api /api/v1/workers; fail "bad's fourth incarnation is not listed blocklisted"; }
+    sleep 0.1
+done
+v=$(worker_view bad)
+echo "$v" | grep -q '"tasks_leased":0,.*"losses":3,"consecutive_losses":3,' ||
+    fail "bad after 3 losses: $v"
+[ "$(metric 'gi_farm_workers{state="blocklisted"}')" = 1 ] ||
+    { api /metrics; fail "no blocklisted worker in the metrics"; }
+start_worker "$TMP/good.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cache-good" --name good
+"$GI" wait "$id2" --out "$TMP/out5" --progress none >"$TMP/wait5.log" 2>&1 ||
+    { cat "$TMP/wait5.log"; fail "the job did not finish on the good host"; }
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out5/img.exr" || fail "image differs after a blocklisted host"
+worker_view bad | grep -q '"tasks_done":0,' || fail "the blocklisted host ran a task: $(worker_view bad)"
+stop_farmd "$LOG"
 echo "ok: 4 hosts lost under one task, job done and identical; a host killer fails its job;"
-echo "a silent host's lease expired without an attempt counted"
+echo "a silent host's lease expired without an attempt counted; a host lost three times in"
+echo "a row is blocklisted, one lost once or drained is not"
