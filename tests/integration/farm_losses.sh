@@ -91,10 +91,12 @@ api /api/v1/jobs/1 | grep -q "task 3 (attempt 0) was lost with its host s[12] (l
     { api /api/v1/jobs/1; fail "the job's log does not say the lease expired"; }
 stop_farmd "$LOG"
 
-"$FARMD" --state "$TMP/bad" --blocklist-losses 0 >"$TMP/flag.log" 2>&1 && fail "--blocklist-losses 0"
+"$FARMD" --state "$TMP/bad" --blocklist-losses 0 >"$TMP/flag.log" 2>&1 &&
+    fail "--blocklist-losses 0"
 grep -q -- '--blocklist-losses: "0" is not an integer in \[1, 1000000\]' "$TMP/flag.log" ||
     { cat "$TMP/flag.log"; fail "no clear error for --blocklist-losses 0"; }
-"$FARMD" --help | grep -q -- "--blocklist-losses N" || fail "--help does not name --blocklist-losses"
+"$FARMD" --help | grep -q -- "--blocklist-losses N" ||
+    fail "--help does not name --blocklist-losses"
 
 # worker_view NAME: the last entry of GET /api/v1/workers for NAME.
 worker_view() {
@@ -148,12 +150,14 @@ spec=$(for t in $(seq 0 15); do for a in $(seq 0 9); do printf '%s:%s,' "$t" "$a
 ) &
 FARM_PIDS="$FARM_PIDS $!"
 show_on_failure "$TMP/bad.log"
-wait_log "$LOG" "worker bad blocklisted for 600 s after 3 losses with tasks held (no result in between) in a row; last: lost with 1 task"
-[ "$(metric gi_farm_host_losses_total)" = 4 ] || fail "host losses: $(metric gi_farm_host_losses_total)"
+wait_log "$LOG" "worker bad blocklisted for 600 s after 3 losses with tasks held (no result in \
+between) in a row; last: lost with 1 task"
+[ "$(metric gi_farm_host_losses_total)" = 4 ] ||
+    fail "host losses: $(metric gi_farm_host_losses_total)"
 n=0
 until worker_view bad | grep -q '"state":"blocklisted"'; do
     n=$((n + 1))
-    [ $n -lt 100 ] || { api /api/v1/workers; fail "bad's fourth incarnation is not listed blocklisted"; }
+    [ $n -lt 100 ] || { api /api/v1/workers; fail "bad's fourth run is not listed blocklisted"; }
     sleep 0.1
 done
 v=$(worker_view bad)
@@ -165,7 +169,8 @@ start_worker "$TMP/good.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cache
 "$GI" wait "$id2" --out "$TMP/out5" --progress none >"$TMP/wait5.log" 2>&1 ||
     { cat "$TMP/wait5.log"; fail "the job did not finish on the good host"; }
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out5/img.exr" || fail "image differs after a blocklisted host"
-worker_view bad | grep -q '"tasks_done":0,' || fail "the blocklisted host ran a task: $(worker_view bad)"
+worker_view bad | grep -q '"tasks_done":0,' ||
+    fail "the blocklisted host ran a task: $(worker_view bad)"
 stop_farmd "$LOG"
 echo "ok: 4 hosts lost under one task, job done and identical; a host killer fails its job;"
 echo "a silent host's lease expired without an attempt counted; a host lost three times in"

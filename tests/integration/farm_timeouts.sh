@@ -99,7 +99,8 @@ timeout 120 "$GI" wait "$id" --out "$TMP/out3" --progress none >"$TMP/wait3.log"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "image differs (queued tasks)"
 [ "$(jnum "$id" timeouts)" = 1 ] && [ "$(jnum "$id" retries)" = 1 ] ||
     { api "/api/v1/jobs/$id"; fail "queued tasks were stopped, or the hang was not: see timeouts"; }
-api "/api/v1/jobs/$id" | grep -q "task 2 (attempt 0) failed on w3: task 2 ran longer than its task_timeout of 3 s" ||
+api "/api/v1/jobs/$id" |
+    grep -q "task 2 (attempt 0) failed on w3: task 2 ran longer than its task_timeout of 3 s" ||
     { api "/api/v1/jobs/$id"; fail "the job's log does not say task 2 was stopped"; }
 [ "$(metric gi_farm_task_timeouts_total)" = 1 ] ||
     fail "task_timeouts metric: $(metric gi_farm_task_timeouts_total)"
@@ -116,12 +117,13 @@ start_worker "$TMP/w4.log" env GI_FAULT_SLOW_TASK="$slow" GI_FAULT_SLOW_S=0.8 \
 wait_workers 1
 api /api/v1/workers | grep -q '"name":"w4".*"protocol":1' ||
     { api /api/v1/workers; fail "w4 does not speak protocol 1"; }
-grep -q "worker w4 (.*) joined: .*, protocol 1, version" "$LOG" || fail "the log does not say protocol 1"
+grep -q "worker w4 (.*) joined: .*, protocol 1, version" "$LOG" ||
+    fail "the log does not say protocol 1"
 id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
 n=0
 until [ "$(metric gi_farm_task_timeouts_total)" -ge 1 ]; do
     n=$((n + 1))
-    [ $n -lt 300 ] || { api "/api/v1/jobs/$id"; fail "no queued task stopped on a protocol 1 worker"; }
+    [ $n -lt 300 ] || { api "/api/v1/jobs/$id"; fail "no queued task stopped (protocol 1)"; }
     sleep 0.1
 done
 "$GI" cancel "$id" >/dev/null 2>&1 || fail "cancel"
