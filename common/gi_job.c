@@ -242,44 +242,74 @@ const gi_camera *gi_job_camera(const gi_job *job)
     return job->has_camera ? &job->camera : &job->scene.camera;
 }
 
-/* path names the same file as one of `inputs` (n stat results). */
-static int same_file(const char *path, const struct stat *inputs, size_t n)
+void gi_job_inputs_add(gi_job_inputs *in, const char *path, const char *what)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return; /* a file that is not there cannot be replaced */
+    if (in->count == in->cap) {
+        in->cap = in->cap ? 2 * in->cap : 16;
+        in->items = gi_xrealloc(in->items, in->cap * sizeof *in->items);
+    }
+    gi_job_input *it = &in->items[in->count++];
+    it->dev = (uint64_t)st.st_dev;
+    it->ino = (uint64_t)st.st_ino;
+    it->what = gi_xstrdup(what);
+}
+
+void gi_job_inputs_init(gi_job_inputs *in, const gi_job *job, const char *job_path)
+{
+    memset(in, 0, sizeof *in);
+    gi_job_inputs_add(in, job_path, "the job file");
+    char *dir = gi_dirname(job_path);
+    for (size_t i = 0; i < job->manifest.count; i++) {
+        const char *name = job->manifest.entries[i].name;
+        char *p = gi_path_join(dir, name);
+        size_t len = strlen(name) + 32;
+        char *what = gi_xmalloc(len);
+        snprintf(what, len, "the scene's %s", name);
+        gi_job_inputs_add(in, p, what);
+        free(what);
+        free(p);
+    }
+    free(dir);
+}
+
+void gi_job_inputs_free(gi_job_inputs *in)
+{
+    for (size_t i = 0; i < in->count; i++)
+        free(in->items[i].what);
+    free(in->items);
+    memset(in, 0, sizeof *in);
+}
+
+int gi_job_inputs_spare(const gi_job_inputs *in, const char *path, const char *job_path,
+                        const char *kind, gi_error *err)
 {
     struct stat st;
     if (stat(path, &st) != 0)
         return 0;
-    for (size_t i = 0; i < n; i++)
-        if (st.st_dev == inputs[i].st_dev && st.st_ino == inputs[i].st_ino)
-            return 1;
+    for (size_t i = 0; i < in->count; i++)
+        if ((uint64_t)st.st_dev == in->items[i].dev && (uint64_t)st.st_ino == in->items[i].ino)
+            return gi_fail(err, GI_EINVAL,
+                           "%s: outputs.%s: %s would replace one of the job's own files (%s): "
+                           "name the output otherwise or write into another --out",
+                           job_path, kind, path, in->items[i].what);
     return 0;
 }
 
 int gi_job_outputs_spare_inputs(const gi_job *job, const char *job_path, const char *out_dir,
                                 gi_error *err)
 {
-    size_t n = 0;
-    struct stat *inputs = gi_xmalloc((job->manifest.count + 1) * sizeof *inputs);
-    if (stat(job_path, &inputs[n]) == 0)
-        n++;
-    char *dir = gi_dirname(job_path);
-    for (size_t i = 0; i < job->manifest.count; i++) {
-        char *p = gi_path_join(dir, job->manifest.entries[i].name);
-        if (stat(p, &inputs[n]) == 0)
-            n++;
-        free(p);
-    }
-    free(dir);
+    gi_job_inputs in;
+    gi_job_inputs_init(&in, job, job_path);
     int rc = 0;
     for (int i = 0; i < job->output_count && rc == 0; i++) {
         char *p = gi_path_join(out_dir, job->outputs[i].file);
-        if (same_file(p, inputs, n))
-            rc = gi_fail(err, GI_EINVAL,
-                         "%s: outputs.%s: %s would replace one of the job's own files (the job "
-                         "or its scene): name the output otherwise or render into another --out",
-                         job_path, job->outputs[i].kind, p);
+        rc = gi_job_inputs_spare(&in, p, job_path, job->outputs[i].kind, err);
         free(p);
     }
-    free(inputs);
+    gi_job_inputs_free(&in);
     return rc;
 }
 

@@ -96,9 +96,29 @@ int gi_job_load_scene(gi_job *job, const gi_asset_source *src, gi_error *err);
 
 /* The camera the job renders with (job override, else the scene's). */
 const gi_camera *gi_job_camera(const gi_job *job);
+/* Files a job reads, which none of its outputs may replace: identified by
+ * device and inode (another path to the same file is the same file), each
+ * with how a message names it ("the job file"). */
+typedef struct gi_job_input {
+    uint64_t dev, ino;
+    char *what;
+} gi_job_input;
+typedef struct gi_job_inputs {
+    gi_job_input *items;
+    size_t count, cap;
+} gi_job_inputs;
+/* The job file at job_path and the files its scene read (job->manifest,
+ * names relative to the job file's directory). */
+void gi_job_inputs_init(gi_job_inputs *in, const gi_job *job, const char *job_path);
+/* One more input (a file that does not exist is skipped: nothing to lose). */
+void gi_job_inputs_add(gi_job_inputs *in, const char *path, const char *what);
+void gi_job_inputs_free(gi_job_inputs *in);
+/* Refuses (GI_EINVAL, naming job_path, the output's kind, path and the input)
+ * writing an output of `kind` at `path` that is one of `in`. */
+int gi_job_inputs_spare(const gi_job_inputs *in, const char *path, const char *job_path,
+                        const char *kind, gi_error *err);
 /* Refuses (GI_EINVAL, naming the output) a job whose output in out_dir would
- * replace one of its inputs: the job file at job_path, or a file its scene
- * read (job->manifest, names relative to the job file's directory). */
+ * replace one of its inputs (gi_job_inputs_init). */
 int gi_job_outputs_spare_inputs(const gi_job *job, const char *job_path, const char *out_dir,
                                 gi_error *err);
 /* The output file of a kind ("exr"), or NULL if the job does not ask for it. */

@@ -104,6 +104,80 @@ static void print_written(void *user, const char *kind, const char *path)
     printf("  %-4s %s\n", kind, path);
 }
 
+/* The files relight writes in a->out: each kind's file per emission set,
+ * the report as NAME-relight (rad_relight.h); exr and png with --images.
+ * Returns how many paths (malloc'ed) it put in `paths`, kinds beside. */
+static int relight_outputs(const relight_args *a, const gi_job *job, const gi_rad_emissions *em,
+                           char ***paths, const char ***kinds)
+{
+    static const char *const per_set[] = {"ply", "glb", "exr", "png"};
+    int n = 0, cap = (int)(4 * em->count + 1);
+    *paths = gi_xcalloc((size_t)cap, sizeof **paths);
+    *kinds = gi_xcalloc((size_t)cap, sizeof **kinds);
+    for (int k = 0; k < (a->images ? 4 : 2); k++) {
+        const char *file = gi_job_output(job, per_set[k]);
+        for (uint32_t i = 0; file && i < em->count; i++, n++) {
+            char *name = gi_rad_output_name(file, em->items[i].name);
+            (*paths)[n] = gi_path_join(a->out, name);
+            (*kinds)[n] = per_set[k];
+            free(name);
+        }
+    }
+    const char *rep = gi_job_output(job, "report");
+    if (rep) {
+        char *name = gi_rad_output_name(rep, "relight");
+        (*paths)[n] = gi_path_join(a->out, name);
+        (*kinds)[n++] = "report";
+        free(name);
+    }
+    return n;
+}
+
+/* Refuses, before anything is written, outputs that would replace what the
+ * relight reads: the job file, its scene's files, the factorization and
+ * the emissions file. Without --images the scene is not loaded; it is read
+ * here only if an output exists already (else nothing can be replaced), to
+ * learn the files it names: a scene that does not load names those read
+ * before it failed, which is all an output could replace. */
+static int outputs_spare_inputs(const relight_args *a, gi_job *job, const char *fpath,
+                                const gi_rad_emissions *em, gi_error *err)
+{
+    char **paths;
+    const char **kinds;
+    int n = relight_outputs(a, job, em, &paths, &kinds), exists = 0;
+    for (int i = 0; i < n && !exists; i++)
+        exists = access(paths[i], F_OK) == 0;
+    int rc = 0;
+    if (exists) {
+        if (!job->scene_loaded && job->manifest.count == 0) {
+            char *dir = gi_dirname(a->job);
+            gi_dir_source ds;
+            gi_dir_source_init(&ds, dir);
+            free(dir);
+            gi_asset_source src = gi_dir_source_as_source(&ds);
+            gi_scene scene;
+            gi_error ignored;
+            if (gi_scene_load(&src, job->scene_name, &scene, &ignored) == 0)
+                gi_scene_free(&scene);
+            job->manifest = ds.manifest;
+            gi_manifest_init(&ds.manifest);
+            gi_dir_source_free(&ds);
+        }
+        gi_job_inputs in;
+        gi_job_inputs_init(&in, job, a->job);
+        gi_job_inputs_add(&in, fpath, "the factorization it relights");
+        gi_job_inputs_add(&in, a->emissions, "the emissions file");
+        for (int i = 0; i < n && rc == 0; i++)
+            rc = gi_job_inputs_spare(&in, paths[i], a->job, kinds[i], err);
+        gi_job_inputs_free(&in);
+    }
+    for (int i = 0; i < n; i++)
+        free(paths[i]);
+    free(paths);
+    free(kinds);
+    return rc;
+}
+
 static int relight(const relight_args *a, gi_error *err)
 {
     gi_job job;
@@ -151,7 +225,7 @@ static int relight(const relight_args *a, gi_error *err)
     if (rc || (rc = gi_rad_emissions_check(&em, &md, a->emissions, err)))
         goto done;
     rc = -1;
-    if (gi_output_dir_ready(a->out, err))
+    if (outputs_spare_inputs(a, &job, fpath, &em, err) || gi_output_dir_ready(a->out, err))
         goto done;
     if (images) {
         /* The method renders the tiles (and writes every output) in relight

@@ -74,4 +74,76 @@ write_job "$TMP/pt.json" <<JOB
 }
 JOB
 expect_error "needs a radiosity job" "$TMP/pt.json" "$TMP/em.json" --out "$TMP/out"
+
+# Outputs that would replace what the relight reads are refused before
+# anything is written (exit 2, naming the file), as gi render refuses them.
+refused() { # WHAT FILE... : each FILE is unchanged and the refusal says WHAT
+    what=$1
+    shift
+    grep -qF -- "would replace one of the job's own files ($what)" "$TMP/stderr" ||
+        fail "'$(cat "$TMP/stderr")' does not say it would replace $what"
+    for f in "$@"; do cmp "$f" "$f.orig" || fail "$f was replaced"; done
+    [ -z "$(find "$TMP/o2" -newer "$TMP/o2/stamp" ! -name stamp)" ] || fail "something was written"
+}
+mkdir "$TMP/o2"
+cp "$TMP/good.fact" "$TMP/o2/cb-scene.fact"
+cp "$TMP/good.fact" "$TMP/o2/cb-scene.fact.orig"
+write_job "$TMP/clash.json" <<JOB
+{
+  "name": "cb",
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "radiosity",
+  "image": {"width": 40, "height": 32},
+  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
+  "outputs": {"ply": "cb.fact", "factorization": "cb-scene.fact"}
+}
+JOB
+touch "$TMP/o2/stamp"
+expect_error "outputs.ply: $TMP/o2/cb-scene.fact" "$TMP/clash.json" "$TMP/em.json" --out "$TMP/o2"
+refused "the factorization it relights" "$TMP/o2/cb-scene.fact"
+# The emissions file, by another path to the same file.
+cp "$TMP/em.json" "$TMP/o2/cb-relight.json"
+cp "$TMP/em.json" "$TMP/o2/cb-relight.json.orig"
+write_job "$TMP/clash.json" <<JOB
+{
+  "name": "cb",
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "radiosity",
+  "image": {"width": 40, "height": 32},
+  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
+  "outputs": {"report": "cb.json", "factorization": "cb-scene.fact"}
+}
+JOB
+touch "$TMP/o2/stamp"
+expect_error "outputs.report" "$TMP/clash.json" "$TMP/o2/../o2/cb-relight.json" --out "$TMP/o2"
+refused "the emissions file" "$TMP/o2/cb-relight.json"
+# The job file itself, and its scene's files (read for this check only,
+# without --images), and with --images an image over the scene.
+cp "$SRC/scenes/cornell-box/scene.json" "$TMP/o2/cb-blue.json"
+cp "$TMP/o2/cb-blue.json" "$TMP/o2/cb-blue.json.orig"
+write_job "$TMP/o2/cb-scene.json" <<JOB
+{
+  "name": "cb",
+  "scene": "cb-blue.json",
+  "method": "radiosity",
+  "image": {"width": 40, "height": 32},
+  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
+  "outputs": {"ply": "cb.json", "factorization": "cb-scene.fact"}
+}
+JOB
+cp "$TMP/o2/cb-scene.json" "$TMP/o2/cb-scene.json.orig"
+touch "$TMP/o2/stamp"
+expect_error "outputs.ply: $TMP/o2/cb-scene.json" "$TMP/o2/cb-scene.json" "$TMP/em.json" \
+    --out "$TMP/o2"
+refused "the job file" "$TMP/o2/cb-scene.json"
+echo '{"emissions": [{"name": "blue", "materials": {"light": [2, 4, 17]}}]}' >"$TMP/blue.json"
+touch "$TMP/o2/stamp"
+expect_error "outputs.ply: $TMP/o2/cb-blue.json" "$TMP/o2/cb-scene.json" "$TMP/blue.json" \
+    --out "$TMP/o2"
+refused "the scene's cb-blue.json" "$TMP/o2/cb-blue.json"
+sed 's/"ply": "cb.json"/"exr": "cb.json"/' "$TMP/o2/cb-scene.json.orig" >"$TMP/o2/images.json"
+touch "$TMP/o2/stamp"
+expect_error "outputs.exr: $TMP/o2/cb-blue.json" "$TMP/o2/images.json" "$TMP/blue.json" \
+    --out "$TMP/o2" --images --workers 1
+refused "the scene's cb-blue.json" "$TMP/o2/cb-blue.json"
 echo ok
