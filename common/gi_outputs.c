@@ -47,7 +47,7 @@ int gi_write_image_outputs(gi_job *job, const gi_image *img, gi_error *err)
 {
     gi_image_writer *w = writer_new(job, img);
     write_all(w);
-    return gi_image_writer_finish(job, &w, err);
+    return gi_image_writer_finish(job, &w, NULL, err);
 }
 
 gi_image_writer *gi_image_writer_start(gi_job *job, gi_image *img)
@@ -69,15 +69,24 @@ int gi_image_writer_wait(gi_image_writer *w)
     return w->rc;
 }
 
-int gi_image_writer_finish(gi_job *job, gi_image_writer **wp, gi_error *err)
+const gi_image *gi_image_writer_failed(gi_image_writer *w)
+{
+    return gi_image_writer_wait(w) ? w->img : NULL;
+}
+
+int gi_image_writer_finish(gi_job *job, gi_image_writer **wp, gi_image *failed, gi_error *err)
 {
     gi_image_writer *w = *wp;
     if (!w)
         return 0;
     int rc = gi_image_writer_wait(w);
-    if (rc)
+    if (rc) {
         *err = w->err;
-    else {
+        if (failed && w->img == &w->owned) {
+            *failed = w->owned;
+            memset(&w->owned, 0, sizeof w->owned);
+        }
+    } else {
         if (w->exr)
             gi_job_note_output(job, "exr", w->exr);
         if (w->png)

@@ -29,9 +29,15 @@ gi_image_writer *gi_image_writer_start(gi_job *job, gi_image *img);
 /* Waits until the write has ended (w may be NULL): 0 if it succeeded, -1
  * if not (gi_image_writer_finish tells why). */
 int gi_image_writer_wait(gi_image_writer *w);
+/* The image of a write that failed (waiting for the write first), so that
+ * a checkpoint can keep it to be written again; NULL if the write worked
+ * (or w is NULL). */
+const gi_image *gi_image_writer_failed(gi_image_writer *w);
 /* Waits, notes the outputs written, frees *w (NULL after; NULL: nothing to
- * do). Returns 0, or -1 with err if a write failed. */
-int gi_image_writer_finish(gi_job *job, gi_image_writer **w, gi_error *err);
+ * do). Returns 0, or -1 with err if a write failed: then the image goes to
+ * *failed (an empty image) if that is given, to be written again, instead
+ * of being lost with the writer. */
+int gi_image_writer_finish(gi_job *job, gi_image_writer **w, gi_image *failed, gi_error *err);
 
 /* Writes a JSON document as the job's output of `kind` (e.g. "report"), if
  * the job asks for it: pretty-printed, temp file + rename. */

@@ -1084,8 +1084,13 @@ static gi_jobrun_opts run_opts(const gi_farm *f)
 static void result_kept(const gi_farm_job *j, gi_error *e)
 {
     gi_error was = *e;
-    gi_fail(e, was.code, "%s; the whole result is kept in checkpoint %llu: a retry only writes "
-            "the outputs", was.msg, (unsigned long long)j->ckpt_seq);
+    if (j->job.in_frame) /* an animation: the frames after go on */
+        gi_fail(e, was.code, "%s; the frames rendered so far are kept in checkpoint %llu: a retry "
+                "writes their outputs and goes on from there", was.msg,
+                (unsigned long long)j->ckpt_seq);
+    else
+        gi_fail(e, was.code, "%s; the whole result is kept in checkpoint %llu: a retry only "
+                "writes the outputs", was.msg, (unsigned long long)j->ckpt_seq);
 }
 
 /* The run failed writing its outputs with its whole result merged: the

@@ -699,6 +699,7 @@ int gi_jobrun_restore_opts(gi_jobrun *jr, gi_job *job, const gi_buf *in,
     if (gi_reader_finish(&sr, err))
         return gi_error_prefix(err, "%s", job->file);
     note_progress(jr);
+    jr->restored_frame = job->frame;
     /* Everything was merged when the checkpoint was taken: only finish is left. */
     if (jr->merge_next == jr->task_count && advance(jr)) {
         if (err)

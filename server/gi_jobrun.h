@@ -79,6 +79,9 @@ typedef struct gi_jobrun {
     uint64_t merged_bytes;
     gi_jobrun_opts opts;
     gi_jobrun_finisher *finisher; /* the finish on its thread, while it runs */
+    /* The animation frame its checkpoint was at (gi_jobrun_restore), before
+     * a finish the restore ran (a checkpoint with every task merged). */
+    uint32_t restored_frame;
 } gi_jobrun;
 
 static inline int gi_jobrun_finishing(const gi_jobrun *jr) { return jr->finisher != NULL; }

@@ -188,14 +188,15 @@ static void remove_kept_batch_root(const char *ckpt)
     free(root);
 }
 
-/* A resumed animation writes only the frames from its checkpoint's on:
- * says so if outputs of the frames before it are gone (deleted since the
- * stop), since nothing will write them again. */
-static void warn_missing_frames(gi_job *job)
+/* A resumed animation writes only the frames from its checkpoint's (`at`)
+ * on: says so if outputs of the frames before it are gone (deleted since
+ * the stop), since nothing will write them again. Not the frames a finish
+ * on restore wrote since: their images may still be being written. */
+static void warn_missing_frames(gi_job *job, uint32_t at)
 {
-    if (!job->in_frame || job->frame == 0)
+    if (!job->in_frame || at == 0)
         return;
-    uint32_t at = job->frame, missing = 0;
+    uint32_t now = job->frame, missing = 0;
     char *first = NULL;
     for (uint32_t f = 0; f < at; f++) {
         job->frame = f;
@@ -208,7 +209,7 @@ static void warn_missing_frames(gi_job *job)
             free(path);
         }
     }
-    job->frame = at;
+    job->frame = now;
     if (missing)
         gi_warn("%s: %u output%s of the frames before frame %u %s missing (%s%s); they were "
                 "written before the stop and are not written again: render without --resume "
@@ -341,7 +342,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             summary->resumed = 1;
             summary->fraction_before = at.fraction;
             summary->stats_before = lr.jr.stats;
-            warn_missing_frames(job);
+            warn_missing_frames(job, lr.jr.restored_frame);
             if (root && gi_local_batch_root_ours(root)) {
                 lr.batch_root = root; /* the stopped render's batches, read again */
                 root = NULL;

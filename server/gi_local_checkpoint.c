@@ -110,7 +110,11 @@ int gi_local_checkpoint_restore(gi_jobrun *jr, gi_job *job, const char *path, ch
         const gi_buf rest = {b.data + (b.len - r.left), r.left, 0};
         gi_error e;
         if (gi_jobrun_restore(jr, job, &rest, &e) != 0) {
-            if (gi_jobrun_finish_retryable(jr)) /* not "start over": that would lose it */
+            if (gi_jobrun_finish_retryable(jr) && job->in_frame) /* an animation */
+                rc = gi_fail(err, e.code, "%s; the frames rendered so far stay in %s: once "
+                             "that is fixed, --resume writes their outputs and goes on", e.msg,
+                             path);
+            else if (gi_jobrun_finish_retryable(jr)) /* not "start over": that would lose it */
                 rc = gi_fail(err, e.code, "%s; the whole result stays in %s: once that is "
                              "fixed, --resume writes the outputs", e.msg, path);
             else

@@ -67,7 +67,8 @@ static void state_free(gi_job *job, detp_state *st)
     if (!st)
         return;
     gi_error ignored;
-    gi_image_writer_finish(job, &st->writer, &ignored);
+    gi_image_writer_finish(job, &st->writer, NULL, &ignored);
+    gi_image_free(&st->unwritten);
     free(st->irr);
     free(st->hits);
     free(st->visible);
@@ -307,21 +308,44 @@ static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)
     gi_buf_free(&extra);
 }
 
-/* A frame's vertex outputs (and report); for animations the next frame
- * is planned after them. */
+/* After a frame's outputs: for animations the next frame is planned. */
+static void frame_written(gi_job *job, detp_state *st, gi_task_queue *fq)
+{
+    if (st->anim && detp_anim_next_frame(job, st, fq)) {
+        job->frame = detp_anim_frame(st);
+        st->phase = DETP_PHASE_BAKE;
+        return;
+    }
+    job->in_frame = 0;
+    st->phase = DETP_PHASE_DONE;
+}
+
+/* A frame's vertex outputs (and report), then the next frame. */
 static int write_frame(gi_job *job, detp_state *st, const detp_vertex_data *v,
                        gi_task_queue *fq, gi_error *err)
 {
     if (detp_write_outputs(job, st, v, err))
         return -1;
-    if (st->anim && detp_anim_next_frame(job, st, fq)) {
-        job->frame = detp_anim_frame(st);
-        st->phase = DETP_PHASE_BAKE;
-        return 0;
-    }
-    job->in_frame = 0;
-    st->phase = DETP_PHASE_DONE;
+    frame_written(job, st, fq);
     return 0;
+}
+
+/* The frame before's image outputs are written by now: those its writer
+ * wrote, or, if that failed, the image kept from it (or from a
+ * checkpoint), written again here. A failure keeps it for the next try. */
+static int write_earlier_frame(gi_job *job, detp_state *st, gi_error *err)
+{
+    if (gi_image_writer_finish(job, &st->writer, &st->unwritten, err))
+        return -1;
+    if (!st->unwritten.pixels)
+        return 0;
+    uint32_t frame = job->frame;
+    job->frame = st->earlier_frame;
+    int rc = gi_write_image_outputs(job, &st->unwritten, err);
+    job->frame = frame;
+    if (rc == 0)
+        gi_image_free(&st->unwritten);
+    return rc;
 }
 
 /* Image tiles' pixels are finite (the per-vertex results are checked as
@@ -374,12 +398,21 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         }
     } else {
         st->wall_image = gi_now() - st->wall_start;
-        /* The frame before's outputs are written by now; this frame's are
-         * written while the next frame runs, if one follows. */
-        rc = gi_image_writer_finish(job, &st->writer, err);
-        if (rc == 0 && st->anim && detp_anim_frame(st) + 1 < p->anim.frames)
-            st->writer = gi_image_writer_start(job, &st->img);
-        else if (rc == 0)
+        rc = write_earlier_frame(job, st, err);
+        if (rc == 0 && st->anim && detp_anim_frame(st) + 1 < p->anim.frames) {
+            /* This frame's images are written while the next frame runs;
+             * its vertex outputs first, so that if they fail the frame is
+             * still whole (its image not handed over) for finish again. */
+            rc = detp_write_outputs(job, st, &v, err);
+            if (rc == 0) {
+                st->earlier_frame = job->frame;
+                st->writer = gi_image_writer_start(job, &st->img);
+                frame_written(job, st, fq);
+            }
+            detp_vertex_data_free(&v);
+            return rc;
+        }
+        if (rc == 0)
             rc = gi_write_image_outputs(job, &st->img, err);
     }
     if (rc == 0)
@@ -388,13 +421,14 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     return rc;
 }
 
-/* A still's failed write leaves its phase and image as they were, and
- * finish writes them again. An animation's frame images are written while
- * the next frame runs and are gone when that write fails: not retried. */
+/* A failed write leaves the phase, the frame and its image as they were
+ * (an earlier frame's image whose write failed is kept beside them), and
+ * finish writes them again: a still's outputs, or an animation's from the
+ * first frame not on disk on. */
 static int detp_can_finish_again(const gi_job *job)
 {
     const detp_state *st = job->state;
-    return !st->anim && st->phase != DETP_PHASE_DONE;
+    return st->phase != DETP_PHASE_DONE && !st->writer;
 }
 
 /* A frame after 0 over frame 0, in bake time: k * (frame 0's share of
@@ -424,14 +458,18 @@ static void detp_progress(const gi_job *job, gi_job_progress *out)
 }
 
 #define STATE_MAGIC 0x53505444u /* "DTPS" */
-#define STATE_VERSION 3u /* 2: animations; 3: frame 0's share of segments from the mobile */
+/* 2: animations; 3: frame 0's share of segments from the mobile; 4: an
+ * animation's earlier frame image not written. */
+#define STATE_VERSION 4u
 
 static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
     const detp_state *st = job->state;
-    /* A checkpoint past a frame holds its outputs on disk. */
-    if (gi_image_writer_wait(st->writer))
-        return gi_fail(err, GI_EIO, "%s: a frame's image outputs could not be written", job->file);
+    (void)err;
+    /* A checkpoint past a frame holds its outputs on disk, or the image of
+     * one whose write failed, to be written again. */
+    const gi_image *unwritten =
+        st->unwritten.pixels ? &st->unwritten : gi_image_writer_failed(st->writer);
     gi_buf_put_u32(out, STATE_MAGIC);
     gi_buf_put_u32(out, STATE_VERSION);
     gi_buf_put_u32(out, (uint32_t)st->phase);
@@ -462,8 +500,33 @@ static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
         gi_buf_put_str(out, st->hash);
         gi_buf_put_f32s(out, st->img.pixels, (size_t)job->width * job->height * 3);
     }
-    if (st->anim)
+    if (st->anim) {
         detp_anim_save(st, out);
+        gi_buf_put_u8(out, unwritten != NULL);
+        if (unwritten) {
+            gi_buf_put_u32(out, st->earlier_frame);
+            gi_buf_put_f32s(out, unwritten->pixels, (size_t)job->width * job->height * 3);
+        }
+    }
+    return 0;
+}
+
+/* The animation's earlier frame image not written (version 4 on). */
+static int load_unwritten(gi_job *job, detp_state *st, gi_reader *in, gi_error *err)
+{
+    uint8_t has = gi_get_u8(in);
+    if (in->failed || has > 1)
+        return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    if (!has)
+        return 0;
+    st->earlier_frame = gi_get_u32(in);
+    if (in->failed || st->earlier_frame >= detp_anim_frame(st))
+        return gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp animation", job->file);
+    static const char *const names[] = {"R", "G", "B"};
+    if (gi_image_init(&st->unwritten, job->width, job->height, 3, names, err))
+        return -1;
+    if (gi_get_f32s(in, st->unwritten.pixels, (size_t)job->width * job->height * 3))
+        return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
     return 0;
 }
 
@@ -516,6 +579,8 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
     }
     if (rc == 0 && p->anim.enabled) {
         rc = detp_anim_load(job, st, in, version, err);
+        if (rc == 0 && version >= 4)
+            rc = load_unwritten(job, st, in, err);
         if (rc == 0) {
             job->in_frame = 1;
             job->frame = detp_anim_frame(st);

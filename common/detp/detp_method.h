@@ -110,6 +110,11 @@ typedef struct detp_state {
     /* An animation frame's image outputs, still being written while the
      * next frame runs (or NULL). */
     struct gi_image_writer *writer;
+    /* The image of an earlier frame whose outputs could not be written (a
+     * full disk, a path in the way): kept, in checkpoints too, and written
+     * again before the next frame's outputs (pixels NULL: none). */
+    gi_image unwritten;
+    uint32_t earlier_frame; /* the frame of writer or unwritten */
 } detp_state;
 
 /* Per-vertex results computed from the state (finish). */

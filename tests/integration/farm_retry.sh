@@ -8,6 +8,9 @@
 #    image without running a task again and fetches it.
 # 2. A job cancelled halfway, retried: the same.
 # 3. Refusals: a job that is done (409), one that does not exist (404).
+# 4. A checkpoint that cannot be written: said once, the job goes on.
+# 5. A detp animation whose frame's image cannot be written keeps all it
+#    rendered; its retry renders only the frames after.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -93,5 +96,45 @@ echo "$view" | grep -q '"last_error":"[^"]*checkpoint[^"]*"' || { echo "$view"; 
 [ "$(echo "$view" | grep -o 'checkpoint failed (the job goes on)' | wc -l)" = 1 ] ||
     { echo "$view"; fail "the checkpoint failure is not in the job's log once"; }
 [ "$(metric gi_farm_checkpoint_failures_total)" -ge 1 ] || fail "checkpoint failures not counted"
+
+# 5. A detp animation whose frame 2 image cannot be written fails at the end
+# of frame 3 (frame 2's image is written while frame 3 runs) with all it
+# rendered in its checkpoint: frame 2's image and frame 3, whole. Its retry
+# writes them and renders frames 4 on, nothing before again, and ends with
+# the frames `gi render` gives.
+write_job "$TMP/anim.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene-mobile.json", "method": "detp", "seed": 11,
+ "image": {"width": 32, "height": 32},
+ "detp": {"photons": 400000, "batch": 50000, "subdivide": 40, "tile": 16, "image_spp": 1,
+          "animation": {"object": "mobile", "frames": 6,
+                        "keyframes": [{"frame": 0, "translate": [340, -338.9, -90]},
+                                      {"frame": 5, "translate": [248, -338.9, -0.4]}]}},
+ "outputs": {"exr": "img.exr", "bin": "v.bin", "json": "report.json"}}
+JOB
+"$GI_RELEASE" render "$TMP/anim.json" --workers 2 --out "$TMP/anim-ref" --progress none \
+    >"$TMP/anim-ref.log" 2>&1 || { cat "$TMP/anim-ref.log"; fail "gi render of the animation"; }
+id5=$("$GI" submit "$TMP/anim.json" 2>"$TMP/submit5.log") || { cat "$TMP/submit5.log"; fail "submit 5"; }
+OUT5="$TMP/state/jobs/$id5/out"
+mkdir -p "$OUT5/img.0002.exr"
+wait_state "$id5" failed 120
+api "/api/v1/jobs/$id5" | grep -q "img.0002.exr: rename.*frames rendered so far are kept in checkpoint" ||
+    { api "/api/v1/jobs/$id5"; fail "the animation did not keep its frames"; }
+seen5=$(jckpt "$id5" merged)
+[ "$seen5" = "$(jnum "$id5" total)" ] || { api "/api/v1/jobs/$id5"; fail "frame 3 not whole in the checkpoint"; }
+[ -e "$OUT5/v.0002.bin" ] && [ ! -e "$OUT5/v.0003.bin" ] || fail "frame 2's or 3's outputs"
+touch -d '1 minute ago' "$OUT5"/*.0*
+touch -d '30 seconds ago' "$TMP/before-retry5"
+rmdir "$OUT5/img.0002.exr"
+"$GI" retry "$id5" --wait --out "$TMP/anim-out" --progress none >"$TMP/retry5.log" 2>&1 ||
+    { cat "$TMP/retry5.log"; fail "gi retry --wait of the animation"; }
+[ "$(jnum "$id5" resumed_merged)" = "$seen5" ] || fail "the animation's retry did not resume at $seen5"
+written=$(cd "$OUT5" && find . -name '*.000[0-3].*' -newer "$TMP/before-retry5" | sort | tr '\n' ' ')
+[ "$written" = "./img.0002.exr ./img.0003.exr ./report.0003.json ./v.0003.bin " ] ||
+    fail "the retry wrote again $written"
+for f in 0000 0001 0002 0003 0004 0005; do
+    for k in img.$f.exr v.$f.bin; do
+        cmp "$TMP/anim-ref/$k" "$TMP/anim-out/$k" || fail "the retried animation's $k differs"
+    done
+done
 stop_farmd "$TMP/farmd.log"
 echo "failed job retried after a restart from $resumed of $total tasks, cancelled one from $seen2: identical"

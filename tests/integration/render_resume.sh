@@ -115,19 +115,36 @@ same_as_ref "$TMP/kill" "resumed after SIGKILL (3 workers)"
 [ "$(batch_roots)" -eq 0 ] || fail "the render resumed after SIGKILL left its batch root"
 
 # An output that cannot be written (a directory in its way, as a full disk
-# would): the render fails naming it, keeps its last checkpoint and batches,
-# and once the way is clear, --resume finishes it.
+# would): the render fails naming it and keeps all it rendered: frame 9's
+# image (written while frame 10 ran) and frame 10, whole. A resume with the
+# way still blocked fails again and keeps them; once the way is clear, a
+# resume writes frame 9's image and goes on at frame 10's outputs: nothing
+# of frame 9 is rendered (nor written) again.
 mkdir -p "$TMP/blocked/img.0009.exr"
 st=0
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none \
     --checkpoint 0.05 >"$TMP/blocked.log" 2>&1 || st=$?
 [ $st -ne 0 ] || fail "a render whose output path is a directory succeeded"
-grep -q "img.0009.exr: rename: .*is kept in .*--resume. continues" "$TMP/blocked.log" ||
-    { cat "$TMP/blocked.log"; fail "no resume hint after a failed write"; }
+grep -q "img.0009.exr: rename: .*(.*frame 10 of 16) is kept in .*--resume. continues" \
+    "$TMP/blocked.log" || { cat "$TMP/blocked.log"; fail "no resume hint after a failed write"; }
 [ "$(batch_roots)" -eq 1 ] || fail "the failed render kept $(batch_roots) batch roots, not 1"
+st=0
+"$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none --resume \
+    >"$TMP/blocked-again.log" 2>&1 || st=$?
+[ $st -ne 0 ] && grep -q "img.0009.exr: rename: .*frames rendered so far stay in .*--resume writes" \
+    "$TMP/blocked-again.log" || { cat "$TMP/blocked-again.log"; fail "resumed, still blocked: exit $st"; }
+[ "$(batch_roots)" -eq 1 ] || fail "the render still blocked kept $(batch_roots) batch roots, not 1"
+touch -d '1 minute ago' "$TMP/blocked"/*.*
+touch -d '30 seconds ago' "$TMP/before-resume"
 rmdir "$TMP/blocked/img.0009.exr"
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none --resume \
     >"$TMP/blocked-resume.log" 2>&1 || { cat "$TMP/blocked-resume.log"; fail "resume after a failed write"; }
+! grep -q "missing" "$TMP/blocked-resume.log" || { cat "$TMP/blocked-resume.log"; fail "frames missing"; }
+written=$(cd "$TMP/blocked" && find . -name '*.0*' -newer "$TMP/before-resume" | sort | tr '\n' ' ')
+[ "$written" = "./img.0009.exr ./img.0010.exr ./img.0011.exr ./img.0012.exr ./img.0013.exr \
+./img.0014.exr ./img.0015.exr ./report.0010.json ./report.0011.json ./report.0012.json \
+./report.0013.json ./report.0014.json ./report.0015.json ./v.0010.bin ./v.0011.bin ./v.0012.bin \
+./v.0013.bin ./v.0014.bin ./v.0015.bin " ] || fail "the resume wrote $written"
 same_as_ref "$TMP/blocked" "resumed after a failed write"
 [ "$(batch_roots)" -eq 0 ] || fail "the render resumed after a failed write left its batch root"
 

@@ -80,7 +80,7 @@ GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
     GI_CHECK(copy.pixels == NULL);   /* taken */
     job.frame = 8;                   /* the next frame goes on meanwhile */
     GI_CHECK(job.written_count == noted);
-    GI_REQUIRE_OK(gi_image_writer_finish(&job, &w, &err));
+    GI_REQUIRE_OK(gi_image_writer_finish(&job, &w, NULL, &err));
     GI_CHECK(w == NULL && job.written_count == noted + 4);
     const char *pairs[2][2] = {{"sync/f.exr", "f.0007.exr"}, {"sync/f.png", "f.0007.png"}};
     for (int k = 0; k < 2; k++) {
@@ -99,12 +99,25 @@ GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
     char gone[800];
     snprintf(gone, sizeof gone, "%s/no-such-dir", dir);
     job.out_dir = gone;
+    /* A write that failed gives its image back, to be written again. */
+    GI_REQUIRE_OK(gi_image_init(&copy, 40, 30, 3, names, &err));
+    memcpy(copy.pixels, img.pixels, sizeof(float) * 40 * 30 * 3);
     w = gi_image_writer_start(&job, &img);
     GI_CHECK(gi_image_writer_wait(w) == -1);
-    GI_CHECK(gi_image_writer_finish(&job, &w, &err) == -1);
+    const gi_image *failed = gi_image_writer_failed(w);
+    GI_CHECK(failed && failed->pixels &&
+             memcmp(failed->pixels, copy.pixels, sizeof(float) * 40 * 30 * 3) == 0);
+    gi_image back;
+    memset(&back, 0, sizeof back);
+    GI_CHECK(gi_image_writer_finish(&job, &w, &back, &err) == -1);
     GI_CHECK(strstr(err.msg, "f.0008.exr") != NULL);
     GI_CHECK(w == NULL && job.written_count == noted + 4);
-    GI_CHECK(gi_image_writer_finish(&job, &w, &err) == 0); /* nothing left */
+    GI_CHECK(back.pixels && back.width == 40 &&
+             memcmp(back.pixels, copy.pixels, sizeof(float) * 40 * 30 * 3) == 0);
+    gi_image_free(&back);
+    gi_image_free(&copy);
+    GI_CHECK(gi_image_writer_failed(NULL) == NULL);
+    GI_CHECK(gi_image_writer_finish(&job, &w, NULL, &err) == 0); /* nothing left */
     for (int i = 0; i < job.written_count; i++)
         free(job.written[i]);
 }
