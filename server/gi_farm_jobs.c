@@ -57,7 +57,7 @@ const char *gi_farm_job_state_name(const gi_farm_job *j)
 }
 
 static void start_checkers(gi_farm *f);
-static void checkpoint_begin(gi_farm *f, gi_farm_job *j);
+static void checkpoint_begin(gi_farm *f, gi_farm_job *j, int over);
 static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait);
 static void published_load(gi_farm_job *j);
 static void end_journaled(gi_farm *f, gi_farm_job *j);
@@ -1100,7 +1100,7 @@ static int keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
 {
     checkpoint_finish(f, j, 1);
     uint64_t seq = j->ckpt_seq;
-    checkpoint_begin(f, j);
+    checkpoint_begin(f, j, 0);
     checkpoint_finish(f, j, 1);
     if (j->ckpt_seq == seq)
         return 0;
@@ -1108,17 +1108,44 @@ static int keep_result(gi_farm *f, gi_farm_job *j, gi_error *e)
     return 1;
 }
 
+/* A result waiting in memory (no new checkpoint file fits: a full disk)
+ * would be lost with the coordinator: it goes into the room of the
+ * checkpoint before, so that a restart resumes from it whole. Says in
+ * `out` where a restart would resume. */
+static void keep_held_result(gi_farm *f, gi_farm_job *j, char *out, size_t len)
+{
+    checkpoint_finish(f, j, 1);
+    uint64_t seq = j->ckpt_seq;
+    checkpoint_begin(f, j, 1);
+    checkpoint_finish(f, j, 1);
+    char *ck = checkpoint_path(j);
+    if (j->ckpt_seq != seq)
+        snprintf(out, len, "the result is kept in checkpoint %llu, written in the room of the "
+                 "one before: a restart resumes from it", (unsigned long long)j->ckpt_seq);
+    else if (access(ck, F_OK) == 0) /* the one before stayed */
+        snprintf(out, len, "a restart would run it again from checkpoint %llu",
+                 (unsigned long long)j->ckpt_seq);
+    else /* none, or the one before gave its room for nothing: the job stays running */
+        snprintf(out, len, "a restart would run it again from the start");
+    free(ck);
+}
+
 /* The run failed: the job fails, unless only its outputs could not be
  * written and no checkpoint can keep its result either (a full disk): then
- * the result waits in memory, and the tick tries the outputs again. */
+ * the result waits in memory (and in the room of its checkpoint before, if
+ * that is enough), and the tick tries the outputs again. */
 static void run_failed(gi_farm *f, gi_farm_job *j)
 {
     gi_error e = j->jr.error;
     if (gi_jobrun_finish_retryable(&j->jr) && !keep_result(f, j, &e)) {
-        if (!j->outputs_retry_at)
+        char kept[160];
+        if (!j->outputs_retry_at) {
+            keep_held_result(f, j, kept, sizeof kept);
             gi_farm_job_warn(j, "its outputs cannot be written (%s), nor a checkpoint of its "
-                             "result: it waits in memory, and they are tried again every %g s "
-                             "(`gi cancel` gives up)", e.msg, f->cfg.checkpoint_s);
+                             "result in a new file: it waits in memory, and they are tried "
+                             "again every %g s (`gi cancel` gives up); %s", e.msg,
+                             f->cfg.checkpoint_s, kept);
+        }
         j->outputs_retry_at = gi_now() + f->cfg.checkpoint_s;
         return;
     }
@@ -1312,7 +1339,11 @@ void gi_farm_job_settle(gi_farm *f, gi_farm_job *j)
  * and hands the bytes to a writer thread; checkpoint_finish, once the file
  * is in place, saves the affinity owners and journals the checkpoint. One
  * at a time per job. */
-static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err)
+/* Serializes the run and starts writing its checkpoint. over: for a result
+ * no new file has room for (a full disk), the checkpoint before gives up
+ * its room first, if it takes at least as much as this one needs (else it
+ * stays, and this one fails). */
+static int checkpoint_start(gi_farm *f, gi_farm_job *j, int over, gi_error *err)
 {
     /* Data the method published for its tasks must outlive a restart too:
      * into the store, where workers' requests find it by hash. */
@@ -1333,10 +1364,28 @@ static int checkpoint_start(gi_farm *f, gi_farm_job *j, gi_error *err)
         gi_buf_free(&cp);
         return -1;
     }
+    char *path = checkpoint_path(j);
+    if (over) {
+        struct stat st;
+        int none = stat(path, &st) != 0;
+        if (none || (uint64_t)st.st_blocks * 512 < cp.len) {
+            gi_fail(err, GI_EIO, "%s: %s", path,
+                    none ? "no checkpoint before to write over"
+                         : "the checkpoint before takes less room than this one needs");
+            free(path);
+            gi_buf_free(&cp);
+            return -1;
+        }
+        if (unlink(path) != 0) {
+            gi_fail(err, GI_EIO, "%s: unlink: %s", path, strerror(errno));
+            free(path);
+            gi_buf_free(&cp);
+            return -1;
+        }
+    }
     j->ckpt_w_merged = j->jr.merge_next;
     j->ckpt_w_done_cost = j->jr.cost_done;
     j->ckpt_w_bytes = cp.len;
-    char *path = checkpoint_path(j);
     j->ckpt_w = gi_file_writer_start(path, &cp);
     free(path);
     return 0;
@@ -1439,10 +1488,10 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
  * stopping coordinator). */
 /* Starts a checkpoint; one that cannot start is a failed one: what it
  * stored goes, and the job's log and view say so. */
-static void checkpoint_begin(gi_farm *f, gi_farm_job *j)
+static void checkpoint_begin(gi_farm *f, gi_farm_job *j, int over)
 {
     gi_error err;
-    if (checkpoint_start(f, j, &err)) {
+    if (checkpoint_start(f, j, over, &err)) {
         checkpoint_published(f, j, 0);
         checkpoint_outcome(f, j, err.msg);
     }
@@ -1462,7 +1511,7 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
     j->ckpt_last = now;
     if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
         return; /* nothing merged since the last one */
-    checkpoint_begin(f, j);
+    checkpoint_begin(f, j, 0);
     j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
     if (force)
         checkpoint_finish(f, j, 1);

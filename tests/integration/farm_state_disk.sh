@@ -8,6 +8,11 @@
 # 3. a job that ends while the journal refuses its END record (immutable
 #    here, as a full disk would) keeps its checkpoint until the END is
 #    journaled, at a later tick; a coordinator killed then knows it done.
+# 4. a result waiting in memory as in 2 survives a stop of gi-farmd while
+#    the disk is still full: it is written in the room of the job's
+#    checkpoint before, and the coordinator restarted (with room again)
+#    resumes with every task merged and writes the outputs, running no
+#    task again.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 need_own_disk 16m
@@ -84,4 +89,51 @@ start_farmd "$S2" "$LOG" -- $OPTS $PORTS
 "$GI" fetch "$id" --out "$TMP/out3" >/dev/null || fail "fetch 3"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "job 3's image differs from gi render"
 stop_farmd "$LOG"
+
+# 4. A held result across a restart: the disk (a tmpfs) outlives gi-farmd in
+# a mount namespace a sleeping process keeps.
+S4="$TMP/state4"
+mkdir -p "$S4/jobs"
+unshare -m sh -c 'mount -t tmpfs -o size=16m tmpfs "$0" && exec sleep 600' "$S4/jobs" &
+HOLDER=$!
+FARM_PIDS="$FARM_PIDS $HOLDER"
+JOBS4=/proc/$HOLDER/root$S4/jobs
+n=0
+until [ "$(stat -f -c %T "$JOBS4" 2>/dev/null)" = tmpfs ]; do
+    n=$((n + 1))
+    [ $n -lt 200 ] || fail "no tmpfs for step 4"
+    sleep 0.05
+done
+# shellcheck disable=SC2086
+start_farmd "$S4" "$LOG" nsenter -t "$HOLDER" -m -- $OPTS
+PORTS="--listen-workers $WADDR --listen-api $API"
+start_worker "$TMP/worker4.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || fail "submit 4"
+# The image's way is blocked too, so that the room the kept result leaves
+# does not let the outputs through before gi-farmd stops.
+mkdir -p "$JOBS4/$id/out/img.exr"
+wait_merged "$id" 4 checkpoint
+kill -STOP "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+dd if=/dev/zero of="$JOBS4/fill" bs=64k 2>/dev/null && fail "16 MiB did not fill up (4)"
+kill -CONT "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+wait_log "$LOG" "job $id: its outputs cannot be written (.*img.exr: .*), nor"
+total=$(jnum "$id" total)
+[ "$(jckpt "$id" merged)" = "$total" ] || { api "/api/v1/jobs/$id"; fail "the held result is not in the checkpoint"; }
+unended "$id" || { api "/api/v1/jobs/$id"; fail "the job did not wait for room"; }
+stop_farmd "$LOG"
+kill -9 "$WORKER_PID"
+rm "$JOBS4/fill"
+rmdir "$JOBS4/$id/out/img.exr"
+# shellcheck disable=SC2086
+start_farmd "$S4" "$LOG" nsenter -t "$HOLDER" -m -- $OPTS $PORTS
+start_worker "$TMP/worker4b.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+wait_state "$id" done 60
+[ "$(jnum "$id" resumed_merged)" = "$total" ] && [ "$(jnum "$id" results_this_run)" = 0 ] ||
+    { api "/api/v1/jobs/$id"; fail "the restart ran tasks of the held result again"; }
+"$GI" fetch "$id" --out "$TMP/out4" >/dev/null || fail "fetch 4"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out4/img.exr" || fail "job 4's image differs from gi render"
+grep -q "job $id: its outputs cannot be written (.*), nor .*; the result is kept in checkpoint [0-9]*, written in the room of the one before: a restart resumes from it" "$LOG" ||
+    fail "the log does not say where the held result is kept"
+stop_farmd "$LOG"
+kill "$HOLDER"
 echo ok
