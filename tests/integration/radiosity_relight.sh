@@ -85,35 +85,25 @@ refused() { # WHAT FILE... : each FILE is unchanged and the refusal says WHAT
     for f in "$@"; do cmp "$f" "$f.orig" || fail "$f was replaced"; done
     [ -z "$(find "$TMP/o2" -newer "$TMP/o2/stamp" ! -name stamp)" ] || fail "something was written"
 }
+clash_job() { # clash_job FILE SCENE OUTPUTS: the job above, with its scene and outputs
+    write_job "$1" <<JOB
+{"name": "cb", "scene": "$2", "method": "radiosity", "image": {"width": 40, "height": 32},
+ "radiosity": {"patches": 80, "levels": 2, "rays": 256}, "outputs": {$3}}
+JOB
+}
 mkdir "$TMP/o2"
 cp "$TMP/good.fact" "$TMP/o2/cb-scene.fact"
 cp "$TMP/good.fact" "$TMP/o2/cb-scene.fact.orig"
-write_job "$TMP/clash.json" <<JOB
-{
-  "name": "cb",
-  "scene": "$SRC/scenes/cornell-box/scene.json",
-  "method": "radiosity",
-  "image": {"width": 40, "height": 32},
-  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
-  "outputs": {"ply": "cb.fact", "factorization": "cb-scene.fact"}
-}
-JOB
+clash_job "$TMP/clash.json" "$SRC/scenes/cornell-box/scene.json" \
+    '"ply": "cb.fact", "factorization": "cb-scene.fact"'
 touch "$TMP/o2/stamp"
 expect_error "outputs.ply: $TMP/o2/cb-scene.fact" "$TMP/clash.json" "$TMP/em.json" --out "$TMP/o2"
 refused "the factorization it relights" "$TMP/o2/cb-scene.fact"
 # The emissions file, by another path to the same file.
 cp "$TMP/em.json" "$TMP/o2/cb-relight.json"
 cp "$TMP/em.json" "$TMP/o2/cb-relight.json.orig"
-write_job "$TMP/clash.json" <<JOB
-{
-  "name": "cb",
-  "scene": "$SRC/scenes/cornell-box/scene.json",
-  "method": "radiosity",
-  "image": {"width": 40, "height": 32},
-  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
-  "outputs": {"report": "cb.json", "factorization": "cb-scene.fact"}
-}
-JOB
+clash_job "$TMP/clash.json" "$SRC/scenes/cornell-box/scene.json" \
+    '"report": "cb.json", "factorization": "cb-scene.fact"'
 touch "$TMP/o2/stamp"
 expect_error "outputs.report" "$TMP/clash.json" "$TMP/o2/../o2/cb-relight.json" --out "$TMP/o2"
 refused "the emissions file" "$TMP/o2/cb-relight.json"
@@ -121,16 +111,7 @@ refused "the emissions file" "$TMP/o2/cb-relight.json"
 # without --images), and with --images an image over the scene.
 cp "$SRC/scenes/cornell-box/scene.json" "$TMP/o2/cb-blue.json"
 cp "$TMP/o2/cb-blue.json" "$TMP/o2/cb-blue.json.orig"
-write_job "$TMP/o2/cb-scene.json" <<JOB
-{
-  "name": "cb",
-  "scene": "cb-blue.json",
-  "method": "radiosity",
-  "image": {"width": 40, "height": 32},
-  "radiosity": {"patches": 80, "levels": 2, "rays": 256},
-  "outputs": {"ply": "cb.json", "factorization": "cb-scene.fact"}
-}
-JOB
+clash_job "$TMP/o2/cb-scene.json" cb-blue.json '"ply": "cb.json", "factorization": "cb-scene.fact"'
 cp "$TMP/o2/cb-scene.json" "$TMP/o2/cb-scene.json.orig"
 touch "$TMP/o2/stamp"
 expect_error "outputs.ply: $TMP/o2/cb-scene.json" "$TMP/o2/cb-scene.json" "$TMP/em.json" \
