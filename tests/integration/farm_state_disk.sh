@@ -12,7 +12,7 @@
 #    the disk is still full: it is written in the room of the job's
 #    checkpoint before, and the coordinator restarted (with room again)
 #    resumes with every task merged and writes the outputs, running no
-#    task again.
+#    task again. 5. without a checkpoint before, a restart runs it again.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 need_own_disk 16m
@@ -134,6 +134,28 @@ wait_state "$id" done 60
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out4/img.exr" || fail "job 4's image differs from gi render"
 grep -q "job $id: its outputs cannot be written (.*), nor .*; the result is kept in checkpoint [0-9]*, written in the room of the one before: a restart resumes from it" "$LOG" ||
     fail "the log does not say where the held result is kept"
+stop_farmd "$LOG"
+
+# 5. With no checkpoint before to give its room (none is taken in time), the
+# held result cannot be kept on disk: the log says a restart runs the job
+# again from the start, and one does (it is still running in the journal).
+# shellcheck disable=SC2086
+start_farmd "$S4" "$LOG" nsenter -t "$HOLDER" -m -- $OPTS $PORTS --checkpoint 1000
+id=$("$GI" submit "$TMP/job.json" 2>"$TMP/submit.log") || fail "submit 5"
+mkdir -p "$JOBS4/$id/out/img.exr"
+wait_merged "$id" 4
+kill -STOP "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+dd if=/dev/zero of="$JOBS4/fill" bs=64k 2>/dev/null && fail "16 MiB did not fill up (5)"
+kill -CONT "$WORKER_PID" $(pgrep -P "$WORKER_PID")
+wait_log "$LOG" "job $id: its outputs cannot be written (.*img.exr: .*), nor .*; a restart would run it again from the start"
+stop_farmd "$LOG"
+rm "$JOBS4/fill"
+rmdir "$JOBS4/$id/out/img.exr"
+# shellcheck disable=SC2086
+start_farmd "$S4" "$LOG" nsenter -t "$HOLDER" -m -- $OPTS $PORTS
+wait_state "$id" done 120
+"$GI" fetch "$id" --out "$TMP/out5" >/dev/null || fail "fetch 5"
+cmp "$TMP/job.json.ref/img.exr" "$TMP/out5/img.exr" || fail "job 5's image differs from gi render"
 stop_farmd "$LOG"
 kill "$HOLDER"
 echo ok
