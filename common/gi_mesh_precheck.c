@@ -69,7 +69,8 @@ static int ply_precheck(const char *name, const uint8_t *data, size_t len, gi_er
             need += count * elem_bytes;
             char *end;
             count = strtod(w3, &end);
-            if (*end || count < 0 || count > 2147483647.0)
+            /* Negated: "nan" is a number to strtod, and no count. */
+            if (*end || !(count >= 0 && count <= 2147483647.0))
                 rc = gi_fail(err, GI_EINVAL, "%s: PLY element \"%s\" has a bad count \"%s\"", name,
                              w2, w3);
             elem_bytes = 0.0;

@@ -630,6 +630,29 @@ GI_TEST(mesh_precheck_ply_first_lines)
                  "%s", err.msg);
 }
 
+/* An element count must be a count: strtod also takes "nan", which no
+ * comparison with the file's size refuses. */
+GI_TEST(mesh_precheck_ply_counts_are_numbers)
+{
+    static const char *const counts[] = {"nan", "NAN", "-nan", "inf", "-1", "3x", "2147483648"};
+    for (size_t i = 0; i < GI_ARRAY_LEN(counts); i++) {
+        char text[256];
+        snprintf(text, sizeof text,
+                 "ply\nformat ascii 1.0\nelement vertex %s\nproperty float x\nend_header\n0\n",
+                 counts[i]);
+        gi_error err;
+        gi_error_clear(&err);
+        GI_CHECK_MSG(gi_mesh_precheck("c.ply", (const uint8_t *)text, strlen(text), &err) == -1 &&
+                         strstr(err.msg, "c.ply") && strstr(err.msg, "bad count"),
+                     "count %s: %s", counts[i], err.msg);
+    }
+    static const char one[] =
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n";
+    gi_error err;
+    GI_CHECK_MSG(gi_mesh_precheck("c.ply", (const uint8_t *)one, sizeof one - 1, &err) == 0,
+                 "%s", err.msg);
+}
+
 /* A vertex that is not a finite point is refused, naming the file and the
  * vertex (the line, for an OBJ); normals that are not finite are dropped
  * (the scene computes its own). fuzz_mesh checks both. */
