@@ -579,6 +579,11 @@ GI_TEST(mesh_import_obj_face_indices_in_range)
         {"f 1 2 4\nv 1 1 0\n", NULL},       /* a vertex defined after the face */
         {"vt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n", NULL},
         {"f 1 2 3.0\n", "Invalid face index"}, /* not an integer: assimp's word */
+        /* assimp skips indented lines: this vertex is not one, */
+        {"  v 1 1 0\nf 1 2 4\n", "line 5: vertex index 4 is out of range (3 defined)"},
+        {"\tv 1 1 0\nf 1 2 3\nf -4 -2 -1\n", "line 6: vertex index -4 is out of range"},
+        /* and these faces and lines are none. */
+        {"f 1 2 3\n  l 1 9\n\tf 7 8 9\n", NULL},
     };
     for (size_t i = 0; i < GI_ARRAY_LEN(cases); i++) {
         char text[256];
