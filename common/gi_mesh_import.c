@@ -7,6 +7,7 @@
  * assimp itself runs in a child process (see "assimp in a child process"). */
 #include "gi_mesh.h"
 #include "gi_mesh_convert.h"
+#include "gi_mesh_wire.h"
 
 #include <assimp/cfileio.h>
 #include <assimp/cimport.h>
@@ -255,7 +256,7 @@ static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_
 enum {
     MSG_READ = 'R',  /* child: a file's name */
     MSG_FILE = 'F',  /* parent: u8 ok, then the bytes or u32 code + message */
-    MSG_MESH = 'M',  /* child: the mesh (encode_mesh) */
+    MSG_MESH = 'M',  /* child: the mesh (gi_mesh_encode) */
     MSG_ERROR = 'E', /* child: u32 code + message */
 };
 
@@ -351,66 +352,6 @@ static int child_read(void *ctx, const char *name, gi_buf *out, gi_error *err)
     return rc;
 }
 
-/* The child is this program on this host: the arrays go as their bytes. */
-_Static_assert(sizeof(gi_vec3) == 3 * sizeof(float), "a gi_vec3 is 3 packed floats");
-static void encode_mesh(gi_buf *b, const gi_mesh_data *m)
-{
-    size_t nv = m->vertex_count, nt = m->triangle_count;
-    gi_buf_reserve(b, 16 + (m->normals ? 24 : 12) * nv + 16 * nt + 64 * m->material_count);
-    gi_buf_put_u32(b, m->vertex_count);
-    gi_buf_put_u32(b, m->triangle_count);
-    gi_buf_put_u32(b, m->material_count);
-    gi_buf_put_u8(b, m->normals != NULL);
-    gi_buf_put(b, m->positions, nv * sizeof *m->positions);
-    if (m->normals)
-        gi_buf_put(b, m->normals, nv * sizeof *m->normals);
-    gi_buf_put(b, m->indices, 3 * nt * sizeof *m->indices);
-    gi_buf_put(b, m->tri_material, nt * sizeof *m->tri_material);
-    for (uint32_t i = 0; i < m->material_count; i++) {
-        gi_buf_put_str(b, m->materials[i].name);
-        gi_buf_put_f32s(b, &m->materials[i].diffuse.x, 3);
-        gi_buf_put_f32s(b, &m->materials[i].emission.x, 3);
-    }
-}
-
-static int decode_mesh(const gi_buf *b, const char *name, gi_mesh_data *m, gi_error *err)
-{
-    gi_reader r;
-    gi_reader_init(&r, b->data, b->len, "imported mesh");
-    uint32_t nv = gi_get_u32(&r), nt = gi_get_u32(&r), nm = gi_get_u32(&r);
-    int normals = gi_get_u8(&r);
-    /* Each vertex takes 12 bytes, a triangle 16, a material 28: counts the
-     * payload cannot hold are refused before anything is allocated. */
-    if (r.failed || nv == 0 || nt == 0 || nm == 0 || r.left / 12 < nv || r.left / 16 < nt ||
-        r.left / 28 < nm)
-        return gi_fail(err, GI_EINTERNAL, "%s: the importer process sent a bad mesh", name);
-    m->vertex_count = nv;
-    m->triangle_count = nt;
-    m->positions = gi_xmalloc(((size_t)nv + 1) * sizeof *m->positions);
-    gi_get(&r, m->positions, (size_t)nv * sizeof *m->positions);
-    if (normals) {
-        m->normals = gi_xmalloc(((size_t)nv + 1) * sizeof *m->normals);
-        gi_get(&r, m->normals, (size_t)nv * sizeof *m->normals);
-    }
-    m->indices = gi_xmalloc(3 * (size_t)nt * sizeof *m->indices);
-    gi_get(&r, m->indices, 3 * (size_t)nt * sizeof *m->indices);
-    m->tri_material = gi_xmalloc((size_t)nt * sizeof *m->tri_material);
-    gi_get(&r, m->tri_material, (size_t)nt * sizeof *m->tri_material);
-    m->materials = gi_xcalloc(nm, sizeof *m->materials);
-    m->material_count = nm;
-    for (uint32_t i = 0; i < nm && !r.failed; i++) {
-        m->materials[i].name = gi_get_str(&r, 4096);
-        gi_get_f32s(&r, &m->materials[i].diffuse.x, 3);
-        gi_get_f32s(&r, &m->materials[i].emission.x, 3);
-    }
-    gi_error e;
-    if (gi_reader_finish(&r, &e))
-        return gi_fail(err, GI_EINTERNAL, "%s: the importer process sent a bad mesh: %s", name,
-                       e.msg);
-    return 0;
-}
-
-
 /* AddressSanitizer maps terabytes of shadow memory up front: an
  * address-space limit would fail its first allocation. */
 #if defined(__SANITIZE_ADDRESS__)
@@ -483,7 +424,7 @@ static void child_main(int fd, const char *name, size_t bytes)
                 "its %zu bytes): the file is malformed or too big for this machine",
                 name, (double)budget / (double)(1u << 30), bytes);
     if (rc == 0)
-        encode_mesh(&b, &m);
+        gi_mesh_encode(&b, &m);
     else
         put_error(&b, e.code != GI_OK ? &e : &c.files[0]->err);
     rc = send_msg(fd, rc == 0 ? MSG_MESH : MSG_ERROR, &b);
@@ -537,7 +478,7 @@ static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_me
             if (send_msg(fd, MSG_FILE, &b))
                 break;
         } else if (type == MSG_MESH) {
-            rc = decode_mesh(&b, name, out, err);
+            rc = gi_mesh_decode(b.data, b.len, name, out, err);
             answered = 1;
         } else if (type == MSG_ERROR) {
             gi_reader r;
