@@ -77,15 +77,11 @@ run_fuzz() {
     fi
 }
 
-echo "== unit tests ($BUILD/asan/gi-tests)"
-"$BUILD/asan/gi-tests" --list | grep -E "$PATTERN" >"$OUT/unit-list"
-# Parallel, one process per test (a crash fails only that test).
-while read -r t; do
-    echo "$t"
-done <"$OUT/unit-list" | {
+# Runs FN on each line of stdin, $JOBS at a time.
+run_parallel() {
     running=0
-    while read -r t; do
-        run_unit "$t" &
+    while read -r arg; do
+        "$1" "$arg" &
         running=$((running + 1))
         if [ $running -ge "$JOBS" ]; then
             wait
@@ -94,6 +90,11 @@ done <"$OUT/unit-list" | {
     done
     wait
 }
+
+echo "== unit tests ($BUILD/asan/gi-tests)"
+"$BUILD/asan/gi-tests" --list | grep -E "$PATTERN" >"$OUT/unit-list"
+# Parallel, one process per test (a crash fails only that test).
+run_parallel run_unit <"$OUT/unit-list"
 
 echo "== integration tests"
 for s in "$SRC"/tests/integration/*.sh; do
@@ -104,11 +105,14 @@ for s in "$SRC"/tests/integration/*.sh; do
 done
 
 echo "== fuzz targets (short runs)"
+# $JOBS at a time, like the unit tests: each target is one process on one
+# core for FUZZ_SECONDS, so the phase takes targets / JOBS runs, not one
+# per target.
 for f in "$BUILD"/fuzz/fuzz_*; do
     [ -x "$f" ] || continue
     basename "$f" | grep -Eq "$PATTERN" || continue
-    run_fuzz "$f"
-done
+    echo "$f"
+done | run_parallel run_fuzz
 
 sort -k2 "$results" | while read -r status name rest; do
     printf '%-5s %-50s %s\n' "$status" "$name" "$rest"
