@@ -414,19 +414,6 @@ static unsigned route(const char *method, const char *url, api_req *r)
 
 /* ---- endpoints ------------------------------------------------------------- */
 
-/* An Idempotency-Key: a client's random token, not something to log or
- * keep in any size. */
-static int key_valid(const char *k)
-{
-    size_t n = strlen(k);
-    if (n < 16 || n > 64)
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isalnum((unsigned char)k[i]) && k[i] != '-' && k[i] != '_')
-            return 0;
-    return 1;
-}
-
 static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_req *r,
                                  const char *method, const char *url)
 {
@@ -435,12 +422,13 @@ static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_re
     if (gi_farm_submission_parse((const char *)r->body.data, r->body.len, &s, &err))
         return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST, "%s", err.msg);
     /* A submission repeated with its Idempotency-Key (its client lost the
-     * first answer: a connection reset under load) gets the job the first
-     * one made, instead of a second one. */
+     * first answer: a connection reset under load, a gi-farmd restart) gets
+     * the job the first one made, instead of a second one. The key is
+     * journaled with the job (SUBMIT) and lives as long as it. */
     const char *key = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Idempotency-Key");
     int status = MHD_HTTP_CREATED;
     gi_farm_job *j = NULL;
-    if (key && !key_valid(key)) {
+    if (key && !gi_submit_key_valid(key)) {
         gi_farm_submission_free(&s);
         return refuse(f, conn, r, method, url, MHD_HTTP_BAD_REQUEST,
                       "Idempotency-Key: 16 to 64 characters of A-Z, a-z, 0-9, '-' and '_'");
@@ -457,9 +445,7 @@ static enum MHD_Result do_submit(gi_farm *f, struct MHD_Connection *conn, api_re
                 "answered with the job, not submitted twice", (unsigned long long)j->id, r->peer);
         status = MHD_HTTP_OK;
     } else {
-        j = gi_farm_job_submit(f, s.file, s.text, &s.manifest, s.priority, &err);
-        if (j && key)
-            j->submit_key = gi_xstrdup(key);
+        j = gi_farm_job_submit(f, s.file, s.text, &s.manifest, s.priority, key, &err);
     }
     if (!j) {
         gi_farm_submission_free(&s);

@@ -65,8 +65,9 @@ struct gi_farm_job {
     uint32_t priority;
     double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
     char *file, *text;
-    /* The submission's Idempotency-Key (NULL: none). In memory only: a
-     * client repeats a submission within a minute, a restart forgets. */
+    /* The submission's Idempotency-Key (NULL: none), journaled with the
+     * job's SUBMIT: a client's retry after a restart gets this job again.
+     * It lives as long as the job (until purged), like the job's text. */
     char *submit_key;
     size_t text_len; /* strlen(text): counted against --max-jobs-memory at every submission */
     gi_manifest manifest;
@@ -317,9 +318,10 @@ int gi_farm_jobs_replay(gi_farm *f, gi_error *err);
 /* A validated submission: takes over text (malloc'ed) and manifest. Returns
  * the new job, or NULL with err (GI_EINVAL: bad job; GI_ENOMEM: full). */
 gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
-                                gi_manifest *manifest, uint32_t priority, gi_error *err);
+                                gi_manifest *manifest, uint32_t priority, const char *key,
+                                gi_error *err);
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
-/* The job submitted with this Idempotency-Key, or NULL. */
+/* The job submitted with this Idempotency-Key (key: NULL if none), or NULL. */
 gi_farm_job *gi_farm_job_by_key(gi_farm *f, const char *key);
 /* The jobs not ended, in submission order (rebuilt here after a change).
  * Valid until the next call: a job that ends meanwhile stays in it. */

@@ -165,7 +165,9 @@ gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id)
 
 gi_farm_job *gi_farm_job_by_key(gi_farm *f, const char *key)
 {
-    /* Newest first: a repeated submission follows its first closely. */
+    /* Newest first: a repeated submission follows its first closely. A
+     * linear search: keys are only looked up for a submission that has
+     * one, and each costs a journal append anyway. */
     for (size_t i = f->job_count; i-- > 0;)
         if (f->jobs[i]->submit_key && strcmp(f->jobs[i]->submit_key, key) == 0)
             return f->jobs[i];
@@ -405,6 +407,7 @@ static void submit_record(const gi_farm_job *j, gi_jrec *r)
     r->submitted = j->submitted;
     r->file = j->file;
     r->text = j->text;
+    r->key = j->submit_key;
     r->manifest = j->manifest; /* borrowed: not freed */
 }
 
@@ -507,6 +510,7 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
         j->file = gi_xstrdup(r->file);
         j->text = gi_xstrdup(r->text);
         j->text_len = strlen(j->text);
+        j->submit_key = r->key ? gi_xstrdup(r->key) : NULL;
         for (size_t i = 0; i < r->manifest.count; i++)
             gi_manifest_put(&j->manifest, r->manifest.entries[i].name,
                             r->manifest.entries[i].hash, r->manifest.entries[i].size);
@@ -684,14 +688,20 @@ static size_t unfinished_jobs(const gi_farm *f)
     return n;
 }
 
+/* A job's record, its text and its Idempotency-Key. */
+static uint64_t job_memory(size_t text_len, const char *key)
+{
+    return sizeof(gi_farm_job) + text_len + (key ? strlen(key) + 1 : 0);
+}
+
 /* What the farm's jobs hold in memory for as long as they are kept (a
  * cancelled or failed job keeps its text for a retry, a done one until it
- * is purged): their records and texts. */
+ * is purged): their records, texts and keys. */
 static uint64_t jobs_memory(const gi_farm *f)
 {
     uint64_t n = 0;
     for (size_t i = 0; i < f->job_count; i++)
-        n += sizeof(gi_farm_job) + f->jobs[i]->text_len;
+        n += job_memory(f->jobs[i]->text_len, f->jobs[i]->submit_key);
     return n;
 }
 
@@ -716,7 +726,8 @@ static uint64_t next_free_id(gi_farm *f)
 }
 
 gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
-                                gi_manifest *manifest, uint32_t priority, gi_error *err)
+                                gi_manifest *manifest, uint32_t priority, const char *key,
+                                gi_error *err)
 {
     if (unfinished_jobs(f) >= f->cfg.max_jobs) {
         gi_fail(err, GI_ENOMEM, "the farm already has %u unfinished jobs (its limit)",
@@ -725,7 +736,7 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     }
     /* Else submitting and cancelling jobs would fill the coordinator's
      * memory (and its journal) without bound. */
-    uint64_t held = jobs_memory(f), more = sizeof(gi_farm_job) + strlen(text);
+    uint64_t held = jobs_memory(f), more = job_memory(strlen(text), key);
     if (held + more > f->cfg.max_jobs_memory) {
         gi_fail(err, GI_ENOMEM,
                 "the farm's %zu jobs hold %llu bytes, and this one's %llu more would pass "
@@ -777,6 +788,7 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
     j->file = gi_xstrdup(file);
     j->text = text;
     j->text_len = strlen(text);
+    j->submit_key = key ? gi_xstrdup(key) : NULL; /* journaled with the job */
     j->manifest = *manifest;
     gi_manifest_init(manifest);
     describe(j, &parsed);

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <ctype.h>
 #include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
@@ -21,12 +22,25 @@
 /* 2: RETRY records; 3: ENDs carry the run's summary (a build before it
  * would take such an END for damage, so it refuses the version instead);
  * 4: the summary ends with the run's tasks lost with their host (absent
- * from a version 3 END, read as 0). */
-#define JOURNAL_VERSION 4u
+ * from a version 3 END, read as 0); 5: a SUBMIT ends with its Idempotency-Key
+ * (none before: a restart forgot the keys, and a client's retry made a
+ * second job). */
+#define JOURNAL_VERSION 5u
 #define HEADER_BYTES 8
 #define RECORD_OVERHEAD 12 /* type, length, crc */
 #define MAX_FILE_NAME 4096
 #define MAX_MESSAGE 4096
+
+int gi_submit_key_valid(const char *k)
+{
+    size_t n = strlen(k);
+    if (n < GI_SUBMIT_KEY_MIN || n > GI_SUBMIT_KEY_MAX)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)k[i]) && k[i] != '-' && k[i] != '_')
+            return 0;
+    return 1;
+}
 
 void gi_jrec_init(gi_jrec *r, gi_jrec_type type, uint64_t job_id)
 {
@@ -41,8 +55,9 @@ void gi_jrec_free(gi_jrec *r)
     free(r->file);
     free(r->text);
     free(r->message);
+    free(r->key);
     gi_manifest_free(&r->manifest);
-    r->file = r->text = r->message = NULL;
+    r->file = r->text = r->message = r->key = NULL;
 }
 
 static void encode_payload(const gi_jrec *r, gi_buf *out)
@@ -55,6 +70,8 @@ static void encode_payload(const gi_jrec *r, gi_buf *out)
         gi_buf_put_str(out, r->file);
         gi_buf_put_str(out, r->text);
         gi_manifest_encode(&r->manifest, out);
+        if (r->key)
+            gi_buf_put_str(out, r->key);
         break;
     case GI_JREC_CHECKPOINT:
         gi_buf_put_u64(out, r->seq);
@@ -120,6 +137,11 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
         r->text = gi_get_str(&rd, GI_JOB_MAX_BYTES);
         if (!rd.failed && gi_manifest_decode(&rd, &r->manifest, err))
             return -1;
+        if (!rd.failed && rd.left) { /* version 5 */
+            r->key = gi_get_str(&rd, GI_SUBMIT_KEY_MAX);
+            if (!rd.failed && !gi_submit_key_valid(r->key))
+                return gi_fail(err, GI_EPROTO, "journal SUBMIT: not an Idempotency-Key");
+        }
         break;
     case GI_JREC_CHECKPOINT:
         r->seq = gi_get_u64(&rd);

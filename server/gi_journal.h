@@ -2,11 +2,12 @@
  * state directory, so a restarted gi-farmd knows every job it had.
  *
  * File layout (little-endian; docs/farm.md, "Journal"):
- *   header   "GIJ1" | u32 version (4; versions 1 to 3, without RETRY, END
- *            summaries or their losses, are read too)
+ *   header   "GIJ1" | u32 version (5; versions 1 to 4, without RETRY, END
+ *            summaries, their losses or SUBMIT keys, are read too)
  *   record   u32 type | u32 length | payload | u32 crc32c(type, length, payload)
  * Records:
- *   SUBMIT      job id, priority, submit time, job file name, job text, manifest
+ *   SUBMIT      job id, priority, submit time, job file name, job text, manifest,
+ *               and the submission's Idempotency-Key if it had one (version 5)
  *   CHECKPOINT  job id, sequence, tasks merged, tasks planned (the checkpoint
  *               itself is a file next to the job; the record is its history)
  *   END         job id, final state (done / failed / cancelled), error code
@@ -44,6 +45,12 @@ typedef enum gi_jrec_type {
     GI_JREC_RETRY = 5
 } gi_jrec_type;
 
+/* A submission's Idempotency-Key: 16 to 64 of A-Z a-z 0-9 - _ (a client's
+ * random token, kept with its job; docs/farm.md, "API"). */
+#define GI_SUBMIT_KEY_MIN 16
+#define GI_SUBMIT_KEY_MAX 64
+int gi_submit_key_valid(const char *key);
+
 /* Final job states in END records. */
 typedef enum gi_job_end {
     GI_JOB_END_DONE = 1,
@@ -61,6 +68,7 @@ typedef struct gi_jrec {
     char *file;
     char *text;
     gi_manifest manifest;
+    char *key; /* version 5 on: the Idempotency-Key, NULL if none */
     /* CHECKPOINT */
     uint64_t seq, merged, tasks;
     /* END */

@@ -3,7 +3,8 @@
 # minute, saying so once, and succeeds once slots free up. GET, HEAD and
 # asset PUTs are asked again whatever broke; a submission carries an
 # Idempotency-Key, so that one sent again after its answer was lost makes
-# no second job (the farm answers it with the first job).
+# no second job (the farm answers it with the first job), also across a
+# gi-farmd restart (the key is journaled with its job).
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -119,6 +120,33 @@ grep -q "job $id: its submission came again with its Idempotency-Key" "$LOG" || 
 [ "$(post 'short' "$body")" = 400 ] && grep -q "Idempotency-Key: 16 to 64" "$TMP/r" ||
     { cat "$TMP/r"; fail "a malformed key"; }
 [ "$("$GI" jobs | awk 'NR > 1' | wc -l)" = 3 ] || { "$GI" jobs; fail "not three jobs"; }
-api "/api/v1/jobs/$id" -o /dev/null -X DELETE
 kill "$WORKER_PID" 2>/dev/null || true
+
+# The key is journaled with its job: a client asking again after gi-farmd
+# restarted (it was stopped between the submission and the retry) gets
+# the job the first one made, and the key still refuses another
+# submission. Twice: the second start reads the journal the first one
+# compacted.
+for n in 1 2; do
+    stop_farmd "$LOG"
+    start_farmd "$TMP/state" "$LOG"
+    [ "$(post $key "$body")" = 200 ] && grep -q "\"id\":$id," "$TMP/r" ||
+        { cat "$TMP/r"; fail "repeated submission after restart $n"; }
+    [ "$(post $key "$(echo "$body" | sed 's/"width": 8/"width": 9/')")" = 409 ] &&
+        grep -q "was given to job $id, another submission" "$TMP/r" ||
+        { cat "$TMP/r"; fail "key reuse after restart $n"; }
+    [ "$("$GI" jobs | awk 'NR > 1' | wc -l)" = 3 ] || { "$GI" jobs; fail "not three jobs"; }
+done
+[ "$(grep -c "job $id: its submission came again with its Idempotency-Key" "$LOG")" = 3 ] ||
+    fail "the repeats after the restarts not logged"
+# The key lives as long as its job: purged, it is forgotten (restart or not).
+api "/api/v1/jobs/$id" -o /dev/null -X DELETE
+api "/api/v1/jobs/$id?purge=1" -o "$TMP/r" -X DELETE
+grep -q '"purged":true' "$TMP/r" || { cat "$TMP/r"; fail "purge $id"; }
+stop_farmd "$LOG"
+start_farmd "$TMP/state" "$LOG"
+[ "$(post $key "$body")" = 201 ] || { cat "$TMP/r"; fail "the purged job's key is still known"; }
+id2=$(grep -o '"id":[0-9]*' "$TMP/r" | cut -d: -f2)
+[ "$id2" -gt "$id" ] || fail "job $id2 after $id"
+api "/api/v1/jobs/$id2" -o /dev/null -X DELETE
 stop_farmd "$LOG"

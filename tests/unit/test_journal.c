@@ -365,14 +365,87 @@ GI_TEST(test_journal_retry_record_and_versions)
     gi_error err;
     GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0);
     GI_CHECK(s.n == 4 && s.types[3] == GI_JREC_RETRY && s.ids[3] == 7 && valid == b.len);
-    for (uint8_t v = 2; v <= 4; v++) { /* RETRY records; END summaries; their losses */
+    /* RETRY records; END summaries; their losses; SUBMIT keys */
+    for (uint8_t v = 2; v <= 5; v++) {
         b.data[4] = v;
         memset(&s, 0, sizeof s);
         GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0 &&
                  s.n == 4);
     }
-    b.data[4] = 5; /* a later build's */
+    b.data[4] = 6; /* a later build's */
     GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == -1);
-    GI_CHECK_MSG(strstr(err.msg, "version 5 is not supported") != NULL, "%s", err.msg);
+    GI_CHECK_MSG(strstr(err.msg, "version 6 is not supported") != NULL, "%s", err.msg);
+    gi_buf_free(&b);
+}
+
+typedef struct keyed {
+    int n;
+    char key[80];
+    int has_key;
+} keyed;
+
+static int keep_key(void *ctx, const gi_jrec *r, gi_error *err)
+{
+    keyed *k = ctx;
+    (void)err;
+    k->n++;
+    if (r->type == GI_JREC_SUBMIT) {
+        k->has_key = r->key != NULL;
+        snprintf(k->key, sizeof k->key, "%s", r->key ? r->key : "");
+    }
+    return 0;
+}
+
+/* Version 5: a SUBMIT ends with its Idempotency-Key (one without, as
+ * before, still reads: no key). A key that is not one is damage. */
+GI_TEST(test_journal_submit_key)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    gi_buf_put(&b, "GIJ1", 4);
+    gi_buf_put_u32(&b, 5);
+    size_t head = b.len;
+    gi_jrec r;
+    gi_jrec_init(&r, GI_JREC_SUBMIT, 4);
+    r.file = "a.json";
+    r.text = "{}";
+    r.key = "0123456789abcdef-_ABCDEF";
+    gi_jrec_encode(&r, &b);
+    size_t keyed_len = b.len - head;
+    keyed k;
+    memset(&k, 0, sizeof k);
+    size_t valid, skipped;
+    gi_error err;
+    GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_key, &k, &valid, &skipped, &err) == 0);
+    GI_CHECK(k.n == 1 && k.has_key && strcmp(k.key, "0123456789abcdef-_ABCDEF") == 0);
+    GI_CHECK(valid == b.len);
+    /* Without a key: 4 bytes (the length) and the key shorter. */
+    gi_buf plain;
+    gi_buf_init(&plain);
+    gi_jrec_init(&r, GI_JREC_SUBMIT, 4);
+    r.file = "a.json";
+    r.text = "{}";
+    gi_jrec_encode(&r, &plain);
+    GI_CHECK(plain.len + 4 + strlen("0123456789abcdef-_ABCDEF") == keyed_len);
+    memset(&k, 0, sizeof k);
+    gi_buf_free(&plain);
+    /* Keys that are not keys: too short, too long, a character outside. */
+    static const char *bad[] = {"0123456789abcde", "0123456789abcdef0123456789abcdef"
+                                "0123456789abcdef0123456789abcdef0", "0123456789abcdef!"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        GI_CHECK(!gi_submit_key_valid(bad[i]));
+        b.len = head;
+        gi_jrec_init(&r, GI_JREC_SUBMIT, 4);
+        r.file = "a.json";
+        r.text = "{}";
+        r.key = (char *)bad[i];
+        gi_jrec_encode(&r, &b);
+        memset(&k, 0, sizeof k);
+        GI_CHECK_MSG(gi_journal_parse(b.data, b.len, keep_key, &k, &valid, &skipped, &err) == 1 &&
+                         k.n == 0 && valid == head,
+                     "key \"%s\" read", bad[i]);
+    }
+    GI_CHECK(gi_submit_key_valid("0123456789abcdef") &&
+             gi_submit_key_valid("0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef"));
     gi_buf_free(&b);
 }
