@@ -616,9 +616,17 @@ static int cmd_status(client *c, uint64_t id)
     const cJSON *err = cJSON_GetObjectItemCaseSensitive(job, "error");
     if (cJSON_IsObject(err))
         printf("  error: %s\n", str(err, "message"));
+    /* Retention purges the jobs fetched first (a farm before it has no "fetched"). */
+    int done = strcmp(str(job, "state"), "done") == 0;
+    int knows = cJSON_GetObjectItemCaseSensitive(job, "fetched") != NULL;
+    if (done && str(job, "fetched")[0])
+        printf("  outputs fetched at %s\n", str(job, "fetched"));
+    else if (done && knows)
+        printf("  outputs never fetched (gi fetch %llu)\n", (unsigned long long)id);
     if (str(job, "purge_at")[0])
-        printf("  ended %s; purged at %s by the farm's retention (fetch its outputs before)\n",
-               str(job, "ended"), str(job, "purge_at"));
+        printf("  ended %s; purged at %s by the farm's retention%s\n", str(job, "ended"),
+               str(job, "purge_at"),
+               done && !str(job, "fetched")[0] ? " (fetch its outputs before)" : "");
     const cJSON *te = cJSON_GetObjectItemCaseSensitive(job, "task_errors");
     int n = cJSON_GetArraySize(te);
     if (n > 0)

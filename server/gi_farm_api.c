@@ -59,6 +59,7 @@ typedef struct api_req {
     char name[256];    /* output name or asset hash */
     gi_buf body;
     gi_farm_upload *up;
+    int fetching; /* an output's bytes are being sent (GET): its job's fetch once sent whole */
     uint64_t received, limit;
     const char *allow; /* a 405's Allow header */
 } api_req;
@@ -508,6 +509,7 @@ static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_re
     MHD_add_response_header(resp, "Content-Disposition", disp);
     enum MHD_Result rc = MHD_queue_response(conn, MHD_HTTP_OK, resp);
     MHD_destroy_response(resp);
+    r->fetching = rc == MHD_YES && strcmp(method, "GET") == 0;
     return rc;
 }
 
@@ -779,12 +781,15 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     api_req *r = *con_cls;
     if (!r)
         return;
+    /* Only an output sent to its end counts as fetched: one cut off (the
+     * client gone, a timeout) leaves the job unfetched for retention. */
+    if (r->fetching && toe == MHD_REQUEST_TERMINATED_COMPLETED_OK)
+        gi_farm_job_fetched(cls, r->job_id, r->name, r->peer);
     gi_farm_upload_abort(r->up); /* a client that went away mid-upload */
     body_release(cls, r);
     free(r);
     *con_cls = NULL;
     (void)conn;
-    (void)toe;
 }
 
 static void on_mhd_log(void *cls, const char *fmt, va_list ap)

@@ -64,6 +64,9 @@ struct gi_farm_job {
     gi_fj_state state;
     uint32_t priority;
     double submitted, started, ended; /* wall clock (epoch seconds); 0 = not yet */
+    /* When an output of the done job was first sent whole through the API
+     * (journaled: FETCHED); 0 = never. Retention purges fetched jobs first. */
+    double fetched;
     char *file, *text;
     /* The submission's Idempotency-Key (NULL: none), journaled with the
      * job's SUBMIT: a client's retry after a restart gets this job again.
@@ -323,6 +326,10 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
 gi_farm_job *gi_farm_job_find(gi_farm *f, uint64_t id);
 /* The job submitted with this Idempotency-Key (key: NULL if none), or NULL. */
 gi_farm_job *gi_farm_job_by_key(gi_farm *f, const char *key);
+/* Output `name` of job `id` was sent whole to peer: the first time, the
+ * job is fetched (journaled, logged). A job purged or retried meanwhile
+ * is left alone. */
+void gi_farm_job_fetched(gi_farm *f, uint64_t id, const char *name, const char *peer);
 /* The jobs not ended, in submission order (rebuilt here after a change).
  * Valid until the next call: a job that ends meanwhile stays in it. */
 gi_farm_job **gi_farm_live_jobs(gi_farm *f, size_t *count);

@@ -447,13 +447,20 @@ static void ckpt_record(const gi_farm_job *j, gi_jrec *r)
     r->tasks = j->loaded ? j->jr.task_count : j->ckpt_merged;
 }
 
-/* Rewrites the journal as the current state: per job one SUBMIT, the last
- * CHECKPOINT of a job not done, and the END of an ended one. */
+static void fetched_record(const gi_farm_job *j, gi_jrec *r)
+{
+    gi_jrec_init(r, GI_JREC_FETCHED, j->id);
+    r->when = j->fetched;
+}
+
+/* Rewrites the journal as the current state: per job one SUBMIT (with its
+ * Idempotency-Key), the last CHECKPOINT of a job not done, the END of an
+ * ended one and the FETCHED of a fetched one. */
 static int compact(gi_farm *f, gi_error *err)
 {
     size_t n = 0;
-    gi_jrec *recs = gi_xcalloc(3 * f->job_count + 1, sizeof *recs);
-    const gi_jrec **ptrs = gi_xcalloc(3 * f->job_count + 1, sizeof *ptrs);
+    gi_jrec *recs = gi_xcalloc(4 * f->job_count + 1, sizeof *recs);
+    const gi_jrec **ptrs = gi_xcalloc(4 * f->job_count + 1, sizeof *ptrs);
     for (size_t i = 0; i < f->job_count; i++) {
         const gi_farm_job *j = f->jobs[i];
         submit_record(j, &recs[n++]);
@@ -462,6 +469,9 @@ static int compact(gi_farm *f, gi_error *err)
             ckpt_record(j, &recs[n++]);
         if (terminal(j))
             end_record(j, &recs[n++]);
+        /* After its END: replay takes a FETCHED for a done job only. */
+        if (j->state == GI_FJ_DONE && j->fetched > 0)
+            fetched_record(j, &recs[n++]);
     }
     for (size_t i = 0; i < n; i++)
         ptrs[i] = &recs[i];
@@ -482,6 +492,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->state = GI_FJ_CHECKING;
     f->live_stale = 1;
     j->ended = 0;
+    j->fetched = 0; /* outputs to come are new */
     gi_error_clear(&j->error);
     j->final_tasks = j->final_merged = j->final_retries = j->final_losses = 0;
     memset(&j->final_stats, 0, sizeof j->final_stats);
@@ -552,6 +563,10 @@ static int replay_one(void *ctx, const gi_jrec *r, gi_error *err)
     case GI_JREC_RETRY:
         if (j && (j->state == GI_FJ_FAILED || j->state == GI_FJ_CANCELLED))
             reopen(f, j);
+        return 0;
+    case GI_JREC_FETCHED:
+        if (j && j->state == GI_FJ_DONE && !j->fetched) /* the first fetch */
+            j->fetched = r->when;
         return 0;
     case GI_JREC_PURGE:
         for (size_t i = 0; i < f->job_count; i++)
@@ -1039,6 +1054,30 @@ static void remove_entry(void *ctx, const char *p, int is_dir)
 static void remove_tree(const char *path)
 {
     walk_tree(path, remove_entry, NULL);
+}
+
+void gi_farm_job_fetched(gi_farm *f, uint64_t id, const char *name, const char *peer)
+{
+    gi_farm_job *j = gi_farm_job_find(f, id);
+    if (!j || j->state != GI_FJ_DONE || j->fetched > 0)
+        return;
+    /* A FETCHED before the END it follows would be dropped by replay: the
+     * next download tries again, and retention meanwhile keeps the job as
+     * unfetched (the safe side). So does a journal that refuses it. */
+    gi_error err;
+    gi_jrec r;
+    double now = gi_farm_wallnow();
+    gi_jrec_init(&r, GI_JREC_FETCHED, j->id);
+    r.when = now;
+    if (end_flush(f, j) || gi_journal_append(&f->journal, &r, &err)) {
+        gi_warn("job %llu: its fetch of \"%s\" is not journaled (%s): it still counts as "
+                "unfetched", (unsigned long long)j->id, name,
+                j->end_pending ? "its end is not journaled yet" : err.msg);
+        return;
+    }
+    j->fetched = now;
+    gi_farm_job_log(j, "outputs fetched: \"%s\" sent whole to %s (the first download)", name,
+                    peer);
 }
 
 int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
@@ -1567,12 +1606,24 @@ static int retainable(const gi_farm_job *j)
     return terminal(j) && !j->end_pending && j->ended > 0;
 }
 
-/* Exactly `gi purge`, logged with the reason. 1 if j is gone. */
+/* A done job whose outputs were never downloaded whole: what a purge can
+ * lose that nobody has. A failed or cancelled job has no outputs. */
+static int unfetched(const gi_farm_job *j)
+{
+    return j->state == GI_FJ_DONE && j->fetched <= 0;
+}
+
+/* Exactly `gi purge`, logged with the reason; a warning for a job never
+ * fetched. 1 if j is gone. */
 static int retention_purge(gi_farm *f, gi_farm_job *j, const char *why)
 {
     unsigned long long id = (unsigned long long)j->id;
-    gi_info("job %llu (%s, %s): purged by retention: %s", id, j->name ? j->name : "?",
-            gi_fj_state_name(j->state), why);
+    if (unfetched(j))
+        gi_warn("job %llu (%s, %s): purged by retention: %s; its outputs were never fetched",
+                id, j->name ? j->name : "?", gi_fj_state_name(j->state), why);
+    else
+        gi_info("job %llu (%s, %s): purged by retention: %s", id, j->name ? j->name : "?",
+                gi_fj_state_name(j->state), why);
     gi_error err;
     if (gi_farm_job_purge(f, j, &err) == 0)
         return 1;
@@ -1583,16 +1634,21 @@ static int retention_purge(gi_farm *f, gi_farm_job *j, const char *why)
     return 0;
 }
 
-static int by_ended(const void *a, const void *b)
+/* Retention's order: the jobs with nothing left to fetch (fetched, failed
+ * or cancelled) before the done jobs never fetched; within each, the one
+ * that ended first. */
+static int by_retention(const void *a, const void *b)
 {
     const gi_farm_job *x = *(gi_farm_job *const *)a, *y = *(gi_farm_job *const *)b;
+    if (unfetched(x) != unfetched(y))
+        return unfetched(x) - unfetched(y);
     if (x->ended != y->ended)
         return x->ended < y->ended ? -1 : 1;
     return x->id < y->id ? -1 : x->id > y->id;
 }
 
-/* --keep-ended-bytes: the oldest ended jobs go while the ended jobs'
- * directories hold more. */
+/* --keep-ended-bytes: ended jobs go in retention's order while the ended
+ * jobs' directories hold more. */
 static void retention_by_size(gi_farm *f, int *budget)
 {
     uint64_t total = 0;
@@ -1609,18 +1665,42 @@ static void retention_by_size(gi_farm *f, int *budget)
         total += j->disk_bytes;
         ended[n++] = j;
     }
-    qsort(ended, n, sizeof *ended, by_ended);
+    qsort(ended, n, sizeof *ended, by_retention);
     for (size_t i = 0; i < n && total > f->cfg.keep_ended_bytes && *budget > 0; i++, --*budget) {
-        char why[200];
+        char why[300];
         uint64_t bytes = ended[i]->disk_bytes;
         snprintf(why, sizeof why, "the ended jobs' files hold %llu bytes, over --keep-ended-bytes "
-                 "%llu, and it is the oldest", (unsigned long long)total,
-                 (unsigned long long)f->cfg.keep_ended_bytes);
+                 "%llu, and it is the oldest %s", (unsigned long long)total,
+                 (unsigned long long)f->cfg.keep_ended_bytes,
+                 unfetched(ended[i]) ? "(no job fetched or without outputs is left)"
+                                     : "fetched or without outputs");
         if (!retention_purge(f, ended[i], why))
             break;
         total -= bytes;
     }
     free(ended);
+}
+
+/* --keep-ended: the jobs due go, in retention's order (a backlog over the
+ * budget of a pass sends those fetched first). */
+static void retention_by_age(gi_farm *f, int *budget)
+{
+    double wall = gi_farm_wallnow();
+    size_t n = 0;
+    gi_farm_job **due = gi_xmalloc((f->job_count + 1) * sizeof *due);
+    for (size_t i = 0; i < f->job_count; i++)
+        if (retainable(f->jobs[i]) && wall >= gi_farm_job_purge_at(f, f->jobs[i]))
+            due[n++] = f->jobs[i];
+    qsort(due, n, sizeof *due, by_retention);
+    for (size_t i = 0; i < n && *budget > 0; i++, --*budget) {
+        char why[200], ago[32], keep[32];
+        snprintf(why, sizeof why, "ended %s ago (--keep-ended %s)",
+                 gi_duration(wall - due[i]->ended, ago, sizeof ago),
+                 gi_duration(f->cfg.keep_ended_s, keep, sizeof keep));
+        if (!retention_purge(f, due[i], why))
+            break;
+    }
+    free(due);
 }
 
 /* Purges the ended jobs that retention no longer keeps. Once a second; the
@@ -1635,21 +1715,8 @@ static void retention(gi_farm *f)
         return;
     f->retention_next = now + 1.0;
     int budget = RETENTION_PURGES_PER_PASS;
-    double wall = gi_farm_wallnow();
-    for (size_t i = 0; f->cfg.keep_ended_s > 0 && i < f->job_count && budget > 0;) {
-        gi_farm_job *j = f->jobs[i];
-        if (retainable(j) && wall >= gi_farm_job_purge_at(f, j)) {
-            char why[200], ago[32], keep[32];
-            snprintf(why, sizeof why, "ended %s ago (--keep-ended %s)",
-                     gi_duration(wall - j->ended, ago, sizeof ago),
-                     gi_duration(f->cfg.keep_ended_s, keep, sizeof keep));
-            budget--;
-            if (retention_purge(f, j, why))
-                continue; /* the next job is at i now */
-            break;
-        }
-        i++;
-    }
+    if (f->cfg.keep_ended_s > 0)
+        retention_by_age(f, &budget);
     if (f->cfg.keep_ended_bytes)
         retention_by_size(f, &budget);
 }

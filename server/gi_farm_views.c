@@ -67,6 +67,8 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
     add_time(o, "started", j->started);
     add_time(o, "ended", j->ended);
     add_time(o, "purge_at", gi_farm_job_purge_at(f, j)); /* --keep-ended */
+    /* The first download of an output sent whole: retention purges fetched jobs first. */
+    add_time(o, "fetched", j->fetched);
 
     uint64_t total = j->final_tasks, merged = j->final_merged, retries = j->final_retries;
     uint64_t losses = j->final_losses;

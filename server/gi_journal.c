@@ -24,7 +24,7 @@
  * 4: the summary ends with the run's tasks lost with their host (absent
  * from a version 3 END, read as 0); 5: a SUBMIT ends with its Idempotency-Key
  * (none before: a restart forgot the keys, and a client's retry made a
- * second job). */
+ * second job), and FETCHED records. */
 #define JOURNAL_VERSION 5u
 #define HEADER_BYTES 8
 #define RECORD_OVERHEAD 12 /* type, length, crc */
@@ -103,6 +103,7 @@ static void encode_payload(const gi_jrec *r, gi_buf *out)
     case GI_JREC_PURGE:
         break;
     case GI_JREC_RETRY:
+    case GI_JREC_FETCHED:
         gi_buf_put_f64(out, r->when);
         break;
     }
@@ -189,6 +190,11 @@ static int decode_payload(uint32_t type, const uint8_t *p, size_t n, gi_jrec *r,
     case GI_JREC_RETRY:
         r->when = gi_get_f64(&rd);
         break;
+    case GI_JREC_FETCHED:
+        r->when = gi_get_f64(&rd);
+        if (!rd.failed && !(isfinite(r->when) && r->when > 0))
+            return gi_fail(err, GI_EPROTO, "journal FETCHED: time out of range");
+        break;
     default:
         return gi_fail(err, GI_EPROTO, "journal record type %u is unknown", type);
     }
@@ -203,6 +209,7 @@ static const char *type_name(uint32_t type)
     case GI_JREC_END: return "END";
     case GI_JREC_PURGE: return "PURGE";
     case GI_JREC_RETRY: return "RETRY";
+    case GI_JREC_FETCHED: return "FETCHED";
     }
     return "unknown";
 }

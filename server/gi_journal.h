@@ -3,7 +3,7 @@
  *
  * File layout (little-endian; docs/farm.md, "Journal"):
  *   header   "GIJ1" | u32 version (5; versions 1 to 4, without RETRY, END
- *            summaries, their losses or SUBMIT keys, are read too)
+ *            summaries, their losses, SUBMIT keys or FETCHED, are read too)
  *   record   u32 type | u32 length | payload | u32 crc32c(type, length, payload)
  * Records:
  *   SUBMIT      job id, priority, submit time, job file name, job text, manifest,
@@ -15,13 +15,15 @@
  *   PURGE       job id: forget the job (its files are removed)
  *   RETRY       job id, time: a failed or cancelled job runs again, from its
  *               last checkpoint if it has one
+ *   FETCHED     job id, time: an output of the done job was first downloaded
+ *               whole through the API (retention purges such jobs first)
  * Each append is written with one write() and fdatasync'ed before the
  * coordinator acts on it. A crash can only tear the last record; replay
  * stops at a last record that is short or fails its CRC (a damaged record
  * followed by an intact one is skipped alone: bit rot) and the journal is
- * then rewritten without it (compaction: one SUBMIT, the last CHECKPOINT
- * and the END of every job; a retried job is unfinished again, so no RETRY
- * survives it). */
+ * then rewritten without it (compaction: one SUBMIT, the last CHECKPOINT,
+ * the END and the FETCHED of every job; a retried job is unfinished again,
+ * so no RETRY survives it). */
 #ifndef GI_JOURNAL_H
 #define GI_JOURNAL_H
 
@@ -42,7 +44,8 @@ typedef enum gi_jrec_type {
     GI_JREC_CHECKPOINT = 2,
     GI_JREC_END = 3,
     GI_JREC_PURGE = 4,
-    GI_JREC_RETRY = 5
+    GI_JREC_RETRY = 5,
+    GI_JREC_FETCHED = 6
 } gi_jrec_type;
 
 /* A submission's Idempotency-Key: 16 to 64 of A-Z a-z 0-9 - _ (a client's
@@ -75,7 +78,7 @@ typedef struct gi_jrec {
     uint32_t end;  /* gi_job_end */
     uint32_t code; /* gi_errcode */
     char *message;
-    double when; /* END, RETRY */
+    double when; /* END, RETRY, FETCHED */
     /* END's summary of the run, so that a restarted coordinator still shows
      * it (journals before it lack it: has_summary 0). Also uses tasks and
      * merged. */

@@ -1,6 +1,7 @@
 # Retention: gi-farmd purges ended jobs by itself, exactly as `gi purge`
 # does (journaled, files removed), logging why. --keep-ended-bytes sends
-# the oldest ended jobs first while the ended jobs' files hold more;
+# the oldest ended jobs first while the ended jobs' files hold more (those
+# fetched before those never fetched: at the end);
 # --keep-ended purges a job that long after it ended, counted from its
 # journaled end, so a job due while gi-farmd was stopped goes at its
 # restart. A job not ended is never purged; `gi status` says when an ended
@@ -94,6 +95,56 @@ start_farmd "$STATE" "$LOG"
 [ "$("$GI" jobs | awk 'NR > 1 {print $1}' | tr '\n' ' ')" = "$id5 " ] ||
     { "$GI" jobs; fail "purged jobs are back after a restart"; }
 "$GI" cancel "$id5" >/dev/null
+stop_farmd "$LOG"
+
+# Fetched first: an output of a done job sent whole through the API (gi
+# fetch, gi wait) is journaled (FETCHED) and shown (fetched, gi status);
+# HEAD is not a fetch. Retention purges the jobs fetched, or failed or
+# cancelled (no outputs), before the done jobs never fetched, the oldest
+# first within each, and warns when it purges one never fetched.
+STATE="$TMP/state3"
+LOG="$TMP/farmd3.log"
+start_farmd "$STATE" "$LOG"
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cache"
+for i in 1 2 3; do
+    job "$TMP/f$i.json" $((10 + i))
+    [ "$("$GI" submit "$TMP/f$i.json" 2>/dev/null)" = $i ] || fail "submit f$i"
+    wait_state $i done 120
+done
+kill "$WORKER_PID"; wait "$WORKER_PID" 2>/dev/null || true
+api /api/v1/jobs/1/outputs/img.exr -o /dev/null -I || fail "HEAD of job 1's output"
+"$GI" fetch 2 --out "$TMP/fetched" >/dev/null || fail "gi fetch 2"
+"$GI" fetch 2 --out "$TMP/fetched" >/dev/null || fail "gi fetch 2 again"
+cmp -s "$TMP/fetched/img.exr" "$STATE/jobs/2/out/img.exr" || fail "job 2's output fetched"
+wait_log "$LOG" 'job 2: outputs fetched: "img.exr" sent whole to '
+[ "$(grep -c "job 2: outputs fetched" "$LOG")" = 1 ] || fail "the second fetch logged again"
+fetched() { api "/api/v1/jobs/$1" | grep -o '"fetched":[^,]*' | cut -d: -f2-; }
+for n in 1 2; do # as fetched, then from the journal (and the compacted one)
+    case $(fetched 2) in '"20'*Z'"') ;; *) api /api/v1/jobs/2; fail "job 2 not fetched ($n)" ;; esac
+    [ "$(fetched 1)" = null ] && [ "$(fetched 3)" = null ] || fail "jobs 1, 3 fetched ($n)"
+    "$GI" status 2 | grep -q "outputs fetched at 20" || { "$GI" status 2; fail "gi status 2"; }
+    "$GI" status 1 | grep -q "outputs never fetched (gi fetch 1)" || { "$GI" status 1; fail "gi status 1"; }
+    stop_farmd "$LOG"
+    start_farmd "$STATE" "$LOG"
+done
+stop_farmd "$LOG"
+sizes() { for i in "$@"; do du -sB1 "$STATE/jobs/$i" | cut -f1; done | awk '{s += $1} END {print s}'; }
+# One byte over: job 2 goes (fetched), not job 1 (older, never fetched).
+total=$(sizes 1 2 3)
+start_farmd "$STATE" "$LOG" -- --keep-ended-bytes $((total - 1))
+wait_log "$LOG" "job 2 (.*, done): purged by retention: .*, and it is the oldest fetched or without"
+gone 2
+sleep 1.5
+kept 1 done; kept 3 done
+! grep -q "never fetched" "$LOG" || fail "a warning for a fetched job"
+stop_farmd "$LOG"
+# Over again: none fetched is left, job 1 (the oldest) goes, with a warning.
+total=$(sizes 1 3)
+start_farmd "$STATE" "$LOG" -- --keep-ended-bytes $((total - 1))
+wait_log "$LOG" "warning.*job 1 (.*, done): purged by retention: .*; its outputs were never fetched"
+gone 1
+sleep 1.5
+kept 3 done
 stop_farmd "$LOG"
 
 # Bad values are refused, naming the option.

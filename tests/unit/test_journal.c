@@ -365,7 +365,7 @@ GI_TEST(test_journal_retry_record_and_versions)
     gi_error err;
     GI_CHECK(gi_journal_parse(b.data, b.len, collect, &s, &valid, &skipped, &err) == 0);
     GI_CHECK(s.n == 4 && s.types[3] == GI_JREC_RETRY && s.ids[3] == 7 && valid == b.len);
-    /* RETRY records; END summaries; their losses; SUBMIT keys */
+    /* RETRY records; END summaries; their losses; SUBMIT keys and FETCHED */
     for (uint8_t v = 2; v <= 5; v++) {
         b.data[4] = v;
         memset(&s, 0, sizeof s);
@@ -382,6 +382,7 @@ typedef struct keyed {
     int n;
     char key[80];
     int has_key;
+    double fetched;
 } keyed;
 
 static int keep_key(void *ctx, const gi_jrec *r, gi_error *err)
@@ -393,12 +394,16 @@ static int keep_key(void *ctx, const gi_jrec *r, gi_error *err)
         k->has_key = r->key != NULL;
         snprintf(k->key, sizeof k->key, "%s", r->key ? r->key : "");
     }
+    if (r->type == GI_JREC_FETCHED)
+        k->fetched = r->when;
     return 0;
 }
 
 /* Version 5: a SUBMIT ends with its Idempotency-Key (one without, as
- * before, still reads: no key). A key that is not one is damage. */
-GI_TEST(test_journal_submit_key)
+ * before, still reads: no key), and FETCHED records the first download of
+ * a done job's outputs. A key that is not one, or a FETCHED time out of
+ * range, is damage. */
+GI_TEST(test_journal_submit_key_and_fetched)
 {
     gi_buf b;
     gi_buf_init(&b);
@@ -412,13 +417,16 @@ GI_TEST(test_journal_submit_key)
     r.key = "0123456789abcdef-_ABCDEF";
     gi_jrec_encode(&r, &b);
     size_t keyed_len = b.len - head;
+    gi_jrec_init(&r, GI_JREC_FETCHED, 4);
+    r.when = 1.7e9;
+    gi_jrec_encode(&r, &b);
     keyed k;
     memset(&k, 0, sizeof k);
     size_t valid, skipped;
     gi_error err;
     GI_REQUIRE(gi_journal_parse(b.data, b.len, keep_key, &k, &valid, &skipped, &err) == 0);
-    GI_CHECK(k.n == 1 && k.has_key && strcmp(k.key, "0123456789abcdef-_ABCDEF") == 0);
-    GI_CHECK(valid == b.len);
+    GI_CHECK(k.n == 2 && k.has_key && strcmp(k.key, "0123456789abcdef-_ABCDEF") == 0);
+    GI_CHECK(k.fetched == 1.7e9 && valid == b.len);
     /* Without a key: 4 bytes (the length) and the key shorter. */
     gi_buf plain;
     gi_buf_init(&plain);
@@ -427,7 +435,6 @@ GI_TEST(test_journal_submit_key)
     r.text = "{}";
     gi_jrec_encode(&r, &plain);
     GI_CHECK(plain.len + 4 + strlen("0123456789abcdef-_ABCDEF") == keyed_len);
-    memset(&k, 0, sizeof k);
     gi_buf_free(&plain);
     /* Keys that are not keys: too short, too long, a character outside. */
     static const char *bad[] = {"0123456789abcde", "0123456789abcdef0123456789abcdef"
@@ -447,5 +454,16 @@ GI_TEST(test_journal_submit_key)
     }
     GI_CHECK(gi_submit_key_valid("0123456789abcdef") &&
              gi_submit_key_valid("0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef"));
+    static const double bad_when[] = {0, -1, 1.0 / 0.0};
+    for (size_t i = 0; i < sizeof bad_when / sizeof bad_when[0]; i++) {
+        b.len = head;
+        gi_jrec_init(&r, GI_JREC_FETCHED, 4);
+        r.when = bad_when[i];
+        gi_jrec_encode(&r, &b);
+        memset(&k, 0, sizeof k);
+        GI_CHECK(gi_journal_parse(b.data, b.len, keep_key, &k, &valid, &skipped, &err) == 1 &&
+                 k.n == 0);
+        GI_CHECK_MSG(strstr(err.msg, "FETCHED") != NULL, "%s", err.msg);
+    }
     gi_buf_free(&b);
 }
