@@ -123,12 +123,15 @@ for n in 1 2; do # as fetched, then from the journal (and the compacted one)
     case $(fetched 2) in '"20'*Z'"') ;; *) api /api/v1/jobs/2; fail "job 2 not fetched ($n)" ;; esac
     [ "$(fetched 1)" = null ] && [ "$(fetched 3)" = null ] || fail "jobs 1, 3 fetched ($n)"
     "$GI" status 2 | grep -q "outputs fetched at 20" || { "$GI" status 2; fail "gi status 2"; }
-    "$GI" status 1 | grep -q "outputs never fetched (gi fetch 1)" || { "$GI" status 1; fail "gi status 1"; }
+    "$GI" status 1 | grep -q "outputs never fetched (gi fetch 1)" ||
+        { "$GI" status 1; fail "gi status 1"; }
     stop_farmd "$LOG"
     start_farmd "$STATE" "$LOG"
 done
 stop_farmd "$LOG"
-sizes() { for i in "$@"; do du -sB1 "$STATE/jobs/$i" | cut -f1; done | awk '{s += $1} END {print s}'; }
+sizes() { # bytes of the jobs' directories
+    for i in "$@"; do du -sB1 "$STATE/jobs/$i" | cut -f1; done | awk '{s += $1} END {print s}'
+}
 # One byte over: job 2 goes (fetched), not job 1 (older, never fetched).
 total=$(sizes 1 2 3)
 start_farmd "$STATE" "$LOG" -- --keep-ended-bytes $((total - 1))

@@ -453,7 +453,8 @@ GI_TEST(test_journal_submit_key_and_fetched)
                      "key \"%s\" read", bad[i]);
     }
     GI_CHECK(gi_submit_key_valid("0123456789abcdef") &&
-             gi_submit_key_valid("0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef"));
+             gi_submit_key_valid("0123456789abcdef0123456789abcdef"
+                                 "0123456789abcdef0123456789abcdef"));
     static const double bad_when[] = {0, -1, 1.0 / 0.0};
     for (size_t i = 0; i < sizeof bad_when / sizeof bad_when[0]; i++) {
         b.len = head;
