@@ -24,7 +24,9 @@ start_worker "$TMP/bad.log" env GI_FAULT_CRASH_TASK="0:0,0:1,0:2" -- \
     --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/c1" --name bad
 id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
 wait_log "$LOG" "worker bad blocklisted"
-"$GI" workers | grep -q "^bad .*blocklisted" || { "$GI" workers; fail "gi workers does not show it"; }
+"$GI" workers >"$TMP/workers.txt"
+grep -A1 "^bad .*blocklisted" "$TMP/workers.txt" | grep -q "^    for [0-9]* s more; last: .*pool child" ||
+    { cat "$TMP/workers.txt"; fail "gi workers does not show it blocklisted, for how long and why"; }
 start_worker "$TMP/good.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c2" --name good
 wait_state "$id" done 60
 "$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
