@@ -52,7 +52,9 @@ static int ply_precheck(const char *name, const uint8_t *data, size_t len, gi_er
     char *hdr = gi_xmalloc(hdr_end + 1);
     memcpy(hdr, data, hdr_end);
     hdr[hdr_end] = '\0';
-    /* Word by word, as assimp reads it ("format  ascii 1.0" too). */
+    /* Word by word, whatever the spacing: the precheck only bounds sizes, so
+     * it errs towards ASCII (no size to check); assimp itself refuses a
+     * "format  ascii 1.0" line. */
     int ascii = 0;
     for (const char *s = strstr(hdr, "format"); s; s = strstr(s + 1, "format")) {
         char w1[64], w2[64];

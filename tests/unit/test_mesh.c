@@ -626,7 +626,8 @@ GI_TEST(mesh_precheck_ply_first_lines)
         /* Named otherwise, the bytes still go to assimp's PLY reader. */
         GI_CHECK(gi_mesh_precheck("big.mesh", (const uint8_t *)text, strlen(text), &err) == -1);
     }
-    /* An ASCII header however spaced is counted as ASCII: this one fits. */
+    /* An ASCII header however spaced is counted as ASCII (the precheck does not
+     * refuse it; assimp does, later, for its own reasons): this one fits. */
     static const char ok[] = "ply \r\nformat  ascii 1.0\r\nelement vertex 3\r\n"
                              "property float x\r\nproperty float y\r\nproperty float z\r\n"
                              "end_header\r\n0 0 0\n1 0 0\n0 1 0\n";
