@@ -144,9 +144,12 @@ int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp
     return 0;
 }
 
-int gi_tile_check_finite(const gi_tile *t, const uint8_t *px, size_t len, gi_error *err)
+int gi_tile_check_result(const gi_tile *t, const uint8_t *px, size_t len, gi_error *err)
 {
     uint32_t w = t->x1 - t->x0;
+    size_t want = (size_t)w * (t->y1 - t->y0) * 12;
+    if (len != want)
+        return gi_fail(err, GI_EPROTO, "tile result has %zu bytes, expected %zu", len, want);
     for (size_t i = 0; i + 4 <= len; i += 4) {
         float v;
         memcpy(&v, px + i, 4); /* little-endian hosts only (gi_buf.h) */

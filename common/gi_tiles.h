@@ -74,8 +74,9 @@ int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp
                          gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
 /* Puts a tile result into img (RGB; coordinator side). */
 int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_error *err);
-/* A tile result's pixels (RGB floats, row by row) are finite; the error
- * names the first pixel that is not. */
-int gi_tile_check_finite(const gi_tile *t, const uint8_t *px, size_t len, gi_error *err);
+/* A tile result is what gi_tile_merge takes: the tile's size, and pixels
+ * (RGB floats, row by row) that are finite; the error names the first pixel
+ * that is not. */
+int gi_tile_check_result(const gi_tile *t, const uint8_t *px, size_t len, gi_error *err);
 
 #endif

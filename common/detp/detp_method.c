@@ -348,8 +348,8 @@ static int write_earlier_frame(gi_job *job, detp_state *st, gi_error *err)
     return rc;
 }
 
-/* Image tiles' pixels are finite (the per-vertex results are checked as
- * they are decoded, detp_result.c). */
+/* Image tiles have the tile's size and finite pixels (the per-vertex
+ * results are checked as they are decoded, detp_result.c). */
 static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
                              gi_error *err)
 {
@@ -361,7 +361,7 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
     uint64_t rays = 0;
     if (tile_result(job, t, result, &tile, &seconds, &rays, &px, err))
         return -1;
-    return gi_tile_check_finite(&tile, px.data, px.len, err);
+    return gi_tile_check_result(&tile, px.data, px.len, err);
 }
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)

@@ -552,16 +552,37 @@ static void put_hits(void *user, uint32_t e, uint32_t node, uint32_t hits)
     st->counts[(size_t)e * st->stride + node] = (uint16_t)hits;
 }
 
+static void ignore_hits(void *user, uint32_t e, uint32_t node, uint32_t hits)
+{
+    (void)user;
+    (void)e;
+    (void)node;
+    (void)hits;
+}
+
+/* Whatever rad_merge would refuse is refused here, as the result arrives:
+ * a result that does not decode then fails its task's run, which is retried,
+ * instead of failing the whole job at merge (and merge never stops half way
+ * through a block's rows). */
 static int rad_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
                             gi_error *err)
 {
+    const gi_rad_params *p = job->params;
     const rad_state *st = job->state;
+    if (t->kind == RAD_TASK_FF && st->counts) {
+        uint32_t e0, e1;
+        gi_rad_ff_stats scratch = {0};
+        if (decode_block(t, st->mesh.element_count, &e0, &e1, err))
+            return -1;
+        return gi_rad_ff_decode(result->data, result->len, e0, e1, st->tracked_nodes, p->rays,
+                                ignore_hits, NULL, &scratch, err);
+    }
     tile_task tt;
     if (t->kind != RAD_TASK_TILE || !st->images)
         return 0;
     if (decode_tile(job, t, st->em->count, &tt, err))
         return -1;
-    return gi_tile_check_finite(&tt.tile, result->data, result->len, err);
+    return gi_tile_check_result(&tt.tile, result->data, result->len, err);
 }
 
 static int rad_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,

@@ -1,6 +1,8 @@
 /* Unit tests that run a whole job in this process (see the header). */
 #include "test_drive.h"
 
+#include <string.h>
+
 int gi_test_drive(gi_jobrun *jr, gi_worker_ctx *ctx, uint64_t stop, gi_error *err)
 {
     for (uint64_t ran = 0; ran < stop && !gi_jobrun_done(jr); ran++) {
@@ -20,5 +22,22 @@ int gi_test_drive(gi_jobrun *jr, gi_worker_ctx *ctx, uint64_t stop, gi_error *er
     }
     if (jr->failed)
         return gi_fail(err, jr->error.code, "%s", jr->error.msg);
+    return 0;
+}
+
+int gi_test_refuse(gi_jobrun *jr, const gi_task *t, const gi_buf *bad, const char *want,
+                   gi_error *err)
+{
+    uint64_t id = t->id;
+    uint32_t attempt = t->attempt;
+    if (gi_jobrun_check_result(jr, id, bad, err) == 0)
+        return gi_fail(err, GI_EINTERNAL, "task %llu: a bad result was accepted",
+                       (unsigned long long)id);
+    if (err->code != GI_EPROTO || !strstr(err->msg, want))
+        return gi_fail(err, GI_EINTERNAL, "unexpected refusal: %s", err->msg);
+    gi_error why = *err;
+    gi_jobrun_fail(jr, id, attempt, &why);
+    if (jr->failed)
+        return gi_fail(err, GI_EINTERNAL, "the job failed: %s", jr->error.msg);
     return 0;
 }

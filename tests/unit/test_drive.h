@@ -11,4 +11,11 @@
  * failed). */
 int gi_test_drive(gi_jobrun *jr, gi_worker_ctx *ctx, uint64_t stop, gi_error *err);
 
+/* Gives leased task t the worker's answer `bad` the way gi-farmd and the
+ * local pool do (gi_jobrun_check_result, then gi_jobrun_fail when refused):
+ * 0 if it was refused with GI_EPROTO and a message holding `want` and the
+ * job did not fail, else -1 with err saying what went wrong. */
+int gi_test_refuse(gi_jobrun *jr, const gi_task *t, const gi_buf *bad, const char *want,
+                   gi_error *err);
+
 #endif

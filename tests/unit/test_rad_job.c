@@ -143,3 +143,67 @@ GI_TEST(test_rad_job_parameters_are_validated)
         gi_job_free(&job);
     }
 }
+
+/* A form-factor result that does not decode (cut short, a row whose rays do
+ * not add up, bytes past its rows), or an image tile of the wrong size, is
+ * refused as it arrives, naming the task: its run fails and the task runs
+ * again, and the job still ends well. */
+GI_TEST(test_rad_job_malformed_form_factor_result_is_retried)
+{
+    gi_error err;
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s/badff", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_mkdirs(dir, &err));
+    gi_job job;
+    GI_REQUIRE_OK(load(dir, PARAMS, &job, &err));
+    gi_worker_ctx ctx;
+    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, fetch_none, NULL,
+                                     job.assets, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    uint64_t ff_tasks = jr.task_count;
+    GI_REQUIRE(ff_tasks >= 1);
+    for (int spoil = 0; spoil < 3; spoil++) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t != NULL);
+        gi_buf good, bad;
+        gi_buf_init(&good);
+        gi_buf_init(&bad);
+        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &good, &err));
+        GI_REQUIRE(good.len > 20);
+        GI_CHECK(gi_jobrun_check_result(&jr, t->id, &good, &err) == 0);
+        gi_buf_put(&bad, good.data, good.len);
+        if (spoil == 0)
+            bad.len -= 3;
+        else if (spoil == 1)
+            bad.data[4]++; /* the first row's escaped rays: one too many */
+        else
+            gi_buf_put_u32(&bad, 0);
+        char want[64];
+        snprintf(want, sizeof want, "task %llu's result: radiosity", (unsigned long long)t->id);
+        uint64_t retries = jr.retries;
+        GI_CHECK_OK(gi_test_refuse(&jr, t, &bad, want, &err));
+        GI_CHECK(jr.retries == retries + 1);
+        gi_buf_free(&good);
+        gi_buf_free(&bad);
+    }
+    /* The form factors, then an image tile one pixel short. */
+    GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, ff_tasks, &err));
+    GI_REQUIRE(jr.task_count > ff_tasks);
+    const gi_task *t = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t != NULL && t->id >= ff_tasks);
+    gi_buf tile;
+    gi_buf_init(&tile);
+    GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &tile, &err));
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &tile, &err) == 0);
+    tile.len -= 12;
+    char want[64];
+    snprintf(want, sizeof want, "task %llu's result: tile result has", (unsigned long long)t->id);
+    GI_CHECK_OK(gi_test_refuse(&jr, t, &tile, want, &err));
+    gi_buf_free(&tile);
+    GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+    GI_CHECK(jr.finished && !jr.failed && jr.retries == 4);
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+}
