@@ -200,6 +200,9 @@ static int pt_check_result(const gi_job *job, const gi_task *t, const gi_buf *re
     if (decode_tile(job, t, &tl, err))
         return -1;
     uint32_t w = tl.tile.x1 - tl.tile.x0;
+    size_t want = (size_t)w * (tl.tile.y1 - tl.tile.y0) * PT_VALUES_PER_PIXEL * 8;
+    if (result->len != want) /* pt_merge takes nothing else */
+        return gi_fail(err, GI_EPROTO, "result has %zu bytes, expected %zu", result->len, want);
     for (size_t i = 0; i + 8 <= result->len; i += 8) {
         double v;
         memcpy(&v, result->data + i, 8); /* little-endian hosts only (gi_buf.h) */

@@ -7,6 +7,7 @@
 #include "gi_rt.h"
 #include "gi_test.h"
 #include "pt/pt.h"
+#include "test_drive.h"
 #include "test_helpers.h"
 
 GI_TEST(test_direct_irradiance_matches_lambert_polygon_formula)
@@ -195,6 +196,39 @@ GI_TEST(test_pt_result_with_nan_is_refused)
                  err.msg);
     GI_CHECK(err.code == GI_EPROTO); /* a retry, not bad input */
     gi_buf_free(&res);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
+/* A result of the wrong size (which pt_merge could not take) is refused as
+ * it arrives, like a NaN: the task runs again and the job does not fail. */
+GI_TEST(test_pt_result_of_the_wrong_size_is_retried)
+{
+    char text[1024], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"pt\", \"seed\": 2,"
+             " \"image\": {\"width\": 16, \"height\": 8}, \"pt\": {\"spp\": 2, \"tile\": 8}}",
+             gi_test_srcdir());
+    snprintf(path, sizeof path, "%s/size.json", gi_test_tmpdir());
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
+    gi_job job;
+    GI_REQUIRE_OK(gi_job_load(path, &job, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    size_t sizes[] = {8 * 8 * 4 * 8 - 8, 8 * 8 * 4 * 8 + 8, 0};
+    for (size_t k = 0; k < GI_ARRAY_LEN(sizes); k++) {
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t != NULL);
+        GI_CHECK(t->id == 0 && t->attempt == k); /* the same task, run again */
+        gi_buf res;
+        gi_buf_init(&res);
+        for (size_t i = 0; i < sizes[k] / 8; i++)
+            gi_buf_put_f64(&res, 0.25);
+        GI_CHECK_OK(gi_test_refuse(&jr, t, &res, "task 0's result: result has", &err));
+        gi_buf_free(&res);
+    }
+    GI_CHECK(jr.retries == GI_ARRAY_LEN(sizes) && !jr.failed);
     gi_jobrun_free(&jr);
     gi_job_free(&job);
 }
