@@ -66,25 +66,35 @@ void gi_quad_accum_emit(gi_quad_accum *a, gi_buf *out)
     a->count = 0;
 }
 
-int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double *image,
+int gi_quad_accum_check(const gi_reader *delta, int width, int height, int channels,
                         gi_error *err)
 {
+    gi_reader check = *delta;
     uint64_t npix = (uint64_t)width * (uint64_t)height;
-    uint32_t count = gi_get_u32(r);
-    if (r->failed || count > npix || (uint64_t)count * (4 + 8 * (uint64_t)channels) > r->left)
-        return gi_fail(err, GI_EPROTO, "%s: bad pixel count", r->what);
-    /* Check everything first: a refused delta leaves the image as it was. */
-    gi_reader check = *r;
+    uint32_t count = gi_get_u32(&check);
+    if (check.failed || count > npix ||
+        (uint64_t)count * (4 + 8 * (uint64_t)channels) > check.left)
+        return gi_fail(err, GI_EPROTO, "%s: bad pixel count", delta->what);
     int64_t prev = -1;
     for (uint32_t i = 0; i < count; i++) {
         uint32_t p = gi_get_u32(&check);
         if (p >= npix || (int64_t)p <= prev)
-            return gi_fail(err, GI_EPROTO, "%s: bad pixel index", r->what);
+            return gi_fail(err, GI_EPROTO, "%s: bad pixel index", delta->what);
         prev = p;
         for (int c = 0; c < channels; c++)
             if (!isfinite(gi_get_f64(&check)))
-                return gi_fail(err, GI_EPROTO, "%s: pixel %u is not finite", r->what, p);
+                return gi_fail(err, GI_EPROTO, "%s: pixel %u is not finite", delta->what, p);
     }
+    return 0;
+}
+
+int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double *image,
+                        gi_error *err)
+{
+    /* Check everything first: a refused delta leaves the image as it was. */
+    if (gi_quad_accum_check(r, width, height, channels, err))
+        return -1;
+    uint32_t count = gi_get_u32(r);
     for (uint32_t i = 0; i < count; i++) {
         double *dst = image + (size_t)gi_get_u32(r) * channels;
         for (int c = 0; c < channels; c++)

@@ -42,8 +42,12 @@ double gi_quad_accum_take_l1(gi_quad_accum *a);
 /* Serializes the touched pixels (sorted) and resets the accumulator. */
 void gi_quad_accum_emit(gi_quad_accum *a, gi_buf *out);
 
+/* A serialized delta fits a width x height image: a pixel count the bytes
+ * hold, indices in range and increasing, finite values (delta unmoved). */
+int gi_quad_accum_check(const gi_reader *delta, int width, int height, int channels,
+                        gi_error *err);
 /* Adds a serialized delta to a dense image of width * height * channels
- * (coordinator side); checks indices (in range, increasing). */
+ * (coordinator side) after gi_quad_accum_check. */
 int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double *image,
                         gi_error *err);
 

@@ -240,6 +240,21 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
     return added;
 }
 
+/* Whatever gi_quad_merge would refuse is refused as the result arrives:
+ * its run then fails and the task runs again, instead of the job failing
+ * at merge. */
+int gi_quad_check_result(const gi_job *job, const gi_task *task, const gi_buf *result,
+                         gi_error *err)
+{
+    const quad_state *st = job->state;
+    gi_quad_result r;
+    if (gi_quad_result_decode(result, &st->rule, &r, err))
+        return -1;
+    int rc = gi_quad_accum_check(&r.delta, job->width, job->height, GI_QUAD_CHANNELS, err);
+    gi_quad_result_free(&r);
+    return rc;
+}
+
 int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
                   gi_error *err)
 {

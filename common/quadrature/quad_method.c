@@ -22,6 +22,7 @@ const gi_method gi_method_quadrature = {
     .check_scene = NULL,
     .plan = gi_quad_plan,
     .run = gi_quad_run,
+    .check_result = gi_quad_check_result,
     .merge = gi_quad_merge,
     .finish = gi_quad_finish,
     .save = gi_quad_save,

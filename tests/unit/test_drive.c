@@ -33,10 +33,10 @@ int gi_test_refuse(gi_jobrun *jr, const gi_task *t, const gi_buf *bad, const cha
     if (gi_jobrun_check_result(jr, id, bad, err) == 0)
         return gi_fail(err, GI_EINTERNAL, "task %llu: a bad result was accepted",
                        (unsigned long long)id);
-    if (err->code != GI_EPROTO || !strstr(err->msg, want))
-        return gi_fail(err, GI_EINTERNAL, "unexpected refusal: %s", err->msg);
     gi_error why = *err;
     gi_jobrun_fail(jr, id, attempt, &why);
+    if (why.code != GI_EPROTO || !strstr(why.msg, want))
+        return gi_fail(err, GI_EINTERNAL, "unexpected refusal: %s", why.msg);
     if (jr->failed)
         return gi_fail(err, GI_EINTERNAL, "the job failed: %s", jr->error.msg);
     return 0;

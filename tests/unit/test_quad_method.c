@@ -171,6 +171,57 @@ GI_TEST(test_quad_damaged_results_and_tasks_are_refused)
     gi_worker_ctx_free(&ctx);
 }
 
+/* The same damage reaching the coordinator as a worker's answer is refused
+ * as it arrives (gi_jobrun_check_result), naming the task: the run fails,
+ * the task runs again, and the job ends well. */
+GI_TEST(test_quad_damaged_results_are_retried)
+{
+    gi_error err;
+    gi_job job;
+    GI_REQUIRE_OK(load_job(&job, 0, "retried", &err));
+    gi_worker_ctx ctx;
+    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
+                                     job.assets, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    enum { CUT, TRAILING, NAN_HEADER, PIXEL_OUT_OF_RANGE, SPOILS };
+    for (int spoil = 0; spoil < SPOILS; spoil++) {
+        if (spoil == PIXEL_OUT_OF_RANGE) /* task 0 ran well: one failure short of its last */
+            GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, 1, &err));
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t != NULL);
+        gi_buf bad;
+        gi_buf_init(&bad);
+        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &bad, &err));
+        GI_CHECK(gi_jobrun_check_result(&jr, t->id, &bad, &err) == 0);
+        /* 13 eight-byte header values, then the delta: u32 count, u32 pixel. */
+        GI_REQUIRE(bad.len > 112 && gi_le_get_u32(bad.data + 104) > 0);
+        const char *want = "quadrature result";
+        if (spoil == CUT) {
+            bad.len /= 2;
+        } else if (spoil == TRAILING) {
+            gi_buf_put_u8(&bad, 0);
+        } else if (spoil == NAN_HEADER) {
+            memset(bad.data + 8 * 6, 0xff, 8); /* closed error: NaN */
+        } else {
+            gi_le_put_u32(bad.data + 108, (uint32_t)(job.width * job.height));
+            want = "quadrature result: bad pixel index";
+        }
+        char msg[128];
+        snprintf(msg, sizeof msg, "task %llu's result: %s", (unsigned long long)t->id, want);
+        uint64_t retries = jr.retries;
+        GI_CHECK_MSG(gi_test_refuse(&jr, t, &bad, msg, &err) == 0, "spoil %d: %s", spoil,
+                     err.msg);
+        GI_CHECK(jr.retries == retries + 1);
+        gi_buf_free(&bad);
+    }
+    GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+    GI_CHECK(jr.finished && !jr.failed);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_worker_ctx_free(&ctx);
+}
+
 static int parse_block(const char *block, gi_error *err)
 {
     char text[1024];
