@@ -108,9 +108,12 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
     return 0;
 }
 
-int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err)
+/* Decodes a batch's result into h, adding its sums into sum and hits
+ * (NULL: only checks it). */
+static int decode_result(const detp_state *st, const gi_task *t, const gi_buf *result,
+                         int64_t *sum, int64_t *hits, detp_anim_result *h, gi_error *err)
 {
-    detp_anim_state *a = st->anim;
+    const detp_anim_state *a = st->anim;
     gi_reader pr;
     gi_reader_init(&pr, t->payload.data, t->payload.len, "detp animation task");
     uint32_t frame = gi_get_u32(&pr), batch = gi_get_u32(&pr);
@@ -119,12 +122,28 @@ int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_e
                        (unsigned long long)t->id, frame, a->frame);
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp animation result");
-    detp_anim_result h;
-    if (detp_decode_anim(&r, st->nv, &h, a->sum, a->hits, err))
+    if (detp_decode_anim(&r, st->nv, h, sum, hits, err))
         return -1;
-    if (h.frame != frame || h.batch != batch)
+    if (h->frame != frame || h->batch != batch)
         return gi_fail(err, GI_EPROTO, "detp task %llu: result of frame %u batch %u",
-                       (unsigned long long)t->id, h.frame, h.batch);
+                       (unsigned long long)t->id, h->frame, h->batch);
+    return 0;
+}
+
+int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
+                    gi_error *err)
+{
+    detp_anim_result h;
+    return decode_result(st, t, result, NULL, NULL, &h, err);
+}
+
+int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err)
+{
+    detp_anim_state *a = st->anim;
+    detp_anim_result h;
+    if (decode_result(st, t, result, a->sum, a->hits, &h, err))
+        return -1;
+    uint32_t frame = h.frame;
     detp_anim_result *s = &a->tot;
     s->photons += h.photons;
     s->paths_examined += h.paths_examined;

@@ -348,11 +348,51 @@ static int write_earlier_frame(gi_job *job, detp_state *st, gi_error *err)
     return rc;
 }
 
-/* Image tiles have the tile's size and finite pixels (the per-vertex
- * results are checked as they are decoded, detp_result.c). */
+/* Values [a, b) of a visibility (one f32 in [0, 1] per vertex) or
+ * reference (`per` finite f64s per sample) task's result, after its timing. */
+static int check_range_values(const gi_task *t, const gi_buf *result, uint32_t lim, int per,
+                              gi_error *err)
+{
+    uint32_t a, b;
+    if (merge_range(t, &a, &b, lim, err))
+        return -1;
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp result");
+    double seconds = 0;
+    uint64_t rays = 0;
+    read_timing(&r, &seconds, &rays);
+    for (uint32_t i = a; i < b && !r.failed; i++) {
+        for (int c = 0; c < per; c++) {
+            double v = per == 1 ? gi_get_f32(&r) : gi_get_f64(&r);
+            if (r.failed || !isfinite(v) || (per == 1 && !(v >= 0.0 && v <= 1.0)))
+                return gi_fail(err, GI_EPROTO, "detp: value %u of the result out of range",
+                               i - a);
+        }
+    }
+    return gi_reader_finish(&r, err);
+}
+
+/* Whatever detp_merge would refuse for what a result holds is refused as it
+ * arrives: its run then fails and the task runs again, instead of the job
+ * failing at merge. Image tiles also need finite pixels. */
 static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
                              gi_error *err)
 {
+    const detp_state *st = job->state;
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp result");
+    detp_batch_result h;
+    switch (t->kind) {
+    case DETP_TASK_BATCH:
+        return detp_decode_batch(&r, st->nv, &h, NULL, NULL, err);
+    case DETP_TASK_VISIBILITY:
+        return st->visible ? check_range_values(t, result, st->nv, 1, err) : 0;
+    case DETP_TASK_REFERENCE:
+        return check_range_values(t, result, st->nref, 4, err);
+    case DETP_TASK_ANIM_BATCH:
+    case DETP_TASK_ANIM_UPDATE:
+        return st->anim ? detp_anim_check(st, t, result, err) : 0;
+    }
     if (t->kind != DETP_TASK_TILE && t->kind != DETP_TASK_ANIM_TILE)
         return 0;
     gi_tile tile;

@@ -44,7 +44,8 @@ typedef struct detp_batch_result {
 
 void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, double scale,
                        gi_buf *out);
-/* Adds the result's per-vertex values into irr (3 per vertex) and hits. */
+/* Adds the result's per-vertex values into irr (3 per vertex) and hits;
+ * with irr and hits NULL, only checks the result. */
 int detp_decode_batch(gi_reader *r, uint32_t vertex_count, detp_batch_result *h, double *irr,
                       uint64_t *hits, gi_error *err);
 
@@ -79,7 +80,8 @@ int detp_anim_header_get(gi_reader *r, detp_anim_result *h, int with_from_mobile
 void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
                       uint32_t nv, gi_buf *out);
 /* Adds the result's sums into sum (3 per vertex) and hits; fails on a
- * malformed result or an overflow. */
+ * malformed result or an overflow. With sum and hits NULL, only checks
+ * the result. */
 int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
                      int64_t *hits, gi_error *err);
 
@@ -135,6 +137,11 @@ int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data
 /* Animations, coordinator side (detp_anim_job.c). The frame's state lives
  * in st->anim; st's per-frame counters and irr/hits are filled from it. */
 int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
+/* Refuses a batch's result that detp_anim_merge would refuse for what it
+ * holds (all but an overflow of the sums, which depends on the merges
+ * before), as it arrives: its run fails and the task runs again. */
+int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
+                    gi_error *err);
 /* Adds a batch's result; a malformed one fails the job (EPROTO). */
 int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err);
 /* Before a frame's outputs: irr and hits from the exact sums, and the

@@ -96,13 +96,16 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
     }
 }
 
-/* Adds one vertex's values (three floats, then its hit count). */
+/* Adds one vertex's values (three floats, then its hit count); irr NULL:
+ * only checks them. */
 static int add_vertex(gi_reader *r, uint64_t i, int sparse, double *irr, uint64_t *hits)
 {
     float e[3] = {gi_get_f32(r), gi_get_f32(r), gi_get_f32(r)};
     uint64_t h = sparse ? get_varint(r) : gi_get_u32(r);
     if (r->failed || !isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2]))
         return -1;
+    if (!irr)
+        return 0;
     for (int c = 0; c < 3; c++)
         irr[3 * i + c] += e[c];
     hits[i] += h;
@@ -250,10 +253,14 @@ int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *su
         uint64_t step = get_varint(r);
         i += step;
         int bad = r->failed || i >= nv || (k > 0 && step == 0);
-        for (int c = 0; c < 3 && !bad; c++)
-            bad = add_checked(&sum[3 * i + c], unzigzag(get_varint(r)));
-        if (!bad)
-            bad = add_checked(&hits[i], unzigzag(get_varint(r))) || r->failed;
+        /* Without sum the values are only read: an overflow of the sums
+         * depends on what was merged before, and is found at merge. */
+        for (int c = 0; c < 4 && !bad; c++) {
+            int64_t v = unzigzag(get_varint(r));
+            if (sum)
+                bad = add_checked(c < 3 ? &sum[3 * i + c] : &hits[i], v);
+        }
+        bad = bad || r->failed;
         if (bad)
             return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
     }

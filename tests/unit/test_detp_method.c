@@ -305,3 +305,90 @@ GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
     gi_asset_store_free(worker_store);
     gi_job_free(&job);
 }
+
+/* Spoils the result of leased task t in the way `spoil` says and gives it
+ * to jr as a worker's answer: it must be refused naming the task, and the
+ * task retried, the job not failed. */
+enum { SPOIL_CUT, SPOIL_TRAILING, SPOIL_MAGIC, SPOIL_ANIM_BATCH };
+static int refuse_spoiled(gi_jobrun *jr, gi_worker_ctx *ctx, int spoil, const char *want,
+                          gi_error *err)
+{
+    const gi_task *t = gi_jobrun_lease(jr);
+    if (!t)
+        return gi_fail(err, GI_EINTERNAL, "nothing to lease");
+    gi_buf res;
+    gi_buf_init(&res);
+    int rc = gi_worker_run_task(ctx, t, &res, err);
+    if (rc == 0 && gi_jobrun_check_result(jr, t->id, &res, err))
+        rc = gi_error_prefix(err, "the result as sent");
+    if (rc == 0 && res.len < 16)
+        rc = gi_fail(err, GI_EINTERNAL, "a result of %zu bytes", res.len);
+    if (rc == 0) {
+        if (spoil == SPOIL_CUT)
+            res.len /= 2;
+        else if (spoil == SPOIL_TRAILING)
+            gi_buf_put_u8(&res, 0);
+        else if (spoil == SPOIL_MAGIC)
+            res.data[0] ^= 1;
+        else
+            gi_le_put_u32(res.data + 8, gi_le_get_u32(res.data + 8) + 1);
+        char msg[128];
+        snprintf(msg, sizeof msg, "task %llu's result: %s", (unsigned long long)t->id, want);
+        uint64_t retries = jr->retries;
+        rc = gi_test_refuse(jr, t, &res, msg, err);
+        if (rc == 0 && jr->retries != retries + 1)
+            rc = gi_fail(err, GI_EINTERNAL, "the task was not retried");
+    }
+    gi_buf_free(&res);
+    return rc;
+}
+
+/* A photon batch's result (still or animation) that merge could not take
+ * is refused as it arrives: its run fails, the task runs again, and the
+ * job ends well. */
+GI_TEST(test_detp_malformed_batch_results_are_retried)
+{
+    gi_error err;
+    char *path = write_job("badres.json", "impact_count", "");
+    GI_REQUIRE(path != NULL);
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    GI_REQUIRE_OK(load(path, "out-badres", &job, &ctx, &err));
+    free(path);
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp result", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp result", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_MAGIC, "detp result: not a detp batch result", &err));
+    GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+    GI_CHECK(jr.finished && !jr.failed);
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+
+    char text[2048], anim_path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
+             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
+             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
+             "  \"tile\": 8, \"image_spp\": 1,"
+             "  \"animation\": {\"object\": \"mobile\", \"frames\": 2,"
+             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
+             "                   {\"frame\": 1, \"translate\": [248, -338.9, -0.4]}]}},"
+             " \"outputs\": {\"exr\": \"a.exr\"}}",
+             gi_test_srcdir());
+    snprintf(anim_path, sizeof anim_path, "%s/badres-anim.json", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_write_file_atomic(anim_path, text, strlen(text), &err));
+    GI_REQUIRE_OK(load(anim_path, "out-badres-anim", &job, &ctx, &err));
+    ctx.batch_dir = gi_path_join(gi_test_tmpdir(), "badres-anim-batches");
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp animation result", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_ANIM_BATCH,
+                               "detp task 0: result of frame 0 batch 1", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp animation result", &err));
+    GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+    GI_CHECK(jr.finished && !jr.failed);
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+}
