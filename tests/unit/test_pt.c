@@ -166,22 +166,32 @@ GI_TEST(test_irradiance_matches_lambert_polygon_formula)
     gi_scene_free(&s);
 }
 
-/* A worker's result holding a NaN is refused as it arrives (the task then
- * fails and runs again) and names the pixel; a finite one passes. */
-GI_TEST(test_pt_result_with_nan_is_refused)
+/* Starts a 16 x 8 pt job of two 8 x 8 tiles (job file `name`). */
+static int start_tiles_job(const char *name, gi_job *job, gi_jobrun *jr, gi_error *err)
 {
     char text[1024], path[600];
     snprintf(text, sizeof text,
              "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"pt\", \"seed\": 2,"
              " \"image\": {\"width\": 16, \"height\": 8}, \"pt\": {\"spp\": 2, \"tile\": 8}}",
              gi_test_srcdir());
-    snprintf(path, sizeof path, "%s/nan.json", gi_test_tmpdir());
+    snprintf(path, sizeof path, "%s/%s", gi_test_tmpdir(), name);
+    if (gi_write_file_atomic(path, text, strlen(text), err) || gi_job_load(path, job, err))
+        return -1;
+    if (gi_jobrun_start(jr, job, err)) {
+        gi_job_free(job);
+        return -1;
+    }
+    return 0;
+}
+
+/* A worker's result holding a NaN is refused as it arrives (the task then
+ * fails and runs again) and names the pixel; a finite one passes. */
+GI_TEST(test_pt_result_with_nan_is_refused)
+{
     gi_error err;
-    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
     gi_job job;
-    GI_REQUIRE_OK(gi_job_load(path, &job, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start_tiles_job("nan.json", &job, &jr, &err));
     const gi_task *t = gi_jobrun_lease(&jr);
     GI_REQUIRE(t != NULL);
     gi_buf res;
@@ -204,18 +214,10 @@ GI_TEST(test_pt_result_with_nan_is_refused)
  * it arrives, like a NaN: the task runs again and the job does not fail. */
 GI_TEST(test_pt_result_of_the_wrong_size_is_retried)
 {
-    char text[1024], path[600];
-    snprintf(text, sizeof text,
-             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"pt\", \"seed\": 2,"
-             " \"image\": {\"width\": 16, \"height\": 8}, \"pt\": {\"spp\": 2, \"tile\": 8}}",
-             gi_test_srcdir());
-    snprintf(path, sizeof path, "%s/size.json", gi_test_tmpdir());
     gi_error err;
-    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
     gi_job job;
-    GI_REQUIRE_OK(gi_job_load(path, &job, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start_tiles_job("size.json", &job, &jr, &err));
     size_t sizes[] = {8 * 8 * 4 * 8 - 8, 8 * 8 * 4 * 8 + 8, 0};
     for (size_t k = 0; k < GI_ARRAY_LEN(sizes); k++) {
         const gi_task *t = gi_jobrun_lease(&jr);

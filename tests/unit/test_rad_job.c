@@ -47,6 +47,21 @@ static int read_all(const char *dir, const char *name, gi_buf *out, gi_error *er
     return rc;
 }
 
+/* Loads the job into dir, a worker for it, and starts its run. */
+static int start(const char *dir, gi_job *job, gi_worker_ctx *ctx, gi_jobrun *jr, gi_error *err)
+{
+    if (load(dir, PARAMS, job, err))
+        return -1;
+    if (gi_worker_ctx_load(ctx, 1, job->file, job->text, &job->manifest, fetch_none, NULL,
+                           job->assets, err) == 0) {
+        if (gi_jobrun_start(jr, job, err) == 0)
+            return 0;
+        gi_worker_ctx_free(ctx);
+    }
+    gi_job_free(job);
+    return -1;
+}
+
 GI_TEST(test_rad_job_checkpoint_restore_gives_the_same_outputs)
 {
     gi_error err;
@@ -54,12 +69,9 @@ GI_TEST(test_rad_job_checkpoint_restore_gives_the_same_outputs)
     snprintf(ref, sizeof ref, "%s/ref", gi_test_tmpdir());
     GI_REQUIRE_OK(gi_mkdirs(ref, &err));
     gi_job job;
-    GI_REQUIRE_OK(load(ref, PARAMS, &job, &err));
     gi_worker_ctx ctx;
-    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, fetch_none, NULL,
-                                     job.assets, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(ref, &job, &ctx, &jr, &err));
     uint64_t ff_tasks = jr.task_count;
     GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
     GI_REQUIRE(jr.finished);
@@ -155,12 +167,9 @@ GI_TEST(test_rad_job_malformed_form_factor_result_is_retried)
     snprintf(dir, sizeof dir, "%s/badff", gi_test_tmpdir());
     GI_REQUIRE_OK(gi_mkdirs(dir, &err));
     gi_job job;
-    GI_REQUIRE_OK(load(dir, PARAMS, &job, &err));
     gi_worker_ctx ctx;
-    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, fetch_none, NULL,
-                                     job.assets, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start(dir, &job, &ctx, &jr, &err));
     uint64_t ff_tasks = jr.task_count;
     GI_REQUIRE(ff_tasks >= 1);
     for (int spoil = 0; spoil < 3; spoil++) {
