@@ -343,13 +343,15 @@ static int refuse_spoiled(gi_jobrun *jr, gi_worker_ctx *ctx, int spoil, const ch
     return rc;
 }
 
-/* A photon batch's result (still or animation) that merge could not take
- * is refused as it arrives: its run fails, the task runs again, and the
- * job ends well. */
+/* A photon batch's (still or animation), visibility or reference result
+ * that merge could not take is refused as it arrives: its run fails, the
+ * task runs again, and the job ends well. */
 GI_TEST(test_detp_malformed_batch_results_are_retried)
 {
     gi_error err;
-    char *path = write_job("badres.json", "impact_count", "");
+    char *path = write_job("badres.json", "impact_count",
+                           ", \"artifact_control\": \"visible_area\","
+                           " \"reference\": {\"spp\": 2, \"vertices\": 6}");
     GI_REQUIRE(path != NULL);
     gi_job job;
     gi_worker_ctx ctx;
@@ -360,6 +362,14 @@ GI_TEST(test_detp_malformed_batch_results_are_retried)
     GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp result", &err));
     GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp result", &err));
     GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_MAGIC, "detp result: not a detp batch result", &err));
+    /* The visibility and reference tasks after the batches. */
+    uint32_t kinds[] = {DETP_TASK_VISIBILITY, DETP_TASK_REFERENCE};
+    for (int k = 0; k < 2; k++) {
+        while (gi_jobrun_task_at(&jr, jr.pending[jr.pending_head])->task.kind != kinds[k])
+            GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, 1, &err));
+        GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp result", &err));
+        GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp result", &err));
+    }
     GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
     GI_CHECK(jr.finished && !jr.failed);
     gi_jobrun_free(&jr);
