@@ -709,8 +709,14 @@ static int cmd_delete(client *c, uint64_t id, int purge)
     int rc = call(c, "DELETE", path, NULL, 0, NULL, 200, 0, &b, NULL);
     if (rc == 0 && purge)
         printf("job %llu removed, with its checkpoint and outputs\n", (unsigned long long)id);
-    else if (rc == 0)
-        printf("job %llu cancelled\n", (unsigned long long)id);
+    else if (rc == 0) {
+        /* A finishing job ends once its outputs are written (not served). */
+        cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
+        int finishing = doc && strcmp(str(doc, "state"), "finishing") == 0;
+        cJSON_Delete(doc);
+        printf("job %llu cancelled%s\n", (unsigned long long)id,
+               finishing ? ": it ends once the outputs being written are (not served)" : "");
+    }
     gi_buf_free(&b);
     return rc;
 }

@@ -549,6 +549,10 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
                           "purge=%.40s: expected purge=1", purge);
         if (!purging && gi_farm_job_cancel(f, j, "requested through the API") == 0)
             return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
+        if (!purging && j->cancelling)
+            return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
+                          "job %llu is cancelled already: it ends once its outputs being "
+                          "written are", (unsigned long long)j->id);
         if (!purging)
             return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT,
                           "job %llu has ended (%s): `gi purge %llu` (DELETE "

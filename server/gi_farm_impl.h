@@ -100,6 +100,10 @@ struct gi_farm_job {
     int disk_measured;
     /* Such a retry's finish runs on its thread (gi_jobrun_finishing). */
     int outputs_retrying;
+    /* Cancelled while its finish ran on its thread: its END (cancelled) is
+     * journaled (or end_pending), and the job ends cancelled once the
+     * finish has returned; until then it is still RUNNING ("finishing"). */
+    int cancelling;
 
     /* Checker. */
     pid_t check_pid;

@@ -16,7 +16,12 @@
  * as "finishing" meanwhile, and the tick takes the finish's end in: DONE
  * only once it returned with its outputs in place, and then END is
  * journaled. No checkpoint is taken while it runs; a stopping coordinator
- * waits for it; a cancel waits for it, then cancels. */
+ * waits for it (its thread works on the run's memory, and the work is then
+ * kept: done, or checkpointed). A cancel does not wait on the loop: it
+ * journals the job's END (cancelled) at once, so that a restart finds it
+ * cancelled, and the tick ends the job cancelled, with no second END, once
+ * the finish has returned (cancelling). A purge of such a job is refused
+ * like that of any job not ended. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -414,9 +419,9 @@ static void submit_record(const gi_farm_job *j, gi_jrec *r)
 static void end_record(const gi_farm_job *j, gi_jrec *r)
 {
     gi_jrec_init(r, GI_JREC_END, j->id);
-    r->end = j->state == GI_FJ_DONE     ? GI_JOB_END_DONE
-             : j->state == GI_FJ_FAILED ? GI_JOB_END_FAILED
-                                        : GI_JOB_END_CANCELLED;
+    r->end = j->cancelling || j->state == GI_FJ_CANCELLED ? GI_JOB_END_CANCELLED
+             : j->state == GI_FJ_DONE                     ? GI_JOB_END_DONE
+                                                          : GI_JOB_END_FAILED;
     r->code = (uint32_t)j->error.code;
     r->message = (char *)j->error.msg;
     r->when = j->ended;
@@ -937,28 +942,25 @@ static int end_flush(gi_farm *f, gi_farm_job *j)
     return 0;
 }
 
-static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
+/* The summary of the run as it ends, for the views and the END record. */
+static void final_summary(gi_farm_job *j)
 {
-    checkpoint_finish(f, j, 1); /* journaled before the END */
-    j->state = state;
-    f->live_stale = 1;
-    f->ended_flush_due = 1; /* its END or log lines may have to wait for room */
-    j->ended = gi_farm_wallnow();
-    j->disk_measured = 0;
-    gi_farm_check_kill(j);
-    gi_farm_sched_drop_job(f, j);
-    if (j->loaded) {
-        j->final_tasks = j->jr.task_count;
-        j->final_merged = j->jr.merge_next;
-        j->final_retries = j->jr.retries;
-        j->final_losses = j->jr.losses;
-        j->final_stats = j->jr.stats;
-        gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
-    }
+    if (!j->loaded)
+        return;
+    j->final_tasks = j->jr.task_count;
+    j->final_merged = j->jr.merge_next;
+    j->final_retries = j->jr.retries;
+    j->final_losses = j->jr.losses;
+    j->final_stats = j->jr.stats;
+    gi_jobrun_progress(&j->jr, gi_now(), &j->final_progress);
+}
+
+/* Appends j's END; one the journal refuses is tried again at every tick. */
+static void end_append(gi_farm *f, gi_farm_job *j)
+{
     gi_jrec r;
     end_record(j, &r);
     gi_error err;
-    run_free(j);
     if (gi_journal_append(&f->journal, &r, &err) == 0) {
         end_journaled(f, j);
         return;
@@ -969,9 +971,30 @@ static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
                      "for that", err.msg);
 }
 
+static void end_job(gi_farm *f, gi_farm_job *j, gi_fj_state state)
+{
+    /* A cancel of a finishing job journaled its END already (or left it
+     * pending): it is not appended twice. */
+    int journaled = j->cancelling;
+    j->cancelling = 0;
+    checkpoint_finish(f, j, 1); /* journaled before the END */
+    j->state = state;
+    f->live_stale = 1;
+    f->ended_flush_due = 1; /* its END or log lines may have to wait for room */
+    if (!journaled)
+        j->ended = gi_farm_wallnow();
+    j->disk_measured = 0;
+    gi_farm_check_kill(j);
+    gi_farm_sched_drop_job(f, j);
+    final_summary(j);
+    run_free(j);
+    if (!journaled)
+        end_append(f, j);
+}
+
 void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
 {
-    if (terminal(j))
+    if (terminal(j) || j->cancelling)
         return;
     j->error = *why;
     gi_farm_job_log(j, "failed: %s", why->msg);
@@ -981,12 +1004,25 @@ void gi_farm_job_fail(gi_farm *f, gi_farm_job *j, const gi_error *why)
 
 int gi_farm_job_cancel(gi_farm *f, gi_farm_job *j, const char *why)
 {
-    if (terminal(j))
+    if (terminal(j) || j->cancelling)
         return -1;
     gi_fail(&j->error, GI_ECANCEL, "cancelled: %s", why);
-    gi_farm_job_log(j, "cancelled: %s", why);
     f->m.jobs_cancelled++;
-    end_job(f, j, GI_FJ_CANCELLED);
+    if (j->state != GI_FJ_RUNNING || !j->loaded || !gi_jobrun_finishing(&j->jr)) {
+        gi_farm_job_log(j, "cancelled: %s", why);
+        end_job(f, j, GI_FJ_CANCELLED);
+        return 0;
+    }
+    /* Joining the finish's thread here would stall the loop for as long as
+     * the outputs take; the END goes to the journal now, and finish_taken
+     * ends the job once the thread has returned. */
+    gi_farm_job_log(j, "cancelled: %s; the cancel waits for the outputs being written (the "
+                    "job ends cancelled once they are, and they are not served)", why);
+    checkpoint_finish(f, j, 1); /* journaled before the END */
+    j->cancelling = 1;
+    j->ended = gi_farm_wallnow();
+    final_summary(j);
+    end_append(f, j);
     return 0;
 }
 
@@ -1082,6 +1118,9 @@ void gi_farm_job_fetched(gi_farm *f, uint64_t id, const char *name, const char *
 
 int gi_farm_job_purge(gi_farm *f, gi_farm_job *j, gi_error *err)
 {
+    if (j->cancelling)
+        return gi_fail(err, GI_EINVAL, "job %llu is cancelled, but its outputs are still being "
+                       "written: purge it once it shows as cancelled", (unsigned long long)j->id);
     if (!terminal(j))
         return gi_fail(err, GI_EINVAL, "job %llu is %s: cancel it first",
                        (unsigned long long)j->id, gi_fj_state_name(j->state));
@@ -1240,6 +1279,14 @@ static void finish_taken(gi_farm *f, gi_farm_job *j, int wait)
         return;
     j->finish_s += j->jr.finish_seconds - f0;
     f->m.finish_s += j->jr.finish_seconds - f0;
+    if (j->cancelling) {
+        j->outputs_retrying = 0;
+        gi_farm_job_log(j, "cancelled: its finish has returned (%s%s)",
+                        j->jr.failed ? "it failed: " : "its outputs are not served",
+                        j->jr.failed ? j->jr.error.msg : "");
+        end_job(f, j, GI_FJ_CANCELLED);
+        return;
+    }
     if (j->outputs_retrying) {
         j->outputs_retrying = 0;
         if (j->jr.failed) {

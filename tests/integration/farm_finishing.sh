@@ -7,8 +7,14 @@
 # 2. An output that cannot be written while the thread writes (a directory
 #    in the way): the job fails with its whole result in a checkpoint, and a
 #    retry once the way is clear writes the outputs without running a task.
-# 3. Cancelled while finishing: the job ends cancelled; a retry ends done,
-#    with the same image.
+# 3. Cancelled while finishing: the cancel answers at once, the job still
+#    finishing (its log says why), its END journaled then; a second cancel
+#    and a purge are refused meanwhile; the loop does not wait for the
+#    finish (its longest round stays under the 2 s of the finish). Once the
+#    finish has returned the job is cancelled, its outputs not served, with
+#    no second END; a retry ends done, with the same image.
+# 3b. gi-farmd killed between such a cancel and the finish's return: the
+#    restarted one has the job cancelled.
 # 4. gi-farmd stopped (SIGTERM) while a job finishes: it waits for the
 #    finish and journals the job done; restarted, it serves the outputs.
 . "$(dirname "$0")/lib.sh"
@@ -56,13 +62,45 @@ rmdir "$TMP/state/jobs/$id/out/img.exr"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o2/img.exr" || fail "the retried image differs"
 
 # 3. Cancelled while finishing.
+ends() { # the END records of the jobs cancelled through the API
+    grep -a -o "cancelled: requested through the API" "$TMP/state/journal" | wc -l
+}
 id=$(submit)
 wait_state "$id" finishing 120
-"$GI" cancel "$id" >/dev/null || fail "gi cancel of a finishing job"
-[ "$(jstate "$id")" = cancelled ] || fail "not cancelled: $(jstate "$id")"
+e0=$(ends)
+"$GI" cancel "$id" >"$TMP/cancel.out" || fail "gi cancel of a finishing job"
+grep -q "cancelled: it ends once the outputs being written are" "$TMP/cancel.out" ||
+    { cat "$TMP/cancel.out"; fail "gi cancel does not say the job ends later"; }
+[ "$(jstate "$id")" = finishing ] || fail "the cancel waited for the finish: $(jstate "$id")"
+api "/api/v1/jobs/$id" | grep -q "the cancel waits for the outputs being written" ||
+    { api "/api/v1/jobs/$id"; fail "the job's log does not say the cancel waits"; }
+[ $(($(ends))) = $((e0 + 1)) ] || fail "the cancel's END is not journaled at once"
+code=$(api "/api/v1/jobs/$id" -X DELETE -o "$TMP/cancel2.json" -w '%{http_code}')
+[ "$code" = 409 ] && grep -q "cancelled already" "$TMP/cancel2.json" ||
+    { cat "$TMP/cancel2.json"; fail "a second cancel was answered $code"; }
+code=$(api "/api/v1/jobs/$id?purge=1" -X DELETE -o "$TMP/purge.json" -w '%{http_code}')
+[ "$code" = 409 ] && grep -q "still being written" "$TMP/purge.json" ||
+    { cat "$TMP/purge.json"; fail "a purge of the cancelling job was answered $code"; }
+wait_state "$id" cancelled 60
+code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
+[ "$code" = 409 ] || fail "an output of the cancelled job was answered $code"
+[ $(($(ends))) = $((e0 + 1)) ] || fail "the END of the cancelled job is journaled twice"
+stall=$(metric gi_farm_loop_stall_max_seconds)
+echo "the loop's longest round so far: $stall s"
+awk -v s="$stall" 'BEGIN {exit !(s < 1.5)}' || fail "the loop stalled for $stall s"
 "$GI" retry "$id" --wait --out "$TMP/o3" --progress none >"$TMP/retry3.log" 2>&1 ||
     { cat "$TMP/retry3.log"; fail "gi retry --wait of the cancelled job"; }
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o3/img.exr" || fail "the image after cancel + retry differs"
+
+# 3b. Killed between the cancel and the finish's return.
+id=$(submit)
+wait_state "$id" finishing 120
+"$GI" cancel "$id" >/dev/null || fail "gi cancel of a finishing job (3b)"
+kill -KILL "$FARMD_PID"
+wait "$FARMD_PID" 2>/dev/null || true
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_DELAY=2 -- $OPTS $PORTS
+[ "$(jstate "$id")" = cancelled ] || fail "job $id is $(jstate "$id") after the restart"
 
 # 4. Stopped while finishing.
 id=$(submit)
