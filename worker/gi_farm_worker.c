@@ -665,9 +665,10 @@ static int handshake(worker *w, gi_error *err)
     h.proto_min = GI_PROTO_MIN;
     h.proto_max = GI_PROTO_MAX;
     /* For tests of a mixed farm: this worker speaks as an older build. */
-    const char *older = getenv(GI_FAULT_PROTO_MAX_ENV);
-    if (older && atoi(older) >= GI_PROTO_MIN && atoi(older) < GI_PROTO_MAX)
-        h.proto_max = (uint32_t)atoi(older);
+    const char *older_env = getenv(GI_FAULT_PROTO_MAX_ENV);
+    int older = older_env ? atoi(older_env) : 0;
+    if (older >= GI_PROTO_MIN && older < GI_PROTO_MAX)
+        h.proto_max = (uint32_t)older;
     gi_auth_random(h.nonce, sizeof h.nonce);
     h.name = w->name;
     h.version = (char *)GI_VERSION;

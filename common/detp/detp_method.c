@@ -180,13 +180,43 @@ static int merge_range(const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim,
     return 0;
 }
 
+/* A visibility (one f32 in [0, 1] per vertex, into vis) or reference
+ * (`reference`: four finite f64s per sample, added into ref) task's result,
+ * after its timing (added into *seconds and *rays). vis and ref NULL: only
+ * checks it (detp_check_result), by the same rules as the merge. */
+static int range_result(const gi_task *t, const gi_buf *result, uint32_t lim, int reference,
+                        float *vis, double *ref, double *seconds, uint64_t *rays, gi_error *err)
+{
+    uint32_t a, b;
+    if (merge_range(t, &a, &b, lim, err))
+        return -1;
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp result");
+    read_timing(&r, seconds, rays);
+    int per = reference ? 4 : 1;
+    for (uint32_t i = a; i < b && !r.failed; i++) {
+        for (int c = 0; c < per; c++) {
+            double v = reference ? gi_get_f64(&r) : gi_get_f32(&r);
+            if (r.failed) /* cut short: gi_reader_finish says so */
+                break;
+            if (!isfinite(v) || (!reference && !(v >= 0.0 && v <= 1.0)))
+                return gi_fail(err, GI_EPROTO, "detp: value %u of the result out of range",
+                               i - a);
+            if (vis)
+                vis[i] = (float)v;
+            if (ref)
+                ref[4 * (size_t)i + c] += v;
+        }
+    }
+    return gi_reader_finish(&r, err);
+}
+
 static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
                       gi_error *err)
 {
     detp_state *st = job->state;
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp result");
-    uint32_t a, b;
     switch (t->kind) {
     case DETP_TASK_BATCH: {
         detp_batch_result h;
@@ -203,24 +233,13 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
         return 0;
     }
     case DETP_TASK_VISIBILITY:
-        if (!st->visible || merge_range(t, &a, &b, st->nv, err))
-            return st->visible ? -1 : gi_fail(err, GI_EPROTO, "unexpected visibility result");
-        read_timing(&r, &st->sec_visibility, &st->rays_visibility);
-        for (uint32_t i = a; i < b; i++) {
-            float f = gi_get_f32(&r);
-            if (!(f >= 0.0f && f <= 1.0f))
-                return gi_fail(err, GI_EPROTO, "detp: visible fraction out of range");
-            st->visible[i] = f;
-        }
-        return gi_reader_finish(&r, err);
+        if (!st->visible)
+            return gi_fail(err, GI_EPROTO, "unexpected visibility result");
+        return range_result(t, result, st->nv, 0, st->visible, NULL, &st->sec_visibility,
+                            &st->rays_visibility, err);
     case DETP_TASK_REFERENCE:
-        if (merge_range(t, &a, &b, st->nref, err))
-            return -1;
-        read_timing(&r, &st->sec_reference, &st->rays_reference);
-        for (uint32_t j = a; j < b; j++)
-            for (int c = 0; c < 4; c++)
-                st->ref[4 * (size_t)j + c] += gi_get_f64(&r);
-        return gi_reader_finish(&r, err);
+        return range_result(t, result, st->nref, 1, NULL, st->ref, &st->sec_reference,
+                            &st->rays_reference, err);
     case DETP_TASK_ANIM_BATCH:
     case DETP_TASK_ANIM_UPDATE:
         if (!st->anim)
@@ -348,32 +367,6 @@ static int write_earlier_frame(gi_job *job, detp_state *st, gi_error *err)
     return rc;
 }
 
-/* Values [a, b) of a visibility (one f32 in [0, 1] per vertex) or
- * reference (`per` finite f64s per sample) task's result, after its timing. */
-static int check_range_values(const gi_task *t, const gi_buf *result, uint32_t lim, int per,
-                              gi_error *err)
-{
-    uint32_t a, b;
-    if (merge_range(t, &a, &b, lim, err))
-        return -1;
-    gi_reader r;
-    gi_reader_init(&r, result->data, result->len, "detp result");
-    double seconds = 0;
-    uint64_t rays = 0;
-    read_timing(&r, &seconds, &rays);
-    for (uint32_t i = a; i < b && !r.failed; i++) {
-        for (int c = 0; c < per; c++) {
-            double v = per == 1 ? gi_get_f32(&r) : gi_get_f64(&r);
-            if (r.failed) /* cut short: gi_reader_finish says so */
-                break;
-            if (!isfinite(v) || (per == 1 && !(v >= 0.0 && v <= 1.0)))
-                return gi_fail(err, GI_EPROTO, "detp: value %u of the result out of range",
-                               i - a);
-        }
-    }
-    return gi_reader_finish(&r, err);
-}
-
 /* Whatever detp_merge would refuse for what a result holds is refused as it
  * arrives: its run then fails and the task runs again, instead of the job
  * failing at merge. Image tiles also need finite pixels. */
@@ -384,13 +377,17 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp result");
     detp_batch_result h;
+    double seconds = 0; /* timings: read, not kept */
+    uint64_t rays = 0;
     switch (t->kind) {
     case DETP_TASK_BATCH:
         return detp_decode_batch(&r, st->nv, &h, NULL, NULL, err);
     case DETP_TASK_VISIBILITY:
-        return st->visible ? check_range_values(t, result, st->nv, 1, err) : 0;
+        return st->visible ? range_result(t, result, st->nv, 0, NULL, NULL, &seconds, &rays,
+                                          err)
+                           : 0;
     case DETP_TASK_REFERENCE:
-        return check_range_values(t, result, st->nref, 4, err);
+        return range_result(t, result, st->nref, 1, NULL, NULL, &seconds, &rays, err);
     case DETP_TASK_ANIM_BATCH:
     case DETP_TASK_ANIM_UPDATE:
         return st->anim ? detp_anim_check(st, t, result, err) : 0;
@@ -399,8 +396,6 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
         return 0;
     gi_tile tile;
     gi_buf px;
-    double seconds = 0;
-    uint64_t rays = 0;
     if (tile_result(job, t, result, &tile, &seconds, &rays, &px, err))
         return -1;
     return gi_tile_check_result(&tile, px.data, px.len, err);
