@@ -143,7 +143,7 @@ struct gi_farm_job {
     char ckpt_error[512]; /* why the last checkpoint failed; "" if it did not */
     double ckpt_done_cost;
     double ckpt_last;   /* monotonic */
-    double ckpt_cost_s; /* the last one's time: serialized, then written */
+    gi_ckpt_pace ckpt_pace;
     /* The checkpoint being written (gi_farm_jobs.c), and what it holds. */
     struct gi_file_writer *ckpt_w;
     gi_manifest ckpt_w_published; /* the data it needs from the store */

@@ -1560,7 +1560,7 @@ static int checkpoint_finish(gi_farm *f, gi_farm_job *j, int wait)
     double seconds;
     int rc = gi_file_writer_finish(j->ckpt_w, &seconds, &err);
     j->ckpt_w = NULL;
-    j->ckpt_cost_s += seconds; /* the disk's time too (gi_jobrun_checkpoint_interval) */
+    gi_ckpt_pace_written(&j->ckpt_pace, seconds);
     checkpoint_published(f, j, rc == 0);
     if (rc == 0) {
         char *ap = affinity_path(j);
@@ -1603,14 +1603,14 @@ static void checkpoint_if_due(gi_farm *f, gi_farm_job *j, double now, int force)
         return; /* its state is the finish's; the job ends or goes on once it returns */
     if (j->outputs_retry_at && !force)
         return; /* its outputs' retries try a checkpoint as well (keep_result) */
-    double every = gi_jobrun_checkpoint_interval(f->cfg.checkpoint_s, j->ckpt_cost_s);
+    double every = gi_ckpt_pace_interval(&j->ckpt_pace, f->cfg.checkpoint_s);
     if (!force && now - j->ckpt_last < every)
         return;
     j->ckpt_last = now;
     if (j->jr.merge_next == j->ckpt_merged && j->jr.cost_done == j->ckpt_done_cost)
         return; /* nothing merged since the last one */
     checkpoint_begin(f, j, 0);
-    j->ckpt_cost_s = gi_now() - now; /* the loop's time; the write's is added at the end */
+    gi_ckpt_pace_begun(&j->ckpt_pace, gi_now() - now); /* the write's time comes later */
     if (force)
         checkpoint_finish(f, j, 1);
 }

@@ -542,10 +542,23 @@ void gi_jobrun_identity(const gi_job *job, char out[GI_HASH_HEX])
     gi_buf_free(&b);
 }
 
-double gi_jobrun_checkpoint_interval(double every_s, double last_s)
+void gi_ckpt_pace_begun(gi_ckpt_pace *p, double seconds)
 {
-    double spaced = 20.0 * last_s;
-    return last_s >= 0.25 && spaced > every_s ? spaced : every_s;
+    p->prev_s = p->last_s;
+    p->last_s = seconds;
+    p->count++;
+}
+
+void gi_ckpt_pace_written(gi_ckpt_pace *p, double seconds)
+{
+    p->last_s += seconds;
+}
+
+double gi_ckpt_pace_interval(const gi_ckpt_pace *p, double every_s)
+{
+    double cost = p->count >= 2 && p->prev_s < p->last_s ? p->prev_s : p->last_s;
+    double spaced = 20.0 * cost;
+    return cost >= 0.25 && spaced > every_s ? spaced : every_s;
 }
 
 int gi_jobrun_checkpoint(const gi_jobrun *jr, gi_buf *out, gi_error *err)

@@ -191,11 +191,25 @@ int gi_jobrun_restore(gi_jobrun *jr, gi_job *job, const gi_buf *in, gi_error *er
  * all merged starts its finish on its thread before this returns. */
 int gi_jobrun_restore_opts(gi_jobrun *jr, gi_job *job, const gi_buf *in,
                            const gi_jobrun_opts *opts, gi_error *err);
+/* What the periodic checkpoints of a run have cost, for their spacing: each
+ * one's time, serialized by the loop, then written by a thread. Zeroed: no
+ * checkpoint yet. */
+typedef struct gi_ckpt_pace {
+    double last_s; /* the last one's (the one being written: so far) */
+    double prev_s; /* the one before */
+    unsigned count;
+} gi_ckpt_pace;
+
+/* A checkpoint was serialized in seconds (its write's time comes later). */
+void gi_ckpt_pace_begun(gi_ckpt_pace *p, double seconds);
+/* Its write took seconds more. */
+void gi_ckpt_pace_written(gi_ckpt_pace *p, double seconds);
 /* Seconds between periodic checkpoints: every_s, or 20 times as long as the
- * last one took (serialized by the loop, then written by a thread) if that
- * was a quarter second or more. A big image's sums on a slow disk thus take
- * the loop and the disk at most a twentieth of the time; shorter
- * checkpoints never matter. */
-double gi_jobrun_checkpoint_interval(double every_s, double last_s);
+ * cheaper of the last two took if that was a quarter second or more. A big
+ * image's sums on a slow disk thus take the loop and the disk at most a
+ * twentieth of the time; shorter checkpoints never matter; and one slowed
+ * by a passing hiccup of the disk does not put the next one off (the
+ * cheaper of two: only a disk slow twice in a row spaces them). */
+double gi_ckpt_pace_interval(const gi_ckpt_pace *p, double every_s);
 
 #endif

@@ -58,7 +58,7 @@ typedef struct local_run {
     unsigned respawn_budget;
     int ckpt_ours; /* the checkpoint file holds this run's work (resumed or written) */
     gi_file_writer *ckpt_w; /* a periodic checkpoint being written */
-    double ckpt_cost;       /* the last one's time: encoded, then written */
+    gi_ckpt_pace ckpt_pace;
 } local_run;
 
 static void on_result(void *user, int child, gi_msg_result *r)
@@ -231,7 +231,7 @@ static int periodic_finish(local_run *lr, int wait)
     gi_error e;
     double seconds;
     int rc = gi_file_writer_finish(lr->ckpt_w, &seconds, &e);
-    lr->ckpt_cost += seconds; /* the disk's time too (gi_jobrun_checkpoint_interval) */
+    gi_ckpt_pace_written(&lr->ckpt_pace, seconds);
     if (rc)
         gi_warn("checkpoint not written: %s", e.msg);
     else
@@ -434,7 +434,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
             break;
         }
         int writer_idle = periodic_finish(&lr, 0); /* first: it adds the write's time */
-        double every = gi_jobrun_checkpoint_interval(opts->checkpoint_s, lr.ckpt_cost);
+        double every = gi_ckpt_pace_interval(&lr.ckpt_pace, opts->checkpoint_s);
         if (writer_idle && checkpoints && opts->checkpoint_s > 0 &&
             now - last_ckpt >= every && lr.jr.merge_next != ckpt_merged &&
             !gi_jobrun_done(&lr.jr) && job->method->save) {
@@ -447,7 +447,7 @@ int gi_render_local(gi_job *job, const gi_local_opts *opts, gi_local_summary *su
                 lr.ckpt_w = gi_file_writer_start(ckpt, &b);
             gi_buf_free(&b);
             last_ckpt = now;
-            lr.ckpt_cost = gi_now() - now;
+            gi_ckpt_pace_begun(&lr.ckpt_pace, gi_now() - now);
             ckpt_merged = lr.jr.merge_next;
         }
         if (now - last_touch >= 60.0) { /* alive: not for the sweep */

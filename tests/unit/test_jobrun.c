@@ -927,15 +927,35 @@ GI_TEST(test_jobrun_restored_mid_frame_keeps_its_progress)
     gi_job_free(&job);
 }
 
+/* The interval after checkpoints that took these seconds (serialized, then
+ * written), oldest first. */
+static double interval_after(double every_s, const double *took, int n)
+{
+    gi_ckpt_pace p;
+    memset(&p, 0, sizeof p);
+    for (int i = 0; i < n; i++) {
+        gi_ckpt_pace_begun(&p, 0.25 * took[i]);
+        gi_ckpt_pace_written(&p, 0.75 * took[i]);
+    }
+    return gi_ckpt_pace_interval(&p, every_s);
+}
+
 GI_TEST(test_jobrun_checkpoints_are_spaced_on_slow_disks)
 {
     /* Quick writes keep the asked interval, even a short one (the tests'). */
-    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 0.0) == 30.0);
-    GI_CHECK(gi_jobrun_checkpoint_interval(0.2, 0.2) == 0.2);
+    GI_CHECK(interval_after(30.0, NULL, 0) == 30.0);
+    GI_CHECK(interval_after(30.0, (double[]){0.0}, 1) == 30.0);
+    GI_CHECK(interval_after(0.2, (double[]){0.2}, 1) == 0.2);
     /* A second to write: at least 20 s apart; a long interval stays. */
-    GI_CHECK(gi_jobrun_checkpoint_interval(1.0, 1.0) == 20.0);
-    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 1.0) == 30.0);
-    GI_CHECK(gi_jobrun_checkpoint_interval(30.0, 5.0) == 100.0);
+    GI_CHECK(interval_after(1.0, (double[]){1.0}, 1) == 20.0);
+    GI_CHECK(interval_after(30.0, (double[]){1.0}, 1) == 30.0);
+    GI_CHECK(interval_after(30.0, (double[]){5.0}, 1) == 100.0);
+    /* One slowed by a hiccup after a quick one does not put the next off;
+     * a disk slow twice in a row does, by the cheaper of the two. */
+    GI_CHECK(interval_after(30.0, (double[]){0.1, 30.0}, 2) == 30.0);
+    GI_CHECK(interval_after(30.0, (double[]){6.0, 30.0}, 2) == 120.0);
+    GI_CHECK(interval_after(30.0, (double[]){30.0, 6.0}, 2) == 120.0);
+    GI_CHECK(interval_after(30.0, (double[]){30.0, 30.0, 0.1}, 3) == 30.0);
 }
 
 /* ---- finish on a thread (gi_jobrun_opts.finish_threaded, gi-farmd's) ----- */
