@@ -60,3 +60,9 @@ echo "== rad_factorizations: Table 4.2 (radiosity error vs the dense solve), two
 "$BIN/bench/rad_factorizations" scenes/cornell-box/scene.json 1024 70
 echo "== rad_moving: moving object, Algorithm 6 + double SMW"
 "$BIN/bench/rad_moving" 1024 70
+echo "== result_check: the coordinator's check of a worker result beside its merge (CPU time a task)"
+rc_out=$(mktemp -d "${TMPDIR:-/tmp}/result-check.XXXXXX")
+for job in pt-default detp-default detp-animation-batches quadrature-default radiosity-default; do
+    "$BIN/bench/result_check" "bench/scale/$job.json" "$rc_out/$job"
+done
+rm -rf "$rc_out"
