@@ -26,6 +26,7 @@ typedef struct child {
     int loaded;
     gi_asset_store *store;
     const char *batch_root;
+    gi_child_faults faults; /* read once, at the start */
 } child;
 
 static int send_msg(child *c, uint16_t type, const gi_buf *b, gi_error *err)
@@ -144,30 +145,6 @@ static int ensure_job(child *c, uint64_t job_id, gi_error *err)
     return 0;
 }
 
-/* The fault injection spec in env names run `attempt` of task_id. */
-static int fault_requested(const char *env, uint64_t task_id, uint32_t attempt)
-{
-    const char *spec = getenv(env);
-    if (!spec)
-        return 0;
-    const char *p = spec;
-    while (*p) {
-        char *end;
-        unsigned long long id = strtoull(p, &end, 10);
-        unsigned long at = 0;
-        if (end == p)
-            return 0;
-        if (*end == ':')
-            at = strtoul(end + 1, &end, 10);
-        if (id == task_id && at == attempt)
-            return 1;
-        while (*end && *end != ',')
-            end++;
-        p = *end ? end + 1 : end;
-    }
-    return 0;
-}
-
 static int handle_task(child *c, const gi_buf *payload, gi_error *err)
 {
     gi_msg_task m;
@@ -178,26 +155,25 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
     gi_buf result;
     gi_buf_init(&result);
     int rc = ensure_job(c, m.job_id, &terr);
-    if (rc == 0 && fault_requested(GI_FAULT_KILL_HOST_ENV, m.task.id, m.task.attempt)) {
+    if (rc == 0 && gi_fault_hits(&c->faults.kill_host, m.task.id, m.task.attempt)) {
         gi_warn("fault injection: task %llu kills this host's gi-worker (pid %ld)",
                 (unsigned long long)m.task.id, (long)getppid());
         kill(getppid(), SIGKILL);
         kill(getpid(), SIGKILL);
     }
-    if (rc == 0 && fault_requested(GI_FAULT_STOP_HOST_ENV, m.task.id, m.task.attempt)) {
+    if (rc == 0 && gi_fault_hits(&c->faults.stop_host, m.task.id, m.task.attempt)) {
         gi_warn("fault injection: task %llu stops this host's gi-worker (pid %ld)",
                 (unsigned long long)m.task.id, (long)getppid());
         kill(getppid(), SIGSTOP);
     }
-    if (rc == 0 && fault_requested(GI_FAULT_HANG_ENV, m.task.id, m.task.attempt)) {
+    if (rc == 0 && gi_fault_hits(&c->faults.hang, m.task.id, m.task.attempt)) {
         gi_warn("fault injection: task %llu hangs this child (pid %ld)",
                 (unsigned long long)m.task.id, (long)getpid());
         for (;;)
             pause();
     }
-    if (rc == 0 && fault_requested(GI_FAULT_SLOW_ENV, m.task.id, m.task.attempt)) {
-        const char *v = getenv(GI_FAULT_SLOW_S_ENV);
-        double secs = v ? atof(v) : 1.0;
+    if (rc == 0 && gi_fault_hits(&c->faults.slow, m.task.id, m.task.attempt)) {
+        double secs = c->faults.slow_s;
         gi_debug("fault injection: task %llu sleeps %.2f s first", (unsigned long long)m.task.id,
                  secs);
         if (secs > 0) {
@@ -208,10 +184,16 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
     }
     if (rc == 0)
         rc = gi_worker_run_task(&c->ctx, &m.task, &result, &terr);
-    if (rc == 0 && fault_requested(GI_FAULT_CRASH_ENV, m.task.id, m.task.attempt)) {
+    if (rc == 0 && gi_fault_hits(&c->faults.crash, m.task.id, m.task.attempt)) {
         gi_warn("fault injection: killing this child during task %llu",
                 (unsigned long long)m.task.id);
         kill(getpid(), SIGKILL);
+    }
+    if (rc == 0 && result.len > 0 &&
+        gi_fault_hits(&c->faults.bad_result, m.task.id, m.task.attempt)) {
+        gi_warn("fault injection: task %llu's result is sent one byte short",
+                (unsigned long long)m.task.id);
+        result.len--;
     }
     gi_buf out;
     gi_buf_init(&out);
@@ -235,6 +217,7 @@ int gi_child_main(int fd, const char *batch_root)
     c.batch_root = batch_root;
     c.limits = gi_frame_limits_default();
     c.store = gi_asset_store_new();
+    gi_child_faults_read(&c.faults);
     signal(SIGPIPE, SIG_IGN);
     pid_t parent = getppid();
     int status = 0;
@@ -286,6 +269,7 @@ int gi_child_main(int fd, const char *batch_root)
     for (int i = 0; i < c.def_count; i++)
         gi_msg_job_free(&c.defs[i]);
     gi_asset_store_free(c.store);
+    gi_child_faults_free(&c.faults);
     close(fd);
     return status;
 }
