@@ -108,41 +108,48 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
     return 0;
 }
 
-/* Decodes a batch's result into h, adding its sums into sum and hits
- * (NULL: only checks it). */
+/* Decodes a batch's result into h, checked against the frame's running
+ * totals (detp_decode_anim) and, with apply, added into them. */
 static int decode_result(const detp_state *st, const gi_task *t, const gi_buf *result,
-                         int64_t *sum, int64_t *hits, detp_anim_result *h, gi_error *err)
+                         int apply, detp_anim_result *h, gi_error *err)
 {
     const detp_anim_state *a = st->anim;
     gi_reader pr;
     gi_reader_init(&pr, t->payload.data, t->payload.len, "detp animation task");
     uint32_t frame = gi_get_u32(&pr), batch = gi_get_u32(&pr);
     if (pr.failed || frame != a->frame)
-        return gi_fail(err, GI_EPROTO, "detp task %llu: frame %u while at frame %u",
-                       (unsigned long long)t->id, frame, a->frame);
+        return gi_fail(err, GI_EPROTO, "a task of frame %u while at frame %u", frame,
+                       a->frame);
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp animation result");
-    if (detp_decode_anim(&r, st->nv, h, sum, hits, err))
-        return -1;
-    if (h->frame != frame || h->batch != batch)
-        return gi_fail(err, GI_EPROTO, "detp task %llu: result of frame %u batch %u",
-                       (unsigned long long)t->id, h->frame, h->batch);
+    /* Whose result it is, before anything is added. */
+    gi_reader head = r;
+    if (detp_anim_header_get(&head, h, 1) == 0 && (h->frame != frame || h->batch != batch))
+        return gi_fail(err, GI_EPROTO, "result of frame %u batch %u", h->frame, h->batch);
+    if (detp_decode_anim(&r, st->nv, h, a->sum, a->hits, apply, err))
+        return gi_error_prefix(err, "frame %u, batch %u", frame, batch);
     return 0;
 }
 
+/* The totals it reads are written only by merges, which run on the thread
+ * that checks, and by the frame's finish (on a thread of its own in
+ * gi-farmd), which starts once all the frame's tasks are merged: none is
+ * leased then, so none is checked. */
 int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
                     gi_error *err)
 {
     detp_anim_result h;
-    return decode_result(st, t, result, NULL, NULL, &h, err);
+    return decode_result(st, t, result, 0, &h, err);
 }
 
 int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err)
 {
     detp_anim_state *a = st->anim;
     detp_anim_result h;
-    if (decode_result(st, t, result, a->sum, a->hits, &h, err))
-        return -1;
+    /* Against the totals as they now stand: results merged since its
+     * arrival's check may have brought them close to the limit. */
+    if (decode_result(st, t, result, 1, &h, err))
+        return gi_error_prefix(err, "detp task %llu", (unsigned long long)t->id);
     uint32_t frame = h.frame;
     detp_anim_result *s = &a->tot;
     s->photons += h.photons;

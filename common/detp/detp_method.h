@@ -79,11 +79,15 @@ void detp_anim_header_put(const detp_anim_result *h, gi_buf *out);
 int detp_anim_header_get(gi_reader *r, detp_anim_result *h, int with_from_mobile);
 void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
                       uint32_t nv, gi_buf *out);
-/* Adds the result's sums into sum (3 per vertex) and hits; fails on a
- * malformed result or an overflow. With sum and hits NULL, only checks
- * the result. */
+/* Reads an animation batch's result into h; fails on a malformed one.
+ * sum (3 per vertex) and hits: the running totals it goes into (NULL: the
+ * result's form alone is checked); it also fails, naming the vertex, if
+ * adding it would overflow one of them. apply: adds it (else they are only
+ * read); one that fails leaves them as they were. Each vertex comes at most
+ * once in a result, so a pass without apply says exactly whether one with
+ * it succeeds. */
 int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
-                     int64_t *hits, gi_error *err);
+                     int64_t *hits, int apply, gi_error *err);
 
 /* The vertex of reference sample j (of m, over n vertices): evenly spread. */
 static inline uint32_t detp_reference_vertex(uint32_t j, uint32_t m, uint32_t n)
@@ -137,12 +141,16 @@ int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data
 /* Animations, coordinator side (detp_anim_job.c). The frame's state lives
  * in st->anim; st's per-frame counters and irr/hits are filled from it. */
 int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err);
-/* Refuses a batch's result that detp_anim_merge would refuse for what it
- * holds (all but an overflow of the sums, which depends on the merges
- * before), as it arrives: its run fails and the task runs again. */
+/* Refuses a batch's result that detp_anim_merge would refuse, as it
+ * arrives: its run fails and the task runs again. That includes sums that
+ * overflow the frame's running totals as merged so far; an overflow that
+ * needs results which arrived before it but are not merged yet (merges go
+ * in task order) is found only by the merge, which then fails the job. */
 int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
                     gi_error *err);
-/* Adds a batch's result; a malformed one fails the job (EPROTO). */
+/* Adds a batch's result; a malformed one, or one whose sums overflow the
+ * totals, fails the job (EPROTO: its message names the task, frame, batch,
+ * vertex and why) and leaves the totals as they were. */
 int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err);
 /* Before a frame's outputs: irr and hits from the exact sums, and the
  * coordinator's scene posed for the frame. */

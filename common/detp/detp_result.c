@@ -234,35 +234,64 @@ void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64
     }
 }
 
-static int add_checked(int64_t *into, int64_t v)
+/* Takes back, when an add fails, what it added: the entries before entry
+ * k and entry k's channels before c, read again from `from` (where they
+ * start). */
+static void anim_undo(gi_reader from, uint32_t k, int c, int64_t *sum, int64_t *hits)
 {
-    return __builtin_add_overflow(*into, v, into);
+    uint64_t i = 0;
+    for (uint32_t e = 0; e <= k; e++) {
+        i += get_varint(&from);
+        for (int ch = 0; ch < 4 && (e < k || ch < c); ch++)
+            *(ch < 3 ? &sum[3 * i + ch] : &hits[i]) -= unzigzag(get_varint(&from));
+    }
 }
 
 int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
-                     int64_t *hits, gi_error *err)
+                     int64_t *hits, int apply, gi_error *err)
 {
+    static const char *const what[4] = {"red sum", "green sum", "blue sum", "hit count"};
     if (detp_anim_header_get(r, h, 1))
         return gi_fail(err, GI_EPROTO, "%s: not a detp animation result", r->what);
     uint32_t count = gi_get_u32(r), nnz = gi_get_u32(r);
     if (r->failed || count != nv || nnz > nv)
         return gi_fail(err, GI_EPROTO, "%s: %u vertices (expected %u), %u entries", r->what,
                        count, nv, nnz);
+    const gi_reader entries = *r;
+    int undo = sum && apply;
     uint64_t i = 0;
     for (uint32_t k = 0; k < nnz; k++) {
         uint64_t step = get_varint(r);
         i += step;
-        int bad = r->failed || i >= nv || (k > 0 && step == 0);
-        /* Without sum the values are only read: an overflow of the sums
-         * depends on what was merged before, and is found at merge. */
-        for (int c = 0; c < 4 && !bad; c++) {
-            int64_t v = unzigzag(get_varint(r));
-            if (sum)
-                bad = add_checked(c < 3 ? &sum[3 * i + c] : &hits[i], v);
+        int c = 0;
+        if (!r->failed && i < nv && (k == 0 || step > 0)) {
+            for (; c < 4; c++) {
+                int64_t v = unzigzag(get_varint(r)), out;
+                if (r->failed)
+                    break;
+                if (!sum)
+                    continue;
+                int64_t *total = c < 3 ? &sum[3 * i + c] : &hits[i];
+                if (__builtin_add_overflow(*total, v, &out)) {
+                    gi_fail(err, GI_EPROTO,
+                            "%s: vertex %llu's %s overflows: %lld + %lld is out of range",
+                            r->what, (unsigned long long)i, what[c], (long long)*total,
+                            (long long)v);
+                    if (undo)
+                        anim_undo(entries, k, c, sum, hits);
+                    return -1;
+                }
+                if (apply)
+                    *total = out;
+            }
         }
-        bad = bad || r->failed;
-        if (bad)
+        if (c < 4) {
+            if (undo)
+                anim_undo(entries, k, c, sum, hits);
             return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
+        }
     }
+    if (r->left && undo) /* trailing bytes, which gi_reader_finish refuses */
+        anim_undo(entries, nnz, 0, sum, hits);
     return gi_reader_finish(r, err);
 }

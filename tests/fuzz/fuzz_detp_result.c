@@ -2,9 +2,12 @@
  * photon batch results (dense and sparse forms) and animation frame results
  * (exact integer sums). The first byte picks the decoder. Any input must
  * decode or fail with GI_EPROTO; never crash, leak or hang. The check-only
- * decode (NULL sums, what the coordinator runs as a result arrives) must
- * agree with the real decode into zeroed sums (each vertex comes once, so
- * one result alone never overflows them). */
+ * decode (NULL sums: the result's form alone) must agree with the real
+ * decode into zeroed sums (each vertex comes once, so one result alone never
+ * overflows them); against totals near the limits, the decode that only
+ * reads them (the coordinator's check as a result arrives) must agree with
+ * the one that adds, and an add that fails must leave the totals as they
+ * were. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,8 +30,34 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (data[0] & 2) {
         int64_t sum[3 * VERTICES] = {0}, hits[VERTICES] = {0};
         detp_anim_result h;
-        rc = detp_decode_anim(&r, VERTICES, &h, sum, hits, &err);
-        check_rc = detp_decode_anim(&check, VERTICES, &h, NULL, NULL, &check_err);
+        rc = detp_decode_anim(&r, VERTICES, &h, sum, hits, 1, &err);
+        check_rc = detp_decode_anim(&check, VERTICES, &h, NULL, NULL, 0, &check_err);
+        for (size_t i = 0; rc && i < VERTICES; i++)
+            if (sum[3 * i] || sum[3 * i + 1] || sum[3 * i + 2] || hits[i])
+                abort(); /* a refused add leaves the totals as they were */
+        /* Against totals near both limits: the pass that only reads them
+         * says exactly whether the one that adds succeeds. */
+        int64_t near[3 * VERTICES], near_hits[VERTICES];
+        for (size_t i = 0; i < 3 * VERTICES; i++)
+            near[i] = i & 1 ? INT64_MIN + (int64_t)i : INT64_MAX - (int64_t)i;
+        for (size_t i = 0; i < VERTICES; i++)
+            near_hits[i] = INT64_MAX - (int64_t)i;
+        gi_reader a, b;
+        gi_reader_init(&a, data + 1, size - 1, "fuzz");
+        b = a;
+        int64_t kept[3 * VERTICES], kept_hits[VERTICES];
+        memcpy(kept, near, sizeof kept);
+        memcpy(kept_hits, near_hits, sizeof kept_hits);
+        int only_read = detp_decode_anim(&a, VERTICES, &h, near, near_hits, 0, &check_err);
+        if (memcmp(kept, near, sizeof kept) || memcmp(kept_hits, near_hits, sizeof kept_hits))
+            abort(); /* only read */
+        int added = detp_decode_anim(&b, VERTICES, &h, near, near_hits, 1, &check_err);
+        if ((only_read == 0) != (added == 0))
+            abort();
+        /* A refused add leaves the totals as they were. */
+        if (added && (memcmp(kept, near, sizeof kept) ||
+                      memcmp(kept_hits, near_hits, sizeof kept_hits)))
+            abort();
     } else {
         double irr[3 * VERTICES] = {0};
         uint64_t hits[VERTICES] = {0};

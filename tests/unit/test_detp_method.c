@@ -392,13 +392,124 @@ GI_TEST(test_detp_malformed_batch_results_are_retried)
     GI_REQUIRE_OK(load(anim_path, "out-badres-anim", &job, &ctx, &err));
     ctx.batch_dir = gi_path_join(gi_test_tmpdir(), "badres-anim-batches");
     GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
-    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp animation result", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT,
+                               "frame 0, batch 0: detp animation result", &err));
     GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_ANIM_BATCH,
-                               "detp task 0: result of frame 0 batch 1", &err));
-    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp animation result", &err));
+                               "result of frame 0 batch 1", &err));
+    GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING,
+                               "frame 0, batch 0: detp animation result", &err));
     GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
     GI_CHECK(jr.finished && !jr.failed);
     gi_jobrun_free(&jr);
     gi_worker_ctx_free(&ctx);
     gi_job_free(&job);
+}
+
+/* The animation batch result `in` (of a job with nv vertices) with vertex
+ * v's red sum set to red, into out. */
+static int set_red_sum(const gi_buf *in, uint32_t nv, uint32_t v, int64_t red, gi_buf *out,
+                       gi_error *err)
+{
+    int64_t *sum = gi_xcalloc((size_t)nv * 3, sizeof *sum);
+    int64_t *hits = gi_xcalloc(nv, sizeof *hits);
+    detp_anim_result h;
+    gi_reader r;
+    gi_reader_init(&r, in->data, in->len, "test result");
+    int rc = detp_decode_anim(&r, nv, &h, sum, hits, 1, err);
+    if (rc == 0) {
+        sum[3 * (size_t)v] = red;
+        gi_buf_init(out);
+        detp_encode_anim(&h, sum, hits, nv, out);
+    }
+    free(sum);
+    free(hits);
+    return rc;
+}
+
+/* Runs leased task t on ctx into res, then sets vertex v's red sum to red. */
+static int run_with_red_sum(gi_worker_ctx *ctx, const gi_job *job, const gi_task *t,
+                            uint32_t v, int64_t red, gi_buf *res, gi_error *err)
+{
+    gi_buf plain;
+    gi_buf_init(&plain);
+    int rc = gi_worker_run_task(ctx, t, &plain, err);
+    if (rc == 0)
+        rc = set_red_sum(&plain, job->scene.vertex_count, v, red, res, err);
+    gi_buf_free(&plain);
+    return rc;
+}
+
+/* Sums that are each in range but overflow the frame's running total: one
+ * that overflows the total merged so far is refused as it arrives, naming
+ * the frame, batch, vertex and why, and the task runs again; one that only
+ * overflows with a result that arrived before it but merges before it
+ * (merges go in task order) is found by the merge, which fails the job
+ * saying the same. */
+GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
+{
+    char text[2048], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
+             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
+             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
+             "  \"tile\": 8, \"image_spp\": 1,"
+             "  \"animation\": {\"object\": \"mobile\", \"frames\": 2,"
+             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
+             "                   {\"frame\": 1, \"translate\": [248, -338.9, -0.4]}]}},"
+             " \"outputs\": {\"exr\": \"a.exr\"}}",
+             gi_test_srcdir());
+    snprintf(path, sizeof path, "%s/overflow-anim.json", gi_test_tmpdir());
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
+    const uint32_t v = 7;
+    const int64_t half = INT64_MAX / 2 + 1; /* twice that overflows */
+    for (int at_merge = 0; at_merge < 2; at_merge++) {
+        gi_job job;
+        gi_worker_ctx ctx;
+        gi_jobrun jr;
+        GI_REQUIRE_OK(load(path, at_merge ? "out-overflow-merge" : "out-overflow", &job, &ctx,
+                           &err));
+        ctx.batch_dir = gi_path_join(gi_test_tmpdir(), at_merge ? "overflow-merge-batches"
+                                                                : "overflow-batches");
+        GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+        const gi_task *t0 = gi_jobrun_lease(&jr), *t1 = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t0 && t1 && t0->id == 0 && t1->id == 1);
+        gi_buf r0, r1;
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t0, v, half, &r0, &err));
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t1, v, half, &r1, &err));
+        gi_task_stats stats = {0};
+        char want[256];
+        if (!at_merge) {
+            /* Batch 0 merged first: batch 1's sum overflows its total. */
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
+            GI_CHECK_OK(gi_jobrun_complete(&jr, 0, 0, &r0, &stats));
+            snprintf(want, sizeof want,
+                     "task 1's result: frame 0, batch 1: detp animation result: vertex %u's "
+                     "red sum overflows: %lld + %lld is out of range",
+                     v, (long long)half, (long long)half);
+            /* (The merge of task 0 may have moved the tasks: t1 is stale.) */
+            GI_CHECK_OK(gi_test_refuse(&jr, &gi_jobrun_task_at(&jr, 1)->task, &r1, want, &err));
+            GI_CHECK(jr.retries == 1);
+            GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+            GI_CHECK_MSG(jr.finished && !jr.failed, "%s", jr.error.msg);
+        } else {
+            /* Batch 1 arrives first and waits for batch 0: each passes its
+             * check against the empty totals, their merges overflow. */
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 1, &r1, &err));
+            GI_CHECK_OK(gi_jobrun_complete(&jr, 1, 0, &r1, &stats));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
+            GI_CHECK(gi_jobrun_complete(&jr, 0, 0, &r0, &stats) != 0);
+            snprintf(want, sizeof want,
+                     "detp task 1: frame 0, batch 1: detp animation result: vertex %u's "
+                     "red sum overflows: %lld + %lld is out of range",
+                     v, (long long)half, (long long)half);
+            GI_CHECK(jr.failed && jr.error.code == GI_EPROTO);
+            GI_CHECK_MSG(strcmp(jr.error.msg, want) == 0, "%s", jr.error.msg);
+        }
+        gi_buf_free(&r0);
+        gi_buf_free(&r1);
+        gi_jobrun_free(&jr);
+        gi_worker_ctx_free(&ctx);
+        gi_job_free(&job);
+    }
 }
