@@ -32,6 +32,28 @@ static char *write_job(const char *name, const char *estimator, const char *extr
     return gi_xstrdup(path);
 }
 
+/* An animation of the Cornell box's mobile over `frames` frames, two
+ * photon batches a frame. */
+static char *write_anim_job(const char *name, int frames)
+{
+    char text[2048], path[600];
+    snprintf(text, sizeof text,
+             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
+             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
+             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
+             "  \"tile\": 8, \"image_spp\": 1,"
+             "  \"animation\": {\"object\": \"mobile\", \"frames\": %d,"
+             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
+             "                   {\"frame\": %d, \"translate\": [248, -338.9, -0.4]}]}},"
+             " \"outputs\": {\"exr\": \"a.exr\"}}",
+             gi_test_srcdir(), frames, frames - 1);
+    snprintf(path, sizeof path, "%s/%s", gi_test_tmpdir(), name);
+    gi_error err;
+    if (gi_write_file_atomic(path, text, strlen(text), &err))
+        return NULL;
+    return gi_xstrdup(path);
+}
+
 static int load(const char *path, const char *out, gi_job *job, gi_worker_ctx *ctx,
                 gi_error *err)
 {
@@ -234,24 +256,14 @@ static int copy_from_coordinator(void *fctx, const char *hash, gi_error *err)
  * holds every frame's for the life of the job. */
 GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
 {
-    char text[2048], path[600];
-    snprintf(text, sizeof text,
-             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
-             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
-             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
-             "  \"tile\": 8, \"image_spp\": 1,"
-             "  \"animation\": {\"object\": \"mobile\", \"frames\": %d,"
-             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
-             "                   {\"frame\": %d, \"translate\": [248, -338.9, -0.4]}]}},"
-             " \"outputs\": {\"exr\": \"a.exr\"}}",
-             gi_test_srcdir(), GI_WORKER_BLOBS_KEPT + 4, GI_WORKER_BLOBS_KEPT + 3);
-    snprintf(path, sizeof path, "%s/anim-blobs.json", gi_test_tmpdir());
+    char *path = write_anim_job("anim-blobs.json", GI_WORKER_BLOBS_KEPT + 4);
+    GI_REQUIRE(path != NULL);
     gi_error err;
-    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
     gi_job job;
     gi_worker_ctx ctx;
     gi_jobrun jr;
     GI_REQUIRE_OK(load(path, "out-anim-blobs", &job, &ctx, &err));
+    free(path);
     /* A worker with a store of its own, as in a pool child. */
     gi_asset_store *worker_store = gi_asset_store_new();
     for (size_t i = 0; i < gi_asset_store_count(job.assets); i++) {
@@ -376,20 +388,10 @@ GI_TEST(test_detp_malformed_batch_results_are_retried)
     gi_worker_ctx_free(&ctx);
     gi_job_free(&job);
 
-    char text[2048], anim_path[600];
-    snprintf(text, sizeof text,
-             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
-             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
-             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
-             "  \"tile\": 8, \"image_spp\": 1,"
-             "  \"animation\": {\"object\": \"mobile\", \"frames\": 2,"
-             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
-             "                   {\"frame\": 1, \"translate\": [248, -338.9, -0.4]}]}},"
-             " \"outputs\": {\"exr\": \"a.exr\"}}",
-             gi_test_srcdir());
-    snprintf(anim_path, sizeof anim_path, "%s/badres-anim.json", gi_test_tmpdir());
-    GI_REQUIRE_OK(gi_write_file_atomic(anim_path, text, strlen(text), &err));
+    char *anim_path = write_anim_job("badres-anim.json", 2);
+    GI_REQUIRE(anim_path != NULL);
     GI_REQUIRE_OK(load(anim_path, "out-badres-anim", &job, &ctx, &err));
+    free(anim_path);
     ctx.batch_dir = gi_path_join(gi_test_tmpdir(), "badres-anim-batches");
     GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
     GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT,
@@ -447,20 +449,9 @@ static int run_with_red_sum(gi_worker_ctx *ctx, const gi_job *job, const gi_task
  * saying the same. */
 GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
 {
-    char text[2048], path[600];
-    snprintf(text, sizeof text,
-             "{\"scene\": \"%s/scenes/cornell-box/scene-mobile.json\", \"method\": \"detp\","
-             " \"seed\": 5, \"image\": {\"width\": 16, \"height\": 12},"
-             " \"detp\": {\"photons\": 6000, \"batch\": 3000, \"subdivide\": \"14%%\","
-             "  \"tile\": 8, \"image_spp\": 1,"
-             "  \"animation\": {\"object\": \"mobile\", \"frames\": 2,"
-             "   \"keyframes\": [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
-             "                   {\"frame\": 1, \"translate\": [248, -338.9, -0.4]}]}},"
-             " \"outputs\": {\"exr\": \"a.exr\"}}",
-             gi_test_srcdir());
-    snprintf(path, sizeof path, "%s/overflow-anim.json", gi_test_tmpdir());
+    char *path = write_anim_job("overflow-anim.json", 2);
+    GI_REQUIRE(path != NULL);
     gi_error err;
-    GI_REQUIRE_OK(gi_write_file_atomic(path, text, strlen(text), &err));
     const uint32_t v = 7;
     const int64_t half = INT64_MAX / 2 + 1; /* twice that overflows */
     for (int at_merge = 0; at_merge < 2; at_merge++) {
@@ -512,4 +503,5 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         gi_worker_ctx_free(&ctx);
         gi_job_free(&job);
     }
+    free(path);
 }
