@@ -145,7 +145,12 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
  * arrives: its run fails and the task runs again. That includes sums that
  * overflow the frame's running totals as merged so far; an overflow that
  * needs results which arrived before it but are not merged yet (merges go
- * in task order) is found only by the merge, which then fails the job. */
+ * in task order) is found only by the merge, which then fails the job.
+ * (Conversely, a total within one result of the limit that those results
+ * would bring back down could refuse it wrongly; it runs again, and fails
+ * the job only if refused on every attempt. Real sums stay many powers of
+ * two below the limit: a vertex gets a small share of a job's photons, each
+ * worth about 2^32 units.) */
 int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
                     gi_error *err);
 /* Adds a batch's result; a malformed one, or one whose sums overflow the
