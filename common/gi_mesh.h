@@ -9,10 +9,17 @@
 #include "gi_error.h"
 #include "gi_math.h"
 
+/* The longest material name a mesh file may give, in bytes. assimp keeps at
+ * most 1023 (its aiString): a longer OBJ material name is dropped with the
+ * material's colours, a glTF one is cut, both silently. The limit is below
+ * that, so that a name assimp cut is always over it and refused (a scene
+ * and a relight's emissions file name the materials by it). */
+#define GI_MESH_NAME_MAX 1000
+
 /* A material as a mesh file describes it (OBJ .mtl Kd/Ke, glTF baseColor and
  * emissive, PLY has none). */
 typedef struct gi_mesh_material {
-    char *name;
+    char *name; /* at most GI_MESH_NAME_MAX bytes, + "#<index>" when made unique */
     gi_vec3 diffuse;
     gi_vec3 emission;
 } gi_mesh_material;

@@ -2,7 +2,8 @@
  * triangles), refusing what cannot be rendered. assimp vouches for the
  * structure (every array as long as its count); the values are the file's:
  * counts, face indices, material indices, coordinates and colours are
- * checked here (fuzz_mesh_convert builds such scenes from fuzz bytes). */
+ * checked here, and the length of material names (fuzz_mesh_convert builds
+ * such scenes from fuzz bytes). */
 #include "gi_mesh_convert.h"
 
 #include <assimp/material.h>
@@ -79,14 +80,25 @@ static void default_material(gi_mesh_material *m)
     m->emission = gi_v3(0.0f, 0.0f, 0.0f);
 }
 
-static void read_material(const struct aiMaterial *am, uint32_t index, gi_mesh_material *m)
+/* A name at assimp's limit may be one it cut (glTF; an OBJ's is dropped
+ * whole, gi_mesh_precheck says so with its line): refused like one over
+ * ours, as it is not the name the file gives. */
+static int read_material(const struct aiMaterial *am, uint32_t index, const char *file,
+                         gi_mesh_material *m, gi_error *err)
 {
     if (is_stand_in(am)) {
         default_material(m);
-        return;
+        return 0;
     }
     struct aiString name;
     if (aiGetMaterialString(am, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.data[0]) {
+        size_t n = strlen(name.data);
+        if (n > GI_MESH_NAME_MAX)
+            return gi_fail(err, GI_EINVAL,
+                           "%s: material %u: its name (\"%.24s...\") is %s%zu bytes long, over "
+                           "the limit of %d",
+                           file, index, name.data, n + 1 >= MAXLEN ? "at least " : "", n,
+                           GI_MESH_NAME_MAX);
         m->name = gi_xstrdup(name.data);
     } else {
         char buf[32];
@@ -111,6 +123,7 @@ static void read_material(const struct aiMaterial *am, uint32_t index, gi_mesh_m
             aiReturn_SUCCESS &&
         one == 1)
         m->emission = gi_scale(m->emission, strength);
+    return 0;
 }
 
 /* Material names must be unique within a mesh (the scene looks them up by
@@ -224,7 +237,11 @@ int gi_mesh_from_assimp(const struct aiScene *sc, const gi_buf *const *mtl_libs,
     int is_obj = nl >= 4 && strcasecmp(name + nl - 4, ".obj") == 0;
     for (uint32_t i = 0; i < used; i++) {
         gi_mesh_material *m = &out->materials[i];
-        read_material(sc->mMaterials[file_index[i]], file_index[i], m);
+        if (read_material(sc->mMaterials[file_index[i]], file_index[i], name, m, err)) {
+            free(map);
+            free(file_index);
+            return -1;
+        }
         if (is_obj && strcmp(m->name, "default") != 0 &&
             !mtl_defines(mtl_libs, mtl_count, m->name)) {
             gi_warn("%s: material \"%s\" is not defined by any material library read; "

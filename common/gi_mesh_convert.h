@@ -18,8 +18,8 @@
  * read (name ends in .obj): a material that usemtl names but none of them
  * defines gets the default colours. Fails, naming `name`, on a scene
  * without triangles, a face index past its mesh's vertices, a vertex that is
- * not finite, a material index past the scene's materials, or more than
- * 2^31 vertices or triangles. Normals that are not all finite are dropped
+ * not finite, a material index past the scene's materials, a material name
+ * longer than GI_MESH_NAME_MAX, or more than 2^31 vertices or triangles. Normals that are not all finite are dropped
  * (computed at scene build). out must be freshly initialized; on failure it
  * may hold partial arrays (gi_mesh_data_free them). */
 int gi_mesh_from_assimp(const struct aiScene *sc, const gi_buf *const *mtl_libs,

@@ -8,9 +8,9 @@
 
 _Static_assert(sizeof(gi_vec3) == 3 * sizeof(float), "a gi_vec3 is 3 packed floats");
 
-/* Longest material name: assimp's aiString holds 1024 bytes; the room
- * above it is for make_names_unique's "#<index>" suffixes. */
-#define MAX_NAME 4096
+/* Longest material name: what gi_mesh_from_assimp lets through, and the
+ * "#<index>" (at most 11 bytes) that makes it unique. */
+#define MAX_NAME (GI_MESH_NAME_MAX + 11)
 
 void gi_mesh_encode(gi_buf *b, const gi_mesh_data *m)
 {

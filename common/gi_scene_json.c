@@ -310,15 +310,19 @@ static int parse_object(gi_jv *v, gi_scene_builder *b, const gi_asset_source *sr
                 map[i] = (uint32_t)mat_index;
                 continue;
             }
-            /* The file's own materials, named "<object>/<material>". */
+            /* The file's own materials, named "<object>/<material>" in
+             * full: two names cut to one length would be one material. */
             const gi_mesh_material *mm = mesh.material_count ? &mesh.materials[i] : NULL;
-            char mname[512];
-            snprintf(mname, sizeof mname, "%s/%s", name, mm && mm->name ? mm->name : "default");
+            const char *mat = mm && mm->name ? mm->name : "default";
+            size_t len = strlen(name) + 1 + strlen(mat) + 1;
+            char *mname = gi_xmalloc(len);
+            snprintf(mname, len, "%s/%s", name, mat);
             int idx = gi_scene_material_index(b->scene, mname);
             if (idx < 0) {
                 gi_material m = gi_material_from_mesh(mm, mname, v->file);
                 idx = gi_scene_add_material(b, &m, v->err);
             }
+            free(mname);
             if (idx < 0)
                 rc = -1;
             else

@@ -11,14 +11,17 @@
  *   per library: u16 length, the bytes
  *   u8 materials (% 5); per material: u8 properties (bit 0 name, 1 the
  *     default name, 2 diffuse, 3 emissive, 4 base colour, 5 emissive
- *     intensity), u8 name length + name, 3 f32 per colour, f32 intensity
+ *     intensity, 6 a long name: its bytes repeated to 8 times their
+ *     length, at most the 1023 an aiString holds), u8 name length + name,
+ *     3 f32 per colour, f32 intensity
  *   u8 meshes (% 5); per mesh: u8 vertices, u8 faces, u8 material index,
  *     u8 flags (bit 0 normals), then f32 x, y, z per vertex, then normals,
  *     then per face u8 corner count (% 4 + 1) and a u8 index per corner
  *
  * Any input must convert or fail with a one-line message naming the file;
  * a mesh that converts must hold exactly the scene's triangles, in range,
- * finite, with unique material names. */
+ * finite, with unique material names, and reach the parent: what
+ * gi_mesh_encode makes of it, gi_mesh_decode takes back unchanged. */
 #include <assimp/material.h>
 #include <assimp/scene.h>
 #include <math.h>
@@ -28,6 +31,7 @@
 
 #include "gi_log.h"
 #include "gi_mesh_convert.h"
+#include "gi_mesh_wire.h"
 #include "gi_scene.h"
 #include "gi_scene_build.h"
 
@@ -72,7 +76,7 @@ static void add_prop(struct aiMaterial *m, const char *key, unsigned semantic, u
 /* A string property as assimp stores one: u32 length, the characters, NUL. */
 static void add_name(struct aiMaterial *m, const char *s, uint32_t n)
 {
-    char buf[4 + 256];
+    char buf[4 + MAXLEN];
     memcpy(buf, &n, 4);
     memcpy(buf + 4, s, n);
     buf[4 + n] = '\0';
@@ -85,10 +89,15 @@ static struct aiMaterial *make_material(bytes *b)
     m->mNumAllocated = 6;
     m->mProperties = calloc(m->mNumAllocated, sizeof *m->mProperties);
     uint8_t which = get_u8(b);
-    uint8_t n = get_u8(b);
-    char name[256];
+    unsigned n = get_u8(b);
+    char name[MAXLEN];
     for (unsigned i = 0; i < n; i++)
         name[i] = (char)get_u8(b);
+    if (which & 64) { /* around the conversion's limit, which is under assimp's */
+        unsigned n0 = n, want = 8 * n0 < MAXLEN - 1 ? 8 * n0 : MAXLEN - 1;
+        for (; n < want; n++)
+            name[n] = name[n % n0];
+    }
     if (which & 1)
         add_name(m, name, n);
     else if (which & 2)
@@ -205,6 +214,26 @@ static void check_mesh(const struct aiScene *sc, const gi_mesh_data *m)
     }
 }
 
+/* The parent takes the mesh back as it was converted. */
+static void check_wire(const gi_mesh_data *m)
+{
+    gi_buf b, again;
+    gi_buf_init(&b);
+    gi_buf_init(&again);
+    gi_mesh_encode(&b, m);
+    gi_mesh_data d;
+    gi_mesh_data_init(&d);
+    gi_error err;
+    if (gi_mesh_decode(b.data, b.len, "fuzz", &d, &err) != 0)
+        abort();
+    gi_mesh_encode(&again, &d);
+    if (again.len != b.len || memcmp(again.data, b.data, b.len) != 0)
+        abort();
+    gi_mesh_data_free(&d);
+    gi_buf_free(&again);
+    gi_buf_free(&b);
+}
+
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     gi_log_set_level(GI_LOG_ERROR); /* dropped normals, undefined materials are warned about */
@@ -245,9 +274,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_mesh_data_init(&m);
     gi_error err;
     gi_error_clear(&err);
-    if (gi_mesh_from_assimp(&sc, lib_ptrs, nlibs, name, &m, &err) == 0)
+    if (gi_mesh_from_assimp(&sc, lib_ptrs, nlibs, name, &m, &err) == 0) {
         check_mesh(&sc, &m);
-    else if (strchr(err.msg, '\n') || !strstr(err.msg, name))
+        check_wire(&m);
+    } else if (strchr(err.msg, '\n') || !strstr(err.msg, name))
         abort();
     gi_mesh_data_free(&m);
 

@@ -2,6 +2,7 @@
  * and a message that breaks what the child's conversion guarantees is
  * refused by the parent. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "gi_buf.h"
@@ -65,6 +66,37 @@ GI_TEST(mesh_wire_refuses_what_the_conversion_never_sends)
         GI_CHECK_MSG(gi_mesh_decode(b.data, b.len, "q.obj", &d, &err) == -1 &&
                          strstr(err.msg, "q.obj") && strstr(err.msg, expect[c]),
                      "case %d: %s", c, err.msg);
+        gi_mesh_data_free(&d);
+        gi_mesh_data_free(&m);
+        gi_buf_free(&b);
+    }
+}
+
+/* The longest name the conversion makes (GI_MESH_NAME_MAX bytes, made
+ * unique with the largest "#<index>") reaches the parent; a longer one
+ * is not something the child sends. */
+GI_TEST(mesh_wire_carries_the_longest_material_name)
+{
+    for (int extra = 0; extra < 2; extra++) {
+        gi_mesh_data m, d;
+        two_triangles(&m);
+        size_t n = GI_MESH_NAME_MAX + strlen("#4294967295") + (size_t)extra;
+        free(m.materials[0].name);
+        m.materials[0].name = gi_xmalloc(n + 1);
+        memset(m.materials[0].name, 'n', n);
+        m.materials[0].name[n] = '\0';
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_mesh_encode(&b, &m);
+        gi_error err;
+        gi_error_clear(&err);
+        gi_mesh_data_init(&d);
+        int rc = gi_mesh_decode(b.data, b.len, "q.obj", &d, &err);
+        if (extra == 0)
+            GI_CHECK_MSG(rc == 0 && strcmp(d.materials[0].name, m.materials[0].name) == 0, "%s",
+                         err.msg);
+        else
+            GI_CHECK_MSG(rc == -1 && strstr(err.msg, "q.obj"), "a %zu-byte name decoded", n);
         gi_mesh_data_free(&d);
         gi_mesh_data_free(&m);
         gi_buf_free(&b);

@@ -1,11 +1,14 @@
 /* Unit tests: scene files (JSON), assembly checks, lights, camera. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "gi_camera.h"
+#include "gi_fs.h"
 #include "gi_light.h"
 #include "gi_rng.h"
+#include "gi_scene_build.h"
 #include "gi_test.h"
 #include "test_helpers.h"
 
@@ -178,6 +181,47 @@ GI_TEST(test_scene_of_meshes_needs_no_materials_block)
              gi_test_srcdir());
     GI_REQUIRE_OK(gi_test_load_scene_text("meshes.json", text, &s, &err));
     GI_CHECK(s.object_count == 1 && s.material_count == 2 && s.total_power > 0);
+    gi_scene_free(&s);
+}
+
+/* A mesh file's materials are the scene's "<object>/<material>" in full:
+ * two names that differ only after 500 bytes stay two materials (they
+ * were cut to 511 bytes and became one, with the first one's colours). */
+GI_TEST(test_scene_mesh_material_names_are_kept_whole)
+{
+    char base[601];
+    memset(base, 'm', 600);
+    base[600] = '\0';
+    char obj[1600], mtl[1600], text[600];
+    snprintf(obj, sizeof obj,
+             "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+             "usemtl %s1\nf 1 2 3\nusemtl %s2\nf 2 4 3\n",
+             base, base);
+    snprintf(mtl, sizeof mtl, "newmtl %s1\nKd 0.5 0.5 0.5\nnewmtl %s2\nKd 0 0 0\nKe 1 1 1\n",
+             base, base);
+    char *po = gi_path_join(gi_test_tmpdir(), "two.obj");
+    char *pm = gi_path_join(gi_test_tmpdir(), "two.mtl");
+    gi_error err;
+    GI_REQUIRE_OK(gi_write_file_atomic(po, obj, strlen(obj), &err));
+    GI_REQUIRE_OK(gi_write_file_atomic(pm, mtl, strlen(mtl), &err));
+    free(po);
+    free(pm);
+    char object[301];
+    memset(object, 'o', 300);
+    object[300] = '\0';
+    snprintf(text, sizeof text, "{\"objects\": [{\"name\": \"%s\", \"mesh\": \"two.obj\"}]}",
+             object);
+    gi_scene s;
+    GI_REQUIRE_OK(gi_test_load_scene_text("names.json", text, &s, &err));
+    GI_CHECK(s.material_count == 2);
+    for (int k = 1; k <= 2; k++) {
+        char full[1000];
+        snprintf(full, sizeof full, "%s/%s%d", object, base, k);
+        int m = gi_scene_material_index(&s, full);
+        GI_CHECK_MSG(m >= 0, "material %d is missing", k);
+        if (m >= 0)
+            GI_CHECK(gi_is_black(s.materials[m].emission) == (k == 1));
+    }
     gi_scene_free(&s);
 }
 
