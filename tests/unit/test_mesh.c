@@ -559,15 +559,129 @@ GI_TEST(mesh_import_malformed_files)
     expect_failure(gi_test_tmpdir(), "lines.obj", GI_EINVAL, "no triangles");
 }
 
+/* ---- material names ---------------------------------------------------- */
+
+/* n bytes of "abc...zabc...". */
+static char *long_name(size_t n)
+{
+    char *s = gi_xmalloc(n + 1);
+    for (size_t i = 0; i < n; i++)
+        s[i] = (char)('a' + i % 26);
+    s[n] = '\0';
+    return s;
+}
+
+/* named.obj + named.mtl: one triangle of material `name` (Kd 0.5 0.25
+ * 0.125); named.gltf + named.bin: make_gltf.py's quad, its material named
+ * `name`. */
+static void write_named_meshes(const char *name)
+{
+    gi_buf b;
+    gi_buf_init(&b);
+    static const char head[] = "mtllib named.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl ";
+    gi_buf_put(&b, head, sizeof head - 1);
+    gi_buf_put(&b, name, strlen(name));
+    gi_buf_put(&b, "\nf 1 2 3\n", 9);
+    write_tmp("named.obj", b.data, b.len);
+    gi_buf_reset(&b);
+    gi_buf_put(&b, "newmtl ", 7);
+    gi_buf_put(&b, name, strlen(name));
+    static const char kd[] = "\nKd 0.5 0.25 0.125\n";
+    gi_buf_put(&b, kd, sizeof kd - 1);
+    write_tmp("named.mtl", b.data, b.len);
+    gi_buf_reset(&b);
+    gltf_buffer(&b);
+    write_tmp("named.bin", b.data, b.len);
+    gi_buf_reset(&b);
+    char *json = gltf_json("\"uri\": \"named.bin\", ");
+    const char *glow = strstr(json, "\"glow\"");
+    gi_buf_put(&b, json, (size_t)(glow - json) + 1);
+    gi_buf_put(&b, name, strlen(name));
+    gi_buf_put(&b, glow + 5, strlen(glow + 5));
+    write_tmp("named.gltf", b.data, b.len);
+    free(json);
+    gi_buf_free(&b);
+}
+
+/* Names up to GI_MESH_NAME_MAX come through whole, with their colours;
+ * longer ones are refused, naming the file, the material and the length.
+ * assimp 5.2 drops an OBJ material named longer than 1023 bytes (its
+ * aiString) with its colours, and cuts a glTF one there, both silently. */
+GI_TEST(mesh_import_material_name_lengths)
+{
+    static const size_t lengths[] = {1, GI_MESH_NAME_MAX, GI_MESH_NAME_MAX + 1, 1022, 1023,
+                                     1100, 5000};
+    for (size_t i = 0; i < GI_ARRAY_LEN(lengths); i++) {
+        size_t n = lengths[i];
+        char *name = long_name(n);
+        write_named_meshes(name);
+        if (n <= GI_MESH_NAME_MAX) {
+            static const char *const files[] = {"named.obj", "named.gltf"};
+            for (int f = 0; f < 2; f++) {
+                gi_dir_source d;
+                gi_mesh_data m;
+                gi_error err;
+                int rc = import_from(gi_test_tmpdir(), files[f], &d, &m, &err);
+                GI_CHECK_MSG(rc == 0, "%s, name of %zu bytes: %s", files[f], n, err.msg);
+                if (rc == 0) {
+                    GI_CHECK(m.material_count == 1 && strcmp(m.materials[0].name, name) == 0);
+                    gi_vec3 kd = f == 0 ? gi_v3(0.5f, 0.25f, 0.125f) : gi_v3(0.2f, 0.4f, 0.6f);
+                    GI_CHECK(near3(m.materials[0].diffuse, kd, 1e-6f));
+                }
+                gi_mesh_data_free(&m);
+                gi_dir_source_free(&d);
+            }
+        } else {
+            char want[256];
+            snprintf(want, sizeof want,
+                     "line 5: usemtl: the material's name (\"%.24s...\") is %zu bytes long, "
+                     "over the limit of %d",
+                     name, n, GI_MESH_NAME_MAX);
+            expect_failure(gi_test_tmpdir(), "named.obj", GI_EINVAL, want);
+            /* assimp keeps 1023 bytes of a glTF name: one that long may be cut. */
+            snprintf(want, sizeof want,
+                     "material 0: its name (\"%.24s...\") is %s%zu bytes long, over the limit "
+                     "of %d",
+                     name, n >= 1023 ? "at least " : "", n >= 1023 ? (size_t)1023 : n,
+                     GI_MESH_NAME_MAX);
+            expect_failure(gi_test_tmpdir(), "named.gltf", GI_EINVAL, want);
+        }
+        free(name);
+    }
+}
+
+/* An OBJ of a triangle's three vertices and `body`: it must import (`also`
+ * NULL) or fail with a message naming it and containing `also`. */
+typedef struct obj_case {
+    const char *body, *also;
+} obj_case;
+
+static void check_obj_cases(const char *file, const obj_case *cases, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        char text[256];
+        snprintf(text, sizeof text, "v 0 0 0\nv 1 0 0\nv 0 1 0\n%s", cases[i].body);
+        write_tmp(file, text, strlen(text));
+        if (cases[i].also) {
+            expect_failure(gi_test_tmpdir(), file, GI_EINVAL, cases[i].also);
+            continue;
+        }
+        gi_dir_source d;
+        gi_mesh_data m;
+        gi_error err;
+        GI_CHECK_MSG(import_from(gi_test_tmpdir(), file, &d, &m, &err) == 0, "case %zu: %s", i,
+                     err.msg);
+        gi_mesh_data_free(&m);
+        gi_dir_source_free(&d);
+    }
+}
+
 /* OBJ faces are checked against what the file defines before assimp sees
  * them (it refused these, but leaked the meshes it had built when the file
  * has more than one: fuzz_mesh; run under LSan). */
 GI_TEST(mesh_import_obj_face_indices_in_range)
 {
-    static const char tri[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
-    static const struct {
-        const char *body, *also; /* also: NULL if it imports */
-    } cases[] = {
+    static const obj_case cases[] = {
         {"f 1 2 3\nusemtl b\nf 1 2 4\n", "line 6: vertex index 4 is out of range (3 defined)"},
         {"usemtl a\nf 1 2 3\nusemtl b\nf -1 -2 -4\n",
          "line 7: vertex index -4 is out of range (3 defined before it)"},
@@ -585,21 +699,108 @@ GI_TEST(mesh_import_obj_face_indices_in_range)
         /* and these faces and lines are none. */
         {"f 1 2 3\n  l 1 9\n\tf 7 8 9\n", NULL},
     };
+    check_obj_cases("refs.obj", cases, GI_ARRAY_LEN(cases));
+}
+
+/* The OBJ checks read the lines assimp 5.2 reads, as it reads them (each
+ * case was imported with assimp alone first): a case that imports here is
+ * one assimp reads right, and one refused with a line is one it would
+ * refuse or mis-read. */
+GI_TEST(mesh_precheck_obj_reads_lines_as_assimp_does)
+{
+    static const obj_case cases[] = {
+        /* A line's first byte says what it is: "fo", "lod" are a face and a line. */
+        {"fo 1 2 3\n", NULL},
+        {"f 1 2 3\nusemtl b\nfo 1 2 9\n", "line 6: vertex index 9 is out of range (3 defined)"},
+        {"f 1 2 3\nlod 9\n", "line 5: vertex index 9 is out of range"},
+        /* Lines from cstype to end are skipped. */
+        {"f 1 2 3\ncstype bspline\nf 1 2 9\nend\n", NULL},
+        {"cstype bspline\nend\nf 1 2 9\n", "line 6: vertex index 9"},
+        /* A "v" line is a vertex with 3, 4 (homogeneous) or 6 numbers. */
+        {"v 0 1\nf 1 2 4\n", "line 5: vertex index 4 is out of range (3 defined)"},
+        {"v 1 1 0 1\nf 1 2 4\n", NULL},
+        {"v 1 1 0 1 1 1\nf 1 2 4\n", NULL},
+        {"v 1 1 0 nan\nf 1 2 4\n", "line 4: vertex coordinate \"nan\" is not a finite number"},
+        {"vt0 0\nf 1/1 2/1 3/1\n", NULL},
+        {"vn 0 0 1\nf 1/1 2/1 3/1\n", NULL}, /* v/vn, without texture coordinates */
+        /* atoi over the bytes: "003" is 3, 3, 3; "3-1" is 3, -1. */
+        {"f 1 2 003\n", NULL},
+        {"f 1 2 3-1\n", NULL},
+        {"f 1 2 3-4\n", "line 4: vertex index -4 is out of range (3 defined before it)"},
+        {"vt 0 0\nvn 0 0 1\nf 1/1/1/1 2 3\n", "line 6: a corner has more than three indices"},
+        {"f 1 2 3 # 9\n", "Invalid face index"}, /* no comment inside a face */
+        /* Line continuations. */
+        {"f 1 2 \\\n3\n", NULL},
+        {"f 1 2 \\\r\n3\r\n", NULL},
+        {"f 1 2 3\n# note \\\nf 1 2 9\n", NULL},
+        {"# note \\\nv 5 5 5\nf 1 2 4\n", "line 6: vertex index 4 is out of range (3 defined)"},
+        {"f 1 2 3 \\\n\nf 1 2 3\n",
+         "line 4: the '\\' (a line continuation) at byte 32 joins an empty line"},
+        {"f 1 2 \\\n\\\n3\n", "joins a line that starts with another '\\'"},
+        {"f 1 2 3\nf 2 1 3 \\", NULL}, /* a '\' that ends the file ends the line */
+    };
+    check_obj_cases("lines.obj", cases, GI_ARRAY_LEN(cases));
+    /* \r, \f and NUL end lines too; a lone \r counts as one in messages. */
+    static const char cr[] = "v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\rusemtl b\rf 1 2 9\r";
+    write_tmp("cr.obj", cr, sizeof cr - 1);
+    expect_failure(gi_test_tmpdir(), "cr.obj", GI_EINVAL, "line 6: vertex index 9");
+    static const char nul[] = "v 0 0 0\fv 1 0 0\fv 0 1 0\ff 1 2 3\0f 1 2 9\n";
+    write_tmp("nul.obj", nul, sizeof nul - 1);
+    expect_failure(gi_test_tmpdir(), "nul.obj", GI_EINVAL, "line 1: vertex index 9");
+    write_tmp("nul.obj", nul, sizeof nul - 10);
+    gi_dir_source d;
+    gi_mesh_data m;
+    gi_error err;
+    GI_CHECK_MSG(import_from(gi_test_tmpdir(), "nul.obj", &d, &m, &err) == 0, "%s", err.msg);
+    gi_mesh_data_free(&m);
+    gi_dir_source_free(&d);
+}
+
+/* A file of more than one of assimp's 16 MiB read blocks: a continuation
+ * that reaches over a block's end is refused (assimp reads past the
+ * block), one inside a block is not; a last line without a line end is
+ * not read (assimp drops it). Straight through the check: no assimp. */
+GI_TEST(mesh_precheck_obj_16mib_blocks)
+{
+    const size_t block = (size_t)16 << 20;
+    static const char tri[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\n", cont[] = "f 1 2 \\\n3\n";
+    /* bs: where the continuation's '\' goes; tail: the file's last line. */
+    static const struct {
+        size_t bs_from_end; /* of the first block */
+        const char *tail, *also;
+    } cases[] = {
+        {100, "f 1 2 3\n", NULL},
+        {2, "f 1 2 3\n", "line 5: the '\\' (a line continuation) at byte 16777214 joins a line "
+                         "that reaches over the end of the file or of a 16 MiB block"},
+        {1, "f 1 2 3\n", "ends a 16 MiB block"},
+        {100, "f 1 2 9", NULL},
+        {100, "f 1 2 9\n", "vertex index 9 is out of range"},
+    };
     for (size_t i = 0; i < GI_ARRAY_LEN(cases); i++) {
-        char text[256];
-        snprintf(text, sizeof text, "%s%s", tri, cases[i].body);
-        write_tmp("refs.obj", text, strlen(text));
-        if (cases[i].also) {
-            expect_failure(gi_test_tmpdir(), "refs.obj", GI_EINVAL, cases[i].also);
-            continue;
-        }
-        gi_dir_source d;
-        gi_mesh_data m;
+        gi_buf b;
+        gi_buf_init(&b);
+        gi_buf_put(&b, tri, sizeof tri - 1);
+        /* One comment line up to the continuation, then comment lines. */
+        size_t bs = block - cases[i].bs_from_end, fill = bs - 6 - b.len - 1;
+        uint8_t *c = gi_buf_grow(&b, fill);
+        memset(c, 'x', fill);
+        c[0] = '#';
+        gi_buf_put(&b, "\n", 1);
+        gi_buf_put(&b, cont, sizeof cont - 1);
+        GI_REQUIRE(b.data[bs] == '\\');
+        while (b.len < block + 1000)
+            gi_buf_put(&b, "# more\n", 7);
+        gi_buf_put(&b, cases[i].tail, strlen(cases[i].tail));
         gi_error err;
-        GI_CHECK_MSG(import_from(gi_test_tmpdir(), "refs.obj", &d, &m, &err) == 0,
-                     "case %zu: %s", i, err.msg);
-        gi_mesh_data_free(&m);
-        gi_dir_source_free(&d);
+        gi_error_clear(&err);
+        int rc = gi_mesh_precheck("big.obj", b.data, b.len, &err);
+        if (cases[i].also)
+            GI_CHECK_MSG(rc == -1 && strstr(err.msg, "big.obj") &&
+                             strstr(err.msg, cases[i].also),
+                         "case %zu: %s", i, rc ? err.msg : "passed");
+        else
+            GI_CHECK_MSG(rc == 0, "case %zu: %s", i, err.msg);
+        gi_buf_free(&b);
     }
 }
 
