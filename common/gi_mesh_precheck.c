@@ -226,7 +226,7 @@ static int obj_next_line(obj_reader *r, const char *name, obj_line *l, gi_error 
             at++;
             break;
         }
-        size_t next;
+        size_t next = at;
         if (obj_backslash(r, name, at, &next, err))
             return -1;
         if (next == at + 1)
