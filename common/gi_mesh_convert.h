@@ -19,9 +19,10 @@
  * defines gets the default colours. Fails, naming `name`, on a scene
  * without triangles, a face index past its mesh's vertices, a vertex that is
  * not finite, a material index past the scene's materials, a material name
- * longer than GI_MESH_NAME_MAX, or more than 2^31 vertices or triangles. Normals that are not all finite are dropped
- * (computed at scene build). out must be freshly initialized; on failure it
- * may hold partial arrays (gi_mesh_data_free them). */
+ * longer than GI_MESH_NAME_MAX, or more than 2^31 vertices or triangles.
+ * Normals that are not all finite are dropped (computed at scene build).
+ * out must be freshly initialized; on failure it may hold partial arrays
+ * (gi_mesh_data_free them). */
 int gi_mesh_from_assimp(const struct aiScene *sc, const gi_buf *const *mtl_libs,
                         size_t mtl_count, const char *name, gi_mesh_data *out, gi_error *err);
 

@@ -5,6 +5,8 @@
 # 1000 bytes renders. The files are made here: OBJ + MTL, glTF.
 . "$(dirname "$0")/lib.sh"
 name_of() { head -c "$1" /dev/zero | tr '\0' 'm'; }
+# The glTF's buffer: 3 float positions, 3 uint16 indices, 2 bytes of padding.
+BUFFER=AACAvwAAAAAAAIC/AAAAAAAAAAAAAIA/AACAPwAAAAAAAIC/AAABAAIAAAA=
 
 # The lamp: one triangle facing down, of material $2.
 obj() {
@@ -18,8 +20,7 @@ gltf() {
  "nodes": [{"mesh": 0, "translation": [0, 1, 0]}],
  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
  "materials": [{"name": "$2", "emissiveFactor": [1, 1, 1]}],
- "buffers": [{"byteLength": 44, "uri":
-   "data:application/octet-stream;base64,AACAvwAAAAAAAIC/AAAAAAAAAAAAAIA/AACAPwAAAAAAAIC/AAABAAIAAAA="}],
+ "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,$BUFFER"}],
  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
                  {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
