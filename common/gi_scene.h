@@ -19,6 +19,12 @@
 #include "gi_error.h"
 #include "gi_math.h"
 
+/* Longest object or material name in a scene (bytes). A mesh's own
+ * materials become "<object>/<material>" (each at most GI_MESH_NAME_MAX), and
+ * output files that carry the names (a radiosity factorization) read them
+ * back within a limit of their own, which this keeps them under. */
+#define GI_SCENE_NAME_MAX 1000
+
 typedef struct gi_material {
     char *name;
     gi_vec3 diffuse;  /* reflectance rho, each channel in [0, 1) */

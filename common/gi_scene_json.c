@@ -31,6 +31,9 @@ static int parse_materials(gi_jv *v, gi_scene_builder *b, const cJSON *mats)
         gi_json_path(path, sizeof path, "materials", m->string);
         if (!m->string[0])
             return gi_jv_fail(v, "materials", "a material has an empty name");
+        if (strlen(m->string) > GI_SCENE_NAME_MAX)
+            return gi_jv_fail(v, "materials", "a material's name is %zu bytes long, over the "
+                              "limit of %d", strlen(m->string), GI_SCENE_NAME_MAX);
         if (gi_jv_keys(v, m, path, keys))
             return -1;
         gi_material mat = {0};
@@ -267,6 +270,9 @@ static int parse_object(gi_jv *v, gi_scene_builder *b, const gi_asset_source *sr
         name = autoname;
     } else if (!name[0]) {
         return gi_jv_fail(v, path, "name is empty");
+    } else if (strlen(name) > GI_SCENE_NAME_MAX) {
+        return gi_jv_fail(v, path, "name is %zu bytes long, over the limit of %d", strlen(name),
+                          GI_SCENE_NAME_MAX);
     }
     int mat_index = -1;
     if (material) {

@@ -13,6 +13,8 @@
 
 #define MAX_NAMES (1u << 20)
 #define MAX_NAME 4096
+/* Every name a scene may hold is read back: "<object>/<material>#<index>". */
+_Static_assert(MAX_NAME > 2 * GI_SCENE_NAME_MAX + 32, "a scene's names fit a factorization");
 
 void gi_rad_file_encode(const gi_rad_file_info *info, const gi_rad_model *md,
                         const gi_rad_factor *f, gi_buf *out)

@@ -371,6 +371,41 @@ GI_TEST(test_bad_scenes_are_refused_with_a_clear_message)
     }
 }
 
+/* Names longer than output files carry (a radiosity factorization reads
+ * "<object>/<material>" back) are refused at the scene, before any work. */
+GI_TEST(test_scene_names_over_the_limit_are_refused)
+{
+    char name[GI_SCENE_NAME_MAX + 2];
+    for (int over = 0; over <= 1; over++) {
+        memset(name, 'n', sizeof name);
+        name[GI_SCENE_NAME_MAX + over] = 0;
+        for (int in_materials = 0; in_materials <= 1; in_materials++) {
+            char text[3 * GI_SCENE_NAME_MAX + 256];
+            snprintf(text, sizeof text,
+                     "{\"materials\": {\"%s\": {\"emission\": [1, 1, 1]}}, \"objects\": "
+                     "[{\"name\": \"%s\", \"material\": \"%s\", "
+                     "\"quad\": {\"size\": [1, 1]}}]}",
+                     in_materials ? name : "l", in_materials ? "o" : name,
+                     in_materials ? name : "l");
+            gi_error err;
+            gi_error_clear(&err);
+            gi_scene s;
+            int rc = gi_test_load_scene_text("names.json", text, &s, &err);
+            if (!over) {
+                GI_CHECK_MSG(rc == 0, "%s", err.msg);
+                if (rc == 0)
+                    gi_scene_free(&s);
+                continue;
+            }
+            GI_CHECK(rc == -1 && err.code == GI_EINVAL);
+            GI_CHECK_MSG(strstr(err.msg, "names.json") &&
+                             strstr(err.msg, in_materials ? "materials" : "objects[0]") &&
+                             strstr(err.msg, "1001 bytes long, over the limit of 1000"),
+                         "%s", err.msg);
+        }
+    }
+}
+
 GI_TEST(test_light_sampling_is_proportional_to_power)
 {
     gi_error err;
