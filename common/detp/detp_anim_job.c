@@ -81,10 +81,8 @@ static void plan_frame(gi_job *job, uint32_t frame, gi_task_queue *q)
         gi_task *t = gi_task_queue_add(q, frame ? DETP_TASK_ANIM_UPDATE : DETP_TASK_ANIM_BATCH,
                                        (double)(p1 - p0));
         t->affinity = (uint64_t)b + 1;
-        gi_buf_put_u32(&t->payload, frame);
-        gi_buf_put_u32(&t->payload, b);
-        gi_buf_put_u64(&t->payload, p0);
-        gi_buf_put_u64(&t->payload, p1);
+        detp_task_encode(t->kind, &(detp_task_in){.p0 = p0, .p1 = p1, .frame = frame, .batch = b},
+                         &t->payload);
     }
 }
 

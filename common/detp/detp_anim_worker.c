@@ -778,21 +778,14 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
 int detp_anim_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
-    gi_reader r;
-    gi_reader_init(&r, t->payload.data, t->payload.len, "detp animation task");
+    detp_task_in in;
+    if (detp_task_decode(&ctx->job, t, 0, &in, err))
+        return -1;
     detp_anim_result h;
     memset(&h, 0, sizeof h);
-    h.frame = gi_get_u32(&r);
-    h.batch = gi_get_u32(&r);
-    uint64_t p0 = gi_get_u64(&r), p1 = gi_get_u64(&r);
-    if (gi_reader_finish(&r, err))
-        return -1;
-    if (!p->anim.enabled || h.frame >= p->anim.frames ||
-        (h.frame == 0) != (t->kind == DETP_TASK_ANIM_BATCH) || p0 >= p1 ||
-        p1 > p->photon_count || p1 - p0 > (uint64_t)GI_DETP_MAX_BATCH ||
-        p0 != (uint64_t)h.batch * (uint64_t)p->batch)
-        return gi_fail(err, GI_EPROTO, "detp animation task %llu: bad payload",
-                       (unsigned long long)t->id);
+    h.frame = in.frame;
+    h.batch = in.batch;
+    uint64_t p0 = in.p0, p1 = in.p1;
     detp_worker *w = detp_worker_state(ctx);
     detp_anim_worker *a;
     const char *dir;

@@ -122,22 +122,19 @@ static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
         if (p1 > p->photon_count)
             p1 = p->photon_count;
         gi_task *t = gi_task_queue_add(q, DETP_TASK_BATCH, (double)(p1 - p0));
-        gi_buf_put_u64(&t->payload, p0);
-        gi_buf_put_u64(&t->payload, p1);
+        detp_task_encode(t->kind, &(detp_task_in){.p0 = p0, .p1 = p1}, &t->payload);
     }
     if (st->visible)
         for (uint32_t v0 = 0; v0 < st->nv; v0 += DETP_VIS_PER_TASK) {
             uint32_t v1 = st->nv - v0 < DETP_VIS_PER_TASK ? st->nv : v0 + DETP_VIS_PER_TASK;
             gi_task *t = gi_task_queue_add(q, DETP_TASK_VISIBILITY, (double)(v1 - v0));
-            gi_buf_put_u32(&t->payload, v0);
-            gi_buf_put_u32(&t->payload, v1);
+            detp_task_encode(t->kind, &(detp_task_in){.a = v0, .b = v1}, &t->payload);
         }
     for (uint32_t j0 = 0; j0 < st->nref; j0 += DETP_REF_PER_TASK) {
         uint32_t j1 = st->nref - j0 < DETP_REF_PER_TASK ? st->nref : j0 + DETP_REF_PER_TASK;
         gi_task *t = gi_task_queue_add(q, DETP_TASK_REFERENCE,
                                        (double)(j1 - j0) * p->reference_spp);
-        gi_buf_put_u32(&t->payload, j0);
-        gi_buf_put_u32(&t->payload, j1);
+        detp_task_encode(t->kind, &(detp_task_in){.a = j0, .b = j1}, &t->payload);
     }
     return 0;
 }

@@ -8,6 +8,7 @@
 
 #include "detp.h"
 #include "detp_params.h"
+#include "gi_assets.h"
 #include "gi_image.h"
 #include "gi_job.h"
 #include "gi_method.h"
@@ -26,6 +27,23 @@ enum {
     DETP_TASK_ANIM_UPDATE = 6,
     DETP_TASK_ANIM_TILE = 7 /* gi_tile, str hash, u32 frame */
 };
+
+/* A task's payload, by kind: the fields its kind has (the others 0). */
+typedef struct detp_task_in {
+    uint64_t p0, p1;        /* batches: photons [p0, p1) */
+    uint32_t a, b;          /* visibility, reference: vertices or reference indices [a, b) */
+    uint32_t frame, batch;  /* animation batches (frame, batch) and tiles (frame) */
+    gi_tile tile;           /* tiles */
+    char hash[GI_HASH_HEX]; /* tiles: the published radiance */
+} detp_task_in;
+
+/* Appends the payload of a task of this kind (detp_task.c). */
+void detp_task_encode(uint32_t kind, const detp_task_in *in, gi_buf *out);
+/* Reads task t's payload, checked against the job: photon ranges, frames,
+ * tiles, and for visibility and reference tasks [a, b) within [0, lim).
+ * Bad bytes: GI_EPROTO naming the task. */
+int detp_task_decode(const gi_job *job, const gi_task *t, uint32_t lim, detp_task_in *in,
+                     gi_error *err);
 
 #define DETP_VIS_PER_TASK 2048
 #define DETP_REF_PER_TASK 16

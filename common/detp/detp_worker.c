@@ -130,14 +130,10 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
 {
     const gi_job *job = &ctx->job;
     const gi_detp_params *p = job->params;
-    gi_reader r;
-    gi_reader_init(&r, t->payload.data, t->payload.len, "detp batch task");
-    uint64_t p0 = gi_get_u64(&r), p1 = gi_get_u64(&r);
-    if (gi_reader_finish(&r, err))
+    detp_task_in in;
+    if (detp_task_decode(job, t, 0, &in, err))
         return -1;
-    if (p0 >= p1 || p1 > p->photon_count || p1 - p0 > (uint64_t)GI_DETP_MAX_BATCH)
-        return gi_fail(err, GI_EPROTO, "detp batch task %llu: bad photon range",
-                       (unsigned long long)t->id);
+    uint64_t p0 = in.p0, p1 = in.p1;
     detp_worker *w = detp_worker_state(ctx);
     detp_batch_result h;
     memset(&h, 0, sizeof h);
@@ -188,17 +184,12 @@ static int run_batch(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_er
 
 static int run_visibility(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
-    gi_reader r;
-    gi_reader_init(&r, t->payload.data, t->payload.len, "detp visibility task");
-    uint32_t v0 = gi_get_u32(&r), v1 = gi_get_u32(&r);
-    if (gi_reader_finish(&r, err))
-        return -1;
     detp_worker *w = detp_worker_state(ctx);
-    if (detp_worker_discs(ctx, w, err))
+    detp_task_in in;
+    if (detp_worker_discs(ctx, w, err) ||
+        detp_task_decode(&ctx->job, t, w->discs.count, &in, err))
         return -1;
-    if (v0 >= v1 || v1 > w->discs.count)
-        return gi_fail(err, GI_EPROTO, "detp visibility task %llu: bad vertex range",
-                       (unsigned long long)t->id);
+    uint32_t v0 = in.a, v1 = in.b;
     need_inward(ctx, w);
     double t0 = gi_now();
     uint64_t rays0 = ctx->rt.rays;
@@ -219,16 +210,12 @@ static int run_reference(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, g
     const gi_job *job = &ctx->job;
     const gi_detp_params *p = job->params;
     const gi_scene *s = &job->scene;
-    gi_reader r;
-    gi_reader_init(&r, t->payload.data, t->payload.len, "detp reference task");
-    uint32_t j0 = gi_get_u32(&r), j1 = gi_get_u32(&r);
-    if (gi_reader_finish(&r, err))
-        return -1;
     uint32_t m = p->reference_vertices < s->vertex_count ? p->reference_vertices
                                                          : s->vertex_count;
-    if (j0 >= j1 || j1 > m)
-        return gi_fail(err, GI_EPROTO, "detp reference task %llu: bad range",
-                       (unsigned long long)t->id);
+    detp_task_in in;
+    if (detp_task_decode(job, t, m, &in, err))
+        return -1;
+    uint32_t j0 = in.a, j1 = in.b;
     gi_pt_params pp;
     gi_pt_params_default(&pp);
     /* The photons' direct light is bounce 0; the path tracer counts the
@@ -295,36 +282,21 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
 {
     const gi_job *job = &ctx->job;
     const gi_detp_params *p = job->params;
-    gi_reader r;
-    gi_reader_init(&r, t->payload.data, t->payload.len, "detp tile task");
-    gi_tile tile;
-    if (gi_tile_read(&r, job->width, job->height, &tile, err))
+    detp_task_in in;
+    if (detp_task_decode(job, t, 0, &in, err))
         return -1;
-    char *hash = gi_get_str(&r, GI_HASH_HEX - 1);
-    /* An animation's tile: the frame whose pose the mobile takes. */
-    uint32_t frame = t->kind == DETP_TASK_ANIM_TILE ? gi_get_u32(&r) : 0;
-    if (gi_reader_finish(&r, err) || !hash || !gi_hash_is_valid(hash)) {
-        free(hash);
-        return gi_fail(err, GI_EPROTO, "detp tile task %llu: bad payload",
-                       (unsigned long long)t->id);
-    }
+    const char *hash = in.hash;
     detp_worker *w = detp_worker_state(ctx);
     if (strcmp(w->hash, hash) != 0) {
         const gi_buf *blob;
-        if (gi_worker_blob(ctx, hash, &blob, err)) {
-            free(hash);
+        if (gi_worker_blob(ctx, hash, &blob, err))
             return -1;
-        }
-        if (blob->len != (size_t)job->scene.vertex_count * 12) {
-            free(hash);
+        if (blob->len != (size_t)job->scene.vertex_count * 12)
             return gi_fail(err, GI_EPROTO, "detp: published radiance has %zu bytes for %u "
                                            "vertices", blob->len, job->scene.vertex_count);
-        }
         float *rad = gi_try_malloc(blob->len + 4, err, "published radiance");
-        if (!rad) {
-            free(hash);
+        if (!rad)
             return -1;
-        }
         gi_reader br;
         gi_reader_init(&br, blob->data, blob->len, "published radiance");
         gi_get_f32s(&br, rad, blob->len / 4);
@@ -332,15 +304,14 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
         w->radiance = rad;
         memcpy(w->hash, hash, GI_HASH_HEX);
     }
-    free(hash);
     double t0 = gi_now();
     uint64_t rays0 = ctx->rt.rays;
     gi_buf px;
     gi_buf_init(&px);
     shade_ctx sc = {&job->scene, w->radiance};
     int rc = t->kind == DETP_TASK_ANIM_TILE
-                 ? detp_anim_render_tile(ctx, w, &tile, frame, shade, &sc, &px, err)
-                 : gi_tile_render(&ctx->rt, job, &tile, p->image_spp, shade, &sc, &px, err);
+                 ? detp_anim_render_tile(ctx, w, &in.tile, in.frame, shade, &sc, &px, err)
+                 : gi_tile_render(&ctx->rt, job, &in.tile, p->image_spp, shade, &sc, &px, err);
     if (rc == 0) {
         gi_buf_put_f64(result, gi_now() - t0);
         gi_buf_put_u64(result, ctx->rt.rays - rays0);

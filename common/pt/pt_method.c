@@ -12,8 +12,8 @@
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
 #include "pt.h"
+#include "pt_task.h"
 
-#define PT_TASK_TILE 1
 #define PT_MAX_SPP (1 << 24)
 
 /* Per pixel in a result: R, G, B sums and the sum of squared luminance. */
@@ -96,13 +96,7 @@ static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     return 0;
 }
 
-/* A task: an image tile and the sample indices [s0, s1) of its pixels. */
-typedef struct pt_tile {
-    gi_tile tile;
-    uint32_t s0, s1;
-} pt_tile;
-
-static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_error *err)
+int gi_pt_task_decode(const gi_job *job, const gi_task *t, gi_pt_task *tl, gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "pt task");
@@ -115,6 +109,12 @@ static int decode_tile(const gi_job *job, const gi_task *t, pt_tile *tl, gi_erro
     if (tl->s0 >= tl->s1)
         return gi_fail(err, GI_EPROTO, "pt task %llu: empty sample range",
                        (unsigned long long)t->id);
+    /* Up to 2^32 samples a pixel would hold the worker until the task's
+     * timeout, and be merged into pixels the job never asked for. */
+    const gi_pt_params *p = job->params;
+    if (tl->s1 > (uint32_t)p->spp)
+        return gi_fail(err, GI_EPROTO, "pt task %llu: samples [%u, %u) past the job's %d",
+                       (unsigned long long)t->id, tl->s0, tl->s1, p->spp);
     return 0;
 }
 
@@ -151,8 +151,8 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
 {
     const gi_job *job = &ctx->job;
     const gi_pt_params *p = job->params;
-    pt_tile tl;
-    if (decode_tile(job, t, &tl, err))
+    gi_pt_task tl;
+    if (gi_pt_task_decode(job, t, &tl, err))
         return -1;
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
@@ -196,8 +196,8 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
 static int pt_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
                            gi_error *err)
 {
-    pt_tile tl;
-    if (decode_tile(job, t, &tl, err))
+    gi_pt_task tl;
+    if (gi_pt_task_decode(job, t, &tl, err))
         return -1;
     uint32_t w = tl.tile.x1 - tl.tile.x0;
     size_t want = (size_t)w * (tl.tile.y1 - tl.tile.y0) * PT_VALUES_PER_PIXEL * 8;
@@ -219,8 +219,8 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
                     gi_error *err)
 {
     pt_state *st = job->state;
-    pt_tile tl;
-    if (decode_tile(job, t, &tl, err))
+    gi_pt_task tl;
+    if (gi_pt_task_decode(job, t, &tl, err))
         return -1;
     size_t npix = (size_t)(tl.tile.x1 - tl.tile.x0) * (tl.tile.y1 - tl.tile.y0);
     if (result->len != npix * PT_VALUES_PER_PIXEL * 8)

@@ -22,10 +22,9 @@
 #include "rad_mesh.h"
 #include "rad_patches.h"
 #include "rad_rays.h"
+#include "rad_task.h"
 #include "rad_vertices.h"
 
-#define RAD_TASK_FF 1
-#define RAD_TASK_TILE 2
 
 /* Rays per form-factor task when task_elements is automatic. */
 #define RAD_RAYS_PER_TASK (1u << 18)
@@ -503,7 +502,8 @@ static int rad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     return 0;
 }
 
-static int decode_block(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1, gi_error *err)
+int gi_rad_task_block_decode(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1,
+                             gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "radiosity task");
@@ -517,14 +517,8 @@ static int decode_block(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1
     return 0;
 }
 
-typedef struct tile_task {
-    gi_tile tile;
-    uint32_t emission;
-    char hash[GI_HASH_HEX];
-} tile_task;
-
-static int decode_tile(const gi_job *job, const gi_task *t, uint32_t emissions, tile_task *tt,
-                       gi_error *err)
+int gi_rad_task_tile_decode(const gi_job *job, const gi_task *t, uint32_t emissions,
+                            gi_rad_tile_task *tt, gi_error *err)
 {
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "radiosity tile task");
@@ -572,15 +566,15 @@ static int rad_check_result(const gi_job *job, const gi_task *t, const gi_buf *r
     if (t->kind == RAD_TASK_FF && st->counts) {
         uint32_t e0, e1;
         gi_rad_ff_stats scratch = {0};
-        if (decode_block(t, st->mesh.element_count, &e0, &e1, err))
+        if (gi_rad_task_block_decode(t, st->mesh.element_count, &e0, &e1, err))
             return -1;
         return gi_rad_ff_decode(result->data, result->len, e0, e1, st->tracked_nodes, p->rays,
                                 ignore_hits, NULL, &scratch, err);
     }
-    tile_task tt;
+    gi_rad_tile_task tt;
     if (t->kind != RAD_TASK_TILE || !st->images)
         return 0;
-    if (decode_tile(job, t, st->em->count, &tt, err))
+    if (gi_rad_task_tile_decode(job, t, st->em->count, &tt, err))
         return -1;
     return gi_tile_check_result(&tt.tile, result->data, result->len, err);
 }
@@ -592,14 +586,14 @@ static int rad_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_tas
     rad_state *st = job->state;
     if (t->kind == RAD_TASK_FF && st->counts) {
         uint32_t e0, e1;
-        if (decode_block(t, st->mesh.element_count, &e0, &e1, err))
+        if (gi_rad_task_block_decode(t, st->mesh.element_count, &e0, &e1, err))
             return -1;
         return gi_rad_ff_decode(result->data, result->len, e0, e1, st->tracked_nodes, p->rays,
                                 put_hits, st, &st->ff, err);
     }
     if (t->kind == RAD_TASK_TILE && st->images) {
-        tile_task tt;
-        if (decode_tile(job, t, st->em->count, &tt, err))
+        gi_rad_tile_task tt;
+        if (gi_rad_task_tile_decode(job, t, st->em->count, &tt, err))
             return -1;
         return gi_tile_merge(&st->images[tt.emission], &tt.tile, result, err);
     }
@@ -933,7 +927,7 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
         return -1;
     if (t->kind == RAD_TASK_FF) {
         uint32_t e0, e1;
-        if (decode_block(t, w->mesh.element_count, &e0, &e1, err))
+        if (gi_rad_task_block_decode(t, w->mesh.element_count, &e0, &e1, err))
             return -1;
         gi_rad_ff_opts o = {ctx->job.seed, tracked_level(p)};
         if (gi_rad_ff_rows(&ctx->rt, &ctx->job.scene, &w->mesh, &w->strata, &o, e0, e1, result,
@@ -943,8 +937,8 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
         return 0;
     }
     if (t->kind == RAD_TASK_TILE) {
-        tile_task tt;
-        if (decode_tile(&ctx->job, t, UINT32_MAX, &tt, err))
+        gi_rad_tile_task tt;
+        if (gi_rad_task_tile_decode(&ctx->job, t, UINT32_MAX, &tt, err))
             return -1;
         const float *corner = worker_corners(ctx, w, tt.hash, err);
         if (!corner)

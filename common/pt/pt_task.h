@@ -1,0 +1,25 @@
+/* pt_task: the pt method's task payload, what its workers read from a TASK
+ * message (and its coordinator again as results arrive): an image tile and
+ * the sample indices [s0, s1) of its pixels, as gi_tiles_plan writes them
+ * with the sample range as the extra bytes. Exposed for fuzz_task. */
+#ifndef GI_PT_TASK_H
+#define GI_PT_TASK_H
+
+#include <stdint.h>
+
+#include "gi_job.h"
+#include "gi_task.h"
+#include "gi_tiles.h"
+
+#define PT_TASK_TILE 1
+
+typedef struct gi_pt_task {
+    gi_tile tile;
+    uint32_t s0, s1;
+} gi_pt_task;
+
+/* Reads t's payload, the tile within the job's image and s0 < s1; bad
+ * bytes: GI_EPROTO naming the task. */
+int gi_pt_task_decode(const gi_job *job, const gi_task *t, gi_pt_task *out, gi_error *err);
+
+#endif

@@ -1,0 +1,34 @@
+/* rad_task: the radiosity method's task payloads, what its workers read
+ * from a TASK message and its coordinator again as results arrive
+ * (rad_method.c owns them; exposed for fuzz_task). */
+#ifndef GI_RAD_TASK_H
+#define GI_RAD_TASK_H
+
+#include <stdint.h>
+
+#include "gi_assets.h"
+#include "gi_job.h"
+#include "gi_task.h"
+#include "gi_tiles.h"
+
+/* u32 first element, u32 end element: a block of form-factor rows. */
+#define RAD_TASK_FF 1
+/* gi_tile, u32 emission set, str hash of the published corner radiosities. */
+#define RAD_TASK_TILE 2
+
+typedef struct gi_rad_tile_task {
+    gi_tile tile;
+    uint32_t emission;
+    char hash[GI_HASH_HEX];
+} gi_rad_tile_task;
+
+/* The block [e0, e1) of an FF task, within the n elements. */
+int gi_rad_task_block_decode(const gi_task *t, uint32_t n, uint32_t *e0, uint32_t *e1,
+                             gi_error *err);
+/* A TILE task: its tile within the job's image, emission below emissions
+ * (a worker, which does not know them: UINT32_MAX) and a valid hash. Bad
+ * bytes: GI_EPROTO naming the task. */
+int gi_rad_task_tile_decode(const gi_job *job, const gi_task *t, uint32_t emissions,
+                            gi_rad_tile_task *tt, gi_error *err);
+
+#endif
