@@ -29,39 +29,22 @@
 
 #include "gi_clock.h"
 #include "gi_farm_impl.h"
+#include "gi_farm_route.h"
 #include "gi_farm_submit.h"
 #include "gi_fs.h"
 #include "gi_log.h"
 #include "gi_net.h"
 
-typedef enum {
-    R_NONE,
-    R_DASHBOARD,
-    R_METRICS,
-    R_JOBS_LIST,
-    R_JOBS_SUBMIT,
-    R_JOB_GET,
-    R_JOB_DELETE,
-    R_JOB_RETRY,
-    R_JOB_OUTPUT,
-    R_ASSET_PUT,
-    R_ASSET_HEAD,
-    R_WORKERS
-} route_id;
-
 typedef struct api_req {
-    route_id route;
+    gi_route rt;
     int responded;     /* a response is queued: ignore the rest of the body */
     int status;        /* for a body-phase failure */
     char err[1100];
     char peer[80];
-    uint64_t job_id;
-    char name[256];    /* output name or asset hash */
     gi_buf body;
     gi_farm_upload *up;
     int fetching; /* an output's bytes are being sent (GET): its job's fetch once sent whole */
     uint64_t received, limit;
-    const char *allow; /* a 405's Allow header */
 } api_req;
 
 /* A TCP connection of the API. A client gets --api-head-seconds to send a
@@ -300,7 +283,7 @@ static enum MHD_Result refuse(gi_farm *f, struct MHD_Connection *conn, api_req *
         gi_warn("api: refused %s %s from %s: %s", method, u, r->peer, msg);
     r->responded = 1;
     return send_json_allow(conn, status, json_error(msg),
-                           status == MHD_HTTP_METHOD_NOT_ALLOWED ? r->allow : NULL);
+                           status == MHD_HTTP_METHOD_NOT_ALLOWED ? r->rt.allow : NULL);
 }
 
 static int authorized(gi_farm *f, struct MHD_Connection *conn, const char **why)
@@ -322,95 +305,6 @@ static int authorized(gi_farm *f, struct MHD_Connection *conn, const char **why)
         return 0;
     }
     return 1;
-}
-
-/* Parses a decimal job id (no sign, no leading zeros beyond "0"). */
-static int parse_id(const char *s, size_t n, uint64_t *out)
-{
-    if (n == 0 || n > 19 || (n > 1 && s[0] == '0'))
-        return -1;
-    uint64_t v = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (s[i] < '0' || s[i] > '9')
-            return -1;
-        v = v * 10 + (uint64_t)(s[i] - '0');
-    }
-    *out = v;
-    return 0;
-}
-
-/* The output name or asset hash of the path: one too long to be either is
- * kept cut short and marked, to be refused as the name it is. */
-static void set_name(api_req *r, const char *p)
-{
-    if (strlen(p) < sizeof r->name)
-        snprintf(r->name, sizeof r->name, "%s", p);
-    else
-        snprintf(r->name, sizeof r->name, "%.200s...", p);
-}
-
-/* 405, with the methods the path takes (the Allow header). */
-static unsigned not_allowed(api_req *r, const char *allow)
-{
-    r->allow = allow;
-    return MHD_HTTP_METHOD_NOT_ALLOWED;
-}
-
-/* Maps method + path to a route; 0 = found, 404 / 405 otherwise. */
-static unsigned route(const char *method, const char *url, api_req *r)
-{
-    int get = strcmp(method, "GET") == 0 || strcmp(method, "HEAD") == 0;
-    const char *p;
-    if (strcmp(url, "/") == 0)
-        return get ? (r->route = R_DASHBOARD, 0) : not_allowed(r, "GET, HEAD");
-    if (strcmp(url, "/metrics") == 0)
-        return get ? (r->route = R_METRICS, 0) : not_allowed(r, "GET, HEAD");
-    if (strcmp(url, "/api/v1/workers") == 0)
-        return get ? (r->route = R_WORKERS, 0) : not_allowed(r, "GET, HEAD");
-    if (strcmp(url, "/api/v1/jobs") == 0) {
-        if (get)
-            r->route = R_JOBS_LIST;
-        else if (strcmp(method, "POST") == 0)
-            r->route = R_JOBS_SUBMIT;
-        else
-            return not_allowed(r, "GET, HEAD, POST");
-        return 0;
-    }
-    if (strncmp(url, "/api/v1/assets/", 15) == 0) {
-        p = url + 15;
-        set_name(r, p);
-        if (strcmp(method, "PUT") == 0)
-            r->route = R_ASSET_PUT;
-        else if (strcmp(method, "HEAD") == 0)
-            r->route = R_ASSET_HEAD;
-        else
-            return not_allowed(r, "HEAD, PUT");
-        return 0;
-    }
-    if (strncmp(url, "/api/v1/jobs/", 13) == 0) {
-        p = url + 13;
-        const char *slash = strchr(p, '/');
-        size_t n = slash ? (size_t)(slash - p) : strlen(p);
-        if (parse_id(p, n, &r->job_id))
-            return MHD_HTTP_NOT_FOUND;
-        if (!slash) {
-            if (get)
-                r->route = R_JOB_GET;
-            else if (strcmp(method, "DELETE") == 0)
-                r->route = R_JOB_DELETE;
-            else
-                return not_allowed(r, "GET, HEAD, DELETE");
-            return 0;
-        }
-        if (strcmp(slash, "/retry") == 0)
-            return strcmp(method, "POST") == 0 ? (r->route = R_JOB_RETRY, 0)
-                                               : not_allowed(r, "POST");
-        if (strncmp(slash, "/outputs/", 9) == 0 && slash[9] && !strchr(slash + 9, '/')) {
-            set_name(r, slash + 9);
-            return get ? (r->route = R_JOB_OUTPUT, 0) : not_allowed(r, "GET, HEAD");
-        }
-    }
-    return MHD_HTTP_NOT_FOUND;
 }
 
 /* ---- endpoints ------------------------------------------------------------- */
@@ -486,16 +380,16 @@ static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_re
     if (j->state != GI_FJ_DONE)
         return refuse(f, conn, r, method, url, MHD_HTTP_CONFLICT, "job %llu is %s, not done",
                       (unsigned long long)j->id, gi_farm_job_state_name(j));
-    char *path = gi_farm_job_output_path(j, r->name);
+    char *path = gi_farm_job_output_path(j, r->rt.name);
     if (!path)
         return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "job %llu has no output \"%s\"",
-                      (unsigned long long)j->id, r->name);
+                      (unsigned long long)j->id, r->rt.name);
     struct stat st;
     int fd = gi_open_regular(path, O_RDONLY, &st, NULL);
     free(path);
     if (fd < 0) {
         return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND,
-                      "output \"%s\" of job %llu was not written", r->name,
+                      "output \"%s\" of job %llu was not written", r->rt.name,
                       (unsigned long long)j->id);
     }
     struct MHD_Response *resp = MHD_create_response_from_fd64((uint64_t)st.st_size, fd);
@@ -503,9 +397,9 @@ static enum MHD_Result do_output(gi_farm *f, struct MHD_Connection *conn, api_re
         close(fd);
         return MHD_NO;
     }
-    MHD_add_response_header(resp, "Content-Type", content_type(r->name));
+    MHD_add_response_header(resp, "Content-Type", content_type(r->rt.name));
     char disp[300];
-    snprintf(disp, sizeof disp, "attachment; filename=\"%s\"", r->name);
+    snprintf(disp, sizeof disp, "attachment; filename=\"%s\"", r->rt.name);
     MHD_add_response_header(resp, "Content-Disposition", disp);
     enum MHD_Result rc = MHD_queue_response(conn, MHD_HTTP_OK, resp);
     MHD_destroy_response(resp);
@@ -517,29 +411,30 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
                                 const char *method, const char *url)
 {
     gi_farm_job *j = NULL;
-    if (r->route == R_JOB_GET || r->route == R_JOB_DELETE || r->route == R_JOB_RETRY ||
-        r->route == R_JOB_OUTPUT) {
-        j = gi_farm_job_find(f, r->job_id);
+    gi_route_id route = r->rt.id;
+    if (route == GI_ROUTE_JOB_GET || route == GI_ROUTE_JOB_DELETE ||
+        route == GI_ROUTE_JOB_RETRY || route == GI_ROUTE_JOB_OUTPUT) {
+        j = gi_farm_job_find(f, r->rt.job_id);
         if (!j)
             return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no job %llu",
-                          (unsigned long long)r->job_id);
+                          (unsigned long long)r->rt.job_id);
     }
     gi_error err;
-    switch (r->route) {
-    case R_DASHBOARD:
+    switch (r->rt.id) {
+    case GI_ROUTE_DASHBOARD:
         return send_body(conn, MHD_HTTP_OK, (char *)gi_farm_dashboard_html,
                          strlen(gi_farm_dashboard_html), "text/html; charset=utf-8", 1);
-    case R_METRICS: {
+    case GI_ROUTE_METRICS: {
         char *m = gi_farm_view_metrics(f);
         return send_response(conn, MHD_HTTP_OK, m, strlen(m), "text/plain; version=0.0.4");
     }
-    case R_JOBS_LIST:
+    case GI_ROUTE_JOBS_LIST:
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_jobs(f));
-    case R_WORKERS:
+    case GI_ROUTE_WORKERS:
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_workers(f));
-    case R_JOB_GET:
+    case GI_ROUTE_JOB_GET:
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
-    case R_JOB_DELETE: {
+    case GI_ROUTE_JOB_DELETE: {
         /* Cancelling twice (a reply lost, a script run again) must not
          * remove the job and its outputs: that takes ?purge=1. */
         const char *purge = MHD_lookup_connection_value(conn, MHD_GET_ARGUMENT_KIND, "purge");
@@ -571,7 +466,7 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
             return send_json(conn, MHD_HTTP_OK, gi_xstrdup(body));
         }
     }
-    case R_JOB_RETRY:
+    case GI_ROUTE_JOB_RETRY:
         if (gi_farm_job_retry(f, j, &err))
             return refuse(f, conn, r, method, url,
                           err.code == GI_EINVAL    ? MHD_HTTP_CONFLICT
@@ -579,17 +474,17 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
                                                   : MHD_HTTP_INTERNAL_SERVER_ERROR,
                           "%s", err.msg);
         return send_json(conn, MHD_HTTP_OK, gi_farm_view_job(f, j));
-    case R_JOB_OUTPUT:
+    case GI_ROUTE_JOB_OUTPUT:
         return do_output(f, conn, r, j, method, url);
-    case R_ASSET_HEAD: {
+    case GI_ROUTE_ASSET_HEAD: {
         uint64_t size;
-        int have = gi_farm_store_has(f, r->name, &size);
+        int have = gi_farm_store_has(f, r->rt.name, &size);
         if (have) /* the client will not upload it: its job is coming */
-            gi_farm_store_touch(f, r->name);
+            gi_farm_store_touch(f, r->rt.name);
         return send_response(conn, have ? MHD_HTTP_OK : MHD_HTTP_NOT_FOUND, NULL, 0,
                              "application/octet-stream");
     }
-    case R_ASSET_PUT: {
+    case GI_ROUTE_ASSET_PUT: {
         gi_farm_upload *u = r->up;
         r->up = NULL;
         uint64_t bytes = r->received;
@@ -598,13 +493,13 @@ static enum MHD_Result dispatch(gi_farm *f, struct MHD_Connection *conn, api_req
                           err.code == GI_EINVAL ? MHD_HTTP_BAD_REQUEST : MHD_HTTP_INTERNAL_SERVER_ERROR,
                           "%s", err.msg);
         char body[400];
-        snprintf(body, sizeof body, "{\"hash\":\"%s\",\"bytes\":%llu}", r->name,
+        snprintf(body, sizeof body, "{\"hash\":\"%s\",\"bytes\":%llu}", r->rt.name,
                  (unsigned long long)bytes);
         return send_json(conn, MHD_HTTP_CREATED, gi_xstrdup(body));
     }
-    case R_JOBS_SUBMIT:
+    case GI_ROUTE_JOBS_SUBMIT:
         return do_submit(f, conn, r, method, url);
-    case R_NONE:
+    case GI_ROUTE_NONE:
         break;
     }
     return refuse(f, conn, r, method, url, MHD_HTTP_NOT_FOUND, "no such endpoint");
@@ -639,19 +534,19 @@ static void body_release(gi_farm *f, api_req *r)
 static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r,
                              const char *method, const char *url)
 {
-    unsigned status = route(method, url, r);
+    unsigned status = gi_route_find(method, url, &r->rt);
     /* Authentication first, so that without the token every path looks
      * the same (no probing for endpoints or job ids). */
     const char *why;
-    if (r->route != R_DASHBOARD && !authorized(f, conn, &why))
+    if (r->rt.id != GI_ROUTE_DASHBOARD && !authorized(f, conn, &why))
         return refuse(f, conn, r, method, url, MHD_HTTP_UNAUTHORIZED, "%s", why);
     if (status == MHD_HTTP_NOT_FOUND)
         return refuse(f, conn, r, method, url, status, "no such endpoint: %s %s", method, url);
     if (status == MHD_HTTP_METHOD_NOT_ALLOWED)
         return refuse(f, conn, r, method, url, status, "%s is not allowed on %s", method, url);
-    if (r->route == R_JOBS_SUBMIT)
+    if (r->rt.id == GI_ROUTE_JOBS_SUBMIT)
         r->limit = GI_FARM_SUBMIT_MAX_BYTES;
-    else if (r->route == R_ASSET_PUT)
+    else if (r->rt.id == GI_ROUTE_ASSET_PUT)
         r->limit = f->cfg.max_asset_bytes;
     else
         r->limit = 0;
@@ -666,15 +561,15 @@ static enum MHD_Result begin(gi_farm *f, struct MHD_Connection *conn, api_req *r
                           "request body of %llu bytes is over the limit of %llu", n,
                           (unsigned long long)r->limit);
         gi_error err;
-        if (r->route == R_ASSET_PUT && gi_farm_store_room(f, n, &err))
+        if (r->rt.id == GI_ROUTE_ASSET_PUT && gi_farm_store_room(f, n, &err))
             return refuse(f, conn, r, method, url, MHD_HTTP_INSUFFICIENT_STORAGE, "%s",
                           err.msg);
-        if (r->route == R_JOBS_SUBMIT && !submissions_have_room(f, n, r))
+        if (r->rt.id == GI_ROUTE_JOBS_SUBMIT && !submissions_have_room(f, n, r))
             return refuse(f, conn, r, method, url, (unsigned)r->status, "%s", r->err);
     }
-    if (r->route == R_ASSET_PUT) {
+    if (r->rt.id == GI_ROUTE_ASSET_PUT) {
         gi_error err;
-        r->up = gi_farm_upload_begin(f, r->name, &err);
+        r->up = gi_farm_upload_begin(f, r->rt.name, &err);
         if (!r->up)
             return refuse(f, conn, r, method, url,
                           err.code == GI_EINVAL ? MHD_HTTP_BAD_REQUEST : MHD_HTTP_INTERNAL_SERVER_ERROR,
@@ -711,7 +606,7 @@ static void body_piece(gi_farm *f, api_req *r, const char *data, size_t n)
                                               : MHD_HTTP_INTERNAL_SERVER_ERROR;
             snprintf(r->err, sizeof r->err, "%s", err.msg);
         }
-    } else if (r->route == R_JOBS_SUBMIT) {
+    } else if (r->rt.id == GI_ROUTE_JOBS_SUBMIT) {
         if (submissions_have_room(f, n, r)) {
             gi_buf_put(&r->body, data, n);
             f->submit_buffered += n;
@@ -788,7 +683,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     /* Only an output sent to its end counts as fetched: one cut off (the
      * client gone, a timeout) leaves the job unfetched for retention. */
     if (r->fetching && toe == MHD_REQUEST_TERMINATED_COMPLETED_OK)
-        gi_farm_job_fetched(cls, r->job_id, r->name, r->peer);
+        gi_farm_job_fetched(cls, r->rt.job_id, r->rt.name, r->peer);
     gi_farm_upload_abort(r->up); /* a client that went away mid-upload */
     body_release(cls, r);
     free(r);
@@ -805,30 +700,11 @@ static void on_mhd_log(void *cls, const char *fmt, va_list ap)
     (void)cls;
 }
 
-static int hex_value(char c)
-{
-    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c - 'A' + 10;
-}
-
-/* MHD's unescaping of paths and query values, except that %00 stays as
- * written: a NUL would cut what the handlers see, so that
- * /api/v1/jobs/1%00x would read as job 1. */
-static size_t unescape_keeping_nul(void *cls, struct MHD_Connection *conn, char *s)
+static size_t unescape(void *cls, struct MHD_Connection *conn, char *s)
 {
     (void)cls;
     (void)conn;
-    char *w = s;
-    for (const char *r = s; *r;) {
-        if (r[0] == '%' && isxdigit((unsigned char)r[1]) && isxdigit((unsigned char)r[2]) &&
-            (r[1] != '0' || r[2] != '0')) {
-            *w++ = (char)(hex_value(r[1]) * 16 + hex_value(r[2]));
-            r += 3;
-        } else {
-            *w++ = *r++;
-        }
-    }
-    *w = '\0';
-    return (size_t)(w - s);
+    return gi_url_unescape(s);
 }
 
 int gi_farm_api_start(gi_farm *f, gi_error *err)
@@ -843,7 +719,7 @@ int gi_farm_api_start(gi_farm *f, gi_error *err)
         on_connection, f, MHD_OPTION_CONNECTION_LIMIT, API_CONNS_MAX + API_CONNS_CUT_ROOM,
         MHD_OPTION_PER_IP_CONNECTION_LIMIT, API_CONNS_PER_ADDRESS + API_CONNS_CUT_ROOM,
         MHD_OPTION_CONNECTION_TIMEOUT, 60u, MHD_OPTION_CONNECTION_MEMORY_LIMIT,
-        (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK, unescape_keeping_nul, NULL,
+        (size_t)(256u << 10), MHD_OPTION_UNESCAPE_CALLBACK, unescape, NULL,
         MHD_OPTION_END);
     if (!f->mhd) {
         close(f->api_fd);
