@@ -44,16 +44,24 @@ void gi_manifest_free(gi_manifest *m)
     gi_manifest_init(m);
 }
 
+void gi_manifest_append(gi_manifest *m, const char *name, const char *hash, uint64_t size)
+{
+    if (m->count == m->cap) {
+        m->cap = m->cap ? 2 * m->cap : 8;
+        m->entries = gi_xrealloc(m->entries, m->cap * sizeof *m->entries);
+    }
+    gi_manifest_entry *e = &m->entries[m->count++];
+    e->name = gi_xstrdup(name);
+    memcpy(e->hash, hash, GI_HASH_HEX);
+    e->size = size;
+}
+
 void gi_manifest_put(gi_manifest *m, const char *name, const char *hash, uint64_t size)
 {
     gi_manifest_entry *e = (gi_manifest_entry *)gi_manifest_find(m, name);
     if (!e) {
-        if (m->count == m->cap) {
-            m->cap = m->cap ? 2 * m->cap : 8;
-            m->entries = gi_xrealloc(m->entries, m->cap * sizeof *m->entries);
-        }
-        e = &m->entries[m->count++];
-        e->name = gi_xstrdup(name);
+        gi_manifest_append(m, name, hash, size);
+        return;
     }
     memcpy(e->hash, hash, GI_HASH_HEX);
     e->size = size;

@@ -50,6 +50,9 @@ void gi_manifest_init(gi_manifest *m);
 void gi_manifest_free(gi_manifest *m);
 /* Adds or replaces name's entry. */
 void gi_manifest_put(gi_manifest *m, const char *name, const char *hash, uint64_t size);
+/* Adds an entry for a name the caller knows is not in m (no look-up: many
+ * entries in a row without quadratic time). */
+void gi_manifest_append(gi_manifest *m, const char *name, const char *hash, uint64_t size);
 const gi_manifest_entry *gi_manifest_find(const gi_manifest *m, const char *name);
 /* 1 if some file of the manifest has these bytes. */
 int gi_manifest_has_hash(const gi_manifest *m, const char *hash);

@@ -56,18 +56,86 @@ static char *absolute_file(const char *ckpt)
     return out;
 }
 
+int gi_batch_root_owner_format(const gi_batch_root_owner *o, gi_buf *out)
+{
+    /* A newline would end the path early: the record would name another
+     * checkpoint, and the root be removed while its checkpoint needs it. */
+    if (o->pid <= 0 || (o->ckpt[0] && o->ckpt[0] != '/') || strchr(o->ckpt, '\n'))
+        return -1;
+    char head[64];
+    int n = snprintf(head, sizeof head, OWNER_MAGIC "\n%ld %llu\n", o->pid, o->start);
+    size_t len = strlen(o->ckpt);
+    if ((size_t)n + len + 1 > GI_BATCH_ROOT_OWNER_MAX)
+        return -1;
+    gi_buf_put(out, head, (size_t)n);
+    gi_buf_put(out, o->ckpt, len);
+    gi_buf_put_u8(out, '\n');
+    return 0;
+}
+
+/* A decimal number without sign or leading zeros, at most max; *s moves
+ * past it. */
+static int parse_decimal(const char **s, const char *end, unsigned long long max,
+                         unsigned long long *out)
+{
+    const char *p = *s;
+    unsigned long long v = 0;
+    for (; p < end && *p >= '0' && *p <= '9'; p++) {
+        unsigned d = (unsigned)(*p - '0');
+        if ((p > *s && v == 0) || v > (max - d) / 10)
+            return -1;
+        v = v * 10 + d;
+    }
+    if (p == *s)
+        return -1;
+    *s = p;
+    *out = v;
+    return 0;
+}
+
+int gi_batch_root_owner_parse(const char *text, size_t len, const char *path,
+                              gi_batch_root_owner *o, gi_error *err)
+{
+    o->ckpt = NULL;
+    const char *s = text, *end = text + len;
+    unsigned long long pid, start;
+    if (len > GI_BATCH_ROOT_OWNER_MAX || len < sizeof OWNER_MAGIC ||
+        memcmp(s, OWNER_MAGIC "\n", sizeof OWNER_MAGIC) != 0)
+        return gi_fail(err, GI_EINVAL, "%s: not a gi render owner record", path);
+    s += sizeof OWNER_MAGIC;
+    if (parse_decimal(&s, end, LONG_MAX, &pid) || pid == 0 || s == end || *s++ != ' ' ||
+        parse_decimal(&s, end, ULLONG_MAX, &start) || s == end || *s++ != '\n')
+        return gi_fail(err, GI_EINVAL, "%s: line 2 is not \"PID START\"", path);
+    const char *nl = memchr(s, '\n', (size_t)(end - s));
+    if (!nl || nl + 1 != end)
+        return gi_fail(err, GI_EINVAL, "%s: line 3 (the checkpoint) is not the last line",
+                       path);
+    if (memchr(s, '\0', (size_t)(nl - s)) || (nl > s && s[0] != '/'))
+        return gi_fail(err, GI_EINVAL, "%s: line 3 is not an absolute path", path);
+    o->pid = (long)pid;
+    o->start = start;
+    o->ckpt = gi_xmalloc((size_t)(nl - s) + 1);
+    memcpy(o->ckpt, s, (size_t)(nl - s));
+    o->ckpt[nl - s] = '\0';
+    return 0;
+}
+
 static void write_owner(const char *root, const char *ckpt)
 {
     char *abs = ckpt ? absolute_file(ckpt) : NULL;
     long pid = (long)getpid();
-    char rec[PATH_MAX + 128];
-    int n = snprintf(rec, sizeof rec, OWNER_MAGIC "\n%ld %llu\n%s\n", pid, process_start(pid),
-                     abs ? abs : "");
-    free(abs);
+    gi_batch_root_owner o = {pid, process_start(pid), abs ? abs : ""};
+    gi_buf rec;
+    gi_buf_init(&rec);
     char *path = gi_path_join(root, ".owner");
     gi_error err;
-    if (n > 0 && (size_t)n < sizeof rec && gi_write_file_atomic(path, rec, (size_t)n, &err))
-        gi_debug("%s", err.msg); /* without it the root waits for the age rule */
+    /* Without a record the root waits for the age rule. */
+    if (gi_batch_root_owner_format(&o, &rec))
+        gi_debug("%s: no owner record: the checkpoint's path cannot be written in one", root);
+    else if (gi_write_file_atomic(path, rec.data, rec.len, &err))
+        gi_debug("%s", err.msg);
+    gi_buf_free(&rec);
+    free(abs);
     free(path);
 }
 
@@ -105,29 +173,24 @@ static int orphaned(const char *root)
     gi_buf b;
     gi_buf_init(&b);
     gi_error err;
-    int rc = gi_read_file(path, PATH_MAX + 128, &b, &err);
-    free(path);
-    if (rc) {
-        gi_buf_free(&b);
-        return 0;
+    gi_batch_root_owner o;
+    /* No record, or a damaged one: left to the age rule. */
+    int rc = gi_read_file(path, GI_BATCH_ROOT_OWNER_MAX, &b, &err);
+    if (rc == 0 && gi_batch_root_owner_parse((const char *)b.data, b.len, path, &o, &err)) {
+        gi_debug("%s", err.msg);
+        rc = -1;
     }
-    gi_buf_put(&b, "", 1); /* a C string */
-    char *text = (char *)b.data, *line2 = strchr(text, '\n'), *line3 = NULL;
-    long pid = 0;
-    unsigned long long start = 0;
-    int ok = line2 && strncmp(text, OWNER_MAGIC "\n", sizeof OWNER_MAGIC) == 0 &&
-             sscanf(line2 + 1, "%ld %llu", &pid, &start) == 2 && pid > 0 &&
-             (line3 = strchr(line2 + 1, '\n')) != NULL;
+    gi_buf_free(&b);
+    free(path);
+    if (rc)
+        return 0;
     int orphan = 0;
-    if (ok && (start == 0 || process_start(pid) != start)) {
-        char *end = strchr(line3 + 1, '\n');
-        if (end)
-            *end = '\0';
-        char *named = line3[1] ? gi_local_checkpoint_batch_root(line3 + 1) : NULL;
+    if (o.start == 0 || process_start(o.pid) != o.start) {
+        char *named = o.ckpt[0] ? gi_local_checkpoint_batch_root(o.ckpt) : NULL;
         orphan = !named || strcmp(named, root) != 0;
         free(named);
     }
-    gi_buf_free(&b);
+    free(o.ckpt);
     return orphan;
 }
 

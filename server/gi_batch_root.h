@@ -12,7 +12,32 @@
 #ifndef GI_BATCH_ROOT_H
 #define GI_BATCH_ROOT_H
 
+#include <stddef.h>
+
+#include "gi_buf.h"
 #include "gi_error.h"
+
+/* The owner record, ROOT/.owner: the line "gi-render-owner 1", then
+ * "PID START" (decimal, PID > 0; START as /proc/PID/stat's 22nd field, 0
+ * if unknown), then the absolute path of the checkpoint that may name the
+ * root (an empty line if none), each line ended by a newline. */
+typedef struct gi_batch_root_owner {
+    long pid;
+    unsigned long long start;
+    char *ckpt; /* malloc'ed; "" if none */
+} gi_batch_root_owner;
+
+/* Records longer than this are not written (the root then waits for the
+ * age rule) and not read. */
+#define GI_BATCH_ROOT_OWNER_MAX (4096 + 128)
+
+/* Appends o's record; -1 (nothing appended) if its checkpoint path cannot
+ * be written in one (a newline in it, not absolute, too long). */
+int gi_batch_root_owner_format(const gi_batch_root_owner *o, gi_buf *out);
+/* Reads a record exactly as gi_batch_root_owner_format writes it; anything
+ * else is GI_EINVAL naming path. */
+int gi_batch_root_owner_parse(const char *text, size_t len, const char *path,
+                              gi_batch_root_owner *o, gi_error *err);
 
 /* A new root under tmp (an absolute path, malloc'ed), owned by this process
  * for the checkpoint at ckpt (NULL: the render keeps none). */

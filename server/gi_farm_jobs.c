@@ -34,6 +34,7 @@
 #include <unistd.h>
 
 #include "gi_farm_impl.h"
+#include "gi_farm_published.h"
 #include "gi_file_writer.h"
 #include "gi_progress.h"
 #include "gi_fs.h"
@@ -859,25 +860,17 @@ static char *published_path(const gi_farm_job *j)
     return p;
 }
 
-/* <dir>/published: "HASH SIZE" lines, what the checkpoint on disk needs
- * from the asset store. A line that does not parse is skipped: at worst
- * the store keeps a file longer. */
+/* <dir>/published (gi_farm_published.h): what the checkpoint on disk
+ * needs from the asset store. */
 static void published_load(gi_farm_job *j)
 {
     char *path = published_path(j);
     gi_buf b;
     gi_buf_init(&b);
     if (gi_read_file(path, (size_t)1 << 24, &b, NULL) == 0) {
-        gi_buf_put(&b, "", 1);
-        for (char *line = (char *)b.data, *next; line && *line; line = next) {
-            next = strchr(line, '\n');
-            if (next)
-                *next++ = '\0';
-            char hash[GI_HASH_HEX];
-            unsigned long long size;
-            if (sscanf(line, "%64s %llu", hash, &size) == 2 && gi_hash_is_valid(hash))
-                gi_manifest_put(&j->published, hash, hash, size);
-        }
+        size_t skipped = gi_published_parse((const char *)b.data, b.len, &j->published);
+        if (skipped)
+            gi_warn("%s: %zu damaged lines skipped", path, skipped);
     }
     gi_buf_free(&b);
     free(path);
@@ -887,12 +880,7 @@ static int published_save(const gi_farm_job *j, const gi_manifest *m, gi_error *
 {
     gi_buf b;
     gi_buf_init(&b);
-    for (size_t i = 0; i < m->count; i++) {
-        char line[GI_HASH_HEX + 32];
-        int n = snprintf(line, sizeof line, "%s %llu\n", m->entries[i].hash,
-                         (unsigned long long)m->entries[i].size);
-        gi_buf_put(&b, line, (size_t)n);
-    }
+    gi_published_format(m, &b);
     char *path = published_path(j);
     int rc = gi_write_file_atomic(path, b.data, b.len, err);
     free(path);

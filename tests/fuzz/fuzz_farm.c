@@ -1,18 +1,24 @@
 /* fuzz_farm: libFuzzer target for what gi-farmd and gi read from outside
  * besides frames: the journal (a file that a crash may have torn), job
  * submission bodies (POST /api/v1/jobs), HTTP response heads and chunked
- * bodies (what `gi` reads from a farm), and a job's affinity file (read
- * back when gi-farmd restarts). The first byte picks the parser. Whatever
- * parses must survive a round trip: journal records encode back to the same
- * bytes, where the parser says they were (in order; damaged ones skipped);
- * a submission rebuilt by `gi submit`'s builder parses to the same job
- * text, priority and asset map; the affinity owners read, written again,
- * read back the same. */
+ * bodies (what `gi` reads from a farm), a job's affinity and published
+ * files (read back when gi-farmd restarts), and the owner record of a `gi
+ * render` batch root (read by the next `gi render`). The first byte picks
+ * the parser. Whatever parses must survive a round trip: journal records
+ * encode back to the same bytes, where the parser says they were (in order;
+ * damaged ones skipped); a submission rebuilt by `gi submit`'s builder
+ * parses to the same job text, priority and asset map; the affinity owners
+ * read, written again, read back the same; the published entries written
+ * again are the lines read, less the skipped ones; an owner record writes
+ * back to its own bytes, and one that does not parse is refused with a
+ * one-line GI_EINVAL message. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gi_affinity.h"
+#include "gi_batch_root.h"
+#include "gi_farm_published.h"
 #include "gi_farm_submit.h"
 #include "gi_http_client.h"
 #include "gi_journal.h"
@@ -147,6 +153,63 @@ static void affinity(const uint8_t *data, size_t size)
     owners_free(&b);
 }
 
+/* Every line that is not skipped is an entry (the last of equal hashes
+ * wins), and the entries written again read back the same, none skipped. */
+static void published(const uint8_t *data, size_t size)
+{
+    gi_manifest a, b;
+    gi_manifest_init(&a);
+    gi_manifest_init(&b);
+    size_t lines = 0, empty = 0;
+    for (size_t i = 0, start = 0; i <= size; i++)
+        if (i == size || data[i] == '\n') {
+            lines += i > start || i < size;
+            empty += i == start && i < size;
+            start = i + 1;
+        }
+    size_t skipped = gi_published_parse((const char *)data, size, &a);
+    if (skipped + empty > lines || a.count > lines - skipped - empty)
+        abort();
+    gi_buf out;
+    gi_buf_init(&out);
+    gi_published_format(&a, &out);
+    if (gi_published_parse((const char *)out.data, out.len, &b) != 0 || b.count != a.count)
+        abort();
+    for (size_t i = 0; i < a.count; i++) {
+        const gi_manifest_entry *e = &a.entries[i];
+        if (!gi_hash_is_valid(e->hash) || strcmp(e->name, e->hash) != 0 ||
+            e->size > GI_ASSET_MAX_BYTES)
+            abort();
+        if (gi_manifest_find(&a, e->name) != e) /* each hash once */
+            abort();
+        const gi_manifest_entry *f = gi_manifest_find(&b, e->name);
+        if (!f || strcmp(f->hash, e->hash) != 0 || f->size != e->size)
+            abort();
+    }
+    gi_buf_free(&out);
+    gi_manifest_free(&a);
+    gi_manifest_free(&b);
+}
+
+static void batch_root_owner(const uint8_t *data, size_t size)
+{
+    gi_batch_root_owner o;
+    gi_error err;
+    gi_error_clear(&err);
+    if (gi_batch_root_owner_parse((const char *)data, size, "owner", &o, &err)) {
+        if (err.code != GI_EINVAL || !err.msg[0] || strchr(err.msg, '\n') || o.ckpt)
+            abort();
+        return;
+    }
+    gi_buf out;
+    gi_buf_init(&out);
+    if (o.pid <= 0 || gi_batch_root_owner_format(&o, &out) != 0 || out.len != size ||
+        memcmp(out.data, data, size) != 0)
+        abort();
+    gi_buf_free(&out);
+    free(o.ckpt);
+}
+
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
@@ -159,7 +222,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return 0;
-    switch (data[0] % 4) {
+    switch (data[0] % 6) {
     case 0:
         journal(data + 1, size - 1);
         break;
@@ -169,8 +232,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     case 2:
         http(data + 1, size - 1);
         break;
-    default:
+    case 3:
         affinity(data + 1, size - 1);
+        break;
+    case 4:
+        published(data + 1, size - 1);
+        break;
+    default:
+        batch_root_owner(data + 1, size - 1);
         break;
     }
     return 0;

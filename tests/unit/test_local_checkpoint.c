@@ -139,3 +139,68 @@ GI_TEST(test_batch_root_sweep_removes_what_cannot_be_resumed)
     free(orphan);
     free(bare);
 }
+
+/* The owner record reads back exactly what was written; anything else is
+ * refused with a message (and the sweep then leaves the root to the age
+ * rule, as if it had no record). */
+GI_TEST(test_batch_root_owner_record)
+{
+    gi_batch_root_owner o = {4242, 987654321ull, "/var/tmp/job.checkpoint"}, back;
+    gi_buf b;
+    gi_buf_init(&b);
+    GI_REQUIRE(gi_batch_root_owner_format(&o, &b) == 0);
+    static const char want[] = "gi-render-owner 1\n4242 987654321\n/var/tmp/job.checkpoint\n";
+    GI_CHECK(b.len == strlen(want) && memcmp(b.data, want, b.len) == 0);
+    gi_error err;
+    GI_REQUIRE(gi_batch_root_owner_parse((const char *)b.data, b.len, "r", &back, &err) == 0);
+    GI_CHECK(back.pid == 4242 && back.start == 987654321ull &&
+             strcmp(back.ckpt, o.ckpt) == 0);
+    free(back.ckpt);
+    GI_CHECK(gi_batch_root_owner_parse("gi-render-owner 1\n7 0\n\n", 23, "r", &back, &err) == 0 &&
+             back.pid == 7 && back.ckpt[0] == '\0');
+    free(back.ckpt);
+    static const char *const bad[] = {
+        "gi-render-owner 1\n-7 0\n\n",       /* sscanf took a sign */
+        "gi-render-owner 1\n+7 0\n\n",
+        "gi-render-owner 1\n0 0\n\n",        /* no process */
+        "gi-render-owner 1\n7 0 junk\n\n",   /* sscanf ignored the rest */
+        "gi-render-owner 1\n7 -1\n\n",       /* %llu took -1 as 2^64 - 1 */
+        "gi-render-owner 1\n7 0\nrel/ckpt\n", /* not absolute */
+        "gi-render-owner 1\n7 0\n/a\n/b\n",  /* a fourth line */
+        "gi-render-owner 1\n7 0\n/a",        /* cut */
+        "gi-render-owner 1\n99999999999999999999 0\n\n",
+        "gi-render-owner 2\n7 0\n\n",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        gi_error_clear(&err);
+        GI_CHECK_MSG(gi_batch_root_owner_parse(bad[i], strlen(bad[i]), "r", &back, &err) != 0 &&
+                         err.code == GI_EINVAL && strncmp(err.msg, "r: ", 3) == 0,
+                     "record %zu parsed", i);
+    }
+    /* A newline in the checkpoint's path cannot be written: the record
+     * would name another file. */
+    gi_buf_reset(&b);
+    o.ckpt = "/var/tmp/a\nb.checkpoint";
+    GI_CHECK(gi_batch_root_owner_format(&o, &b) != 0 && b.len == 0);
+    o.ckpt = "job.checkpoint";
+    GI_CHECK(gi_batch_root_owner_format(&o, &b) != 0 && b.len == 0);
+    gi_buf_free(&b);
+}
+
+/* A render whose checkpoint's path has a newline gets a root without a
+ * record: the sweep leaves it to the age rule instead of reading another
+ * checkpoint's name from a cut path and removing it. */
+GI_TEST(test_batch_root_newline_checkpoint_has_no_record)
+{
+    char base[512], ckpt[700], path[800];
+    GI_REQUIRE(realpath(gi_test_tmpdir(), base) != NULL);
+    snprintf(ckpt, sizeof ckpt, "%s/a\nb.checkpoint", base);
+    gi_error err;
+    char *root = gi_batch_root_make(base, ckpt, &err);
+    GI_REQUIRE(root != NULL);
+    snprintf(path, sizeof path, "%s/.owner", root);
+    GI_CHECK(access(path, F_OK) != 0);
+    GI_CHECK(gi_batch_root_sweep(base, GI_BATCH_DIR_MAX_AGE_S) == 0 && access(root, F_OK) == 0);
+    GI_CHECK_OK(gi_batch_dir_remove(root, &err));
+    free(root);
+}
