@@ -46,6 +46,8 @@ void gi_farm_config_default(gi_farm_config *c)
     c->heartbeat_s = 2.0;
     c->lease_s = 30.0;
     c->api_head_s = 10.0;
+    c->api_request_s = 10.0;
+    c->api_min_rate = 16 << 10;
     c->dead_s = 120.0;
     c->handshake_s = 10.0;
     c->checkpoint_s = 30.0;

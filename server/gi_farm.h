@@ -31,6 +31,10 @@ typedef struct gi_farm_config {
     double dead_s;       /* a connection silent this long is closed */
     double handshake_s;  /* time allowed for HELLO .. AUTH */
     double api_head_s;   /* time allowed an API client for a request's head */
+    /* A request must be over by api_request_s after its head, plus a second
+     * for every api_min_rate bytes it moved (0: no such limit). */
+    double api_request_s;
+    uint64_t api_min_rate;
     double checkpoint_s; /* checkpoint running jobs this often */
     double refusal_window_s; /* an unauthenticated peer's refusals: a log line per window */
     /* Retention: an ended job is purged this long after it ended (0: kept

@@ -13,13 +13,18 @@
  * compares the digests in constant time. Refusals (no token, wrong token,
  * bodies over their limit, invalid jobs) are logged with the peer and the
  * reason, never with the token; those of a missing or wrong token, which
- * anyone can send, once per peer and 10 s (gi_refusal_log). */
+ * anyone can send, once per peer and 10 s (gi_refusal_log), as are the
+ * connections closed for their pace (a request's head or whole request not
+ * in time, gi_api_conn) and MHD's own messages. */
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <linux/tcp.h> /* struct tcp_info with its byte counts (glibc's has none) */
+#include <math.h>
 #include <microhttpd.h>
 #include <netinet/in.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -47,18 +52,45 @@ typedef struct api_req {
     uint64_t received, limit;
 } api_req;
 
+/* A request target for logs: printable ASCII only, cut short. */
+static void log_safe(const char *in, char *out, size_t n)
+{
+    size_t k = 0;
+    for (; *in && k + 5 < n; in++)
+        if (isprint((unsigned char)*in))
+            out[k++] = *in;
+        else
+            k += (size_t)snprintf(out + k, n - k, "\\x%02x", (unsigned char)*in);
+    out[k] = '\0';
+}
+
 /* A TCP connection of the API. A client gets --api-head-seconds to send a
  * request's head, from its connection or from the end of its last request;
  * then it is shut down. MHD's own timeout counts idle time only, so a
  * client trickling a header line every few seconds would hold its
  * connection (and, 64 of them, every other client from its address) for
- * ever. */
+ * ever.
+ *
+ * Once the head is in, the request (its body in, its answer out) keeps a
+ * pace: by --api-request-seconds after the head, and one second more for
+ * every --api-min-rate bytes moved since, it must be over, or it is shut
+ * down too. Bytes moved are the kernel's count of bytes received and of
+ * bytes the client acknowledged (TCP_INFO), so that an answer counts as
+ * the client takes it, not as MHD hands it to the socket; a body MHD reads
+ * only to discard it counts as well. Without a pace, a token holder
+ * sending a submission a byte a second (never idle for MHD) holds its slot
+ * for ever, and 64 of them every other client of its address. */
 typedef struct gi_api_conn {
     int fd;
     struct sockaddr_storage addr; /* the client's; port ignored */
+    char peer[80];
     double since;   /* when it began to wait for a request's head */
     int in_request; /* a head has come, the answer has not gone */
     int cut;        /* shut down already */
+    char what[120]; /* the request under way, for logs: "POST /api/v1/jobs" */
+    double head_at; /* when its head came */
+    uint64_t moved_at_head; /* bytes moved (received + acknowledged) by then */
+    double deadline;        /* the request's, as of the bytes moved when last looked at */
     struct gi_api_conn *prev, *next;
 } gi_api_conn;
 
@@ -67,6 +99,10 @@ typedef struct gi_api_conn {
 #define API_CONNS_PER_ADDRESS 64u
 /* MHD's limits are higher by this much, for connections cut but not closed yet. */
 #define API_CONNS_CUT_ROOM 64u
+/* A connection's first second idle, or a request's first second: the time a
+ * client needs to get going (its head read, its body flowing), during which
+ * keep_a_slot_free spares it if it can. */
+#define API_SETTLE_S 1.0
 
 static gi_api_conn *api_conn_of(struct MHD_Connection *conn)
 {
@@ -105,27 +141,110 @@ static int same_host(const struct sockaddr_storage *a, const struct sockaddr_sto
     return 1;
 }
 
+/* Bytes the connection has received and had acknowledged, from the
+ * kernel; -1 when it cannot say (then no pace is kept). */
+static int bytes_moved(int fd, uint64_t *out)
+{
+    struct tcp_info ti;
+    socklen_t n = sizeof ti;
+    memset(&ti, 0, sizeof ti);
+    if (fd < 0 || getsockopt(fd, IPPROTO_TCP, TCP_INFO, &ti, &n) != 0 ||
+        n < offsetof(struct tcp_info, tcpi_bytes_received) + sizeof ti.tcpi_bytes_received)
+        return -1;
+    *out = ti.tcpi_bytes_acked + ti.tcpi_bytes_received;
+    return 0;
+}
+
+static void request_began(const gi_farm *f, gi_api_conn *c, const char *method, const char *url)
+{
+    char u[100];
+    log_safe(url, u, sizeof u);
+    snprintf(c->what, sizeof c->what, "%.10s %s", method, u);
+    c->in_request = 1;
+    c->head_at = gi_now();
+    c->deadline = c->head_at + f->cfg.api_request_s;
+    if (bytes_moved(c->fd, &c->moved_at_head))
+        c->deadline = INFINITY;
+}
+
+/* Looks again at the bytes the request has moved; sets *moved to them and
+ * returns 1 if it is past its deadline. */
+static int request_overdue(const gi_farm *f, gi_api_conn *c, double now, uint64_t *moved)
+{
+    uint64_t total;
+    *moved = 0;
+    if (f->cfg.api_min_rate == 0 || c->deadline == INFINITY || bytes_moved(c->fd, &total))
+        return 0;
+    *moved = total - c->moved_at_head;
+    c->deadline = c->head_at + f->cfg.api_request_s + (double)*moved / (double)f->cfg.api_min_rate;
+    return now > c->deadline;
+}
+
+/* A request under way for a second or more that has moved fewer bytes than
+ * --api-min-rate for its time (the deadline allows --api-request-seconds
+ * more): how far behind it is, in bytes; 0 if not. */
+static double request_behind(const gi_farm *f, gi_api_conn *c, double now)
+{
+    uint64_t moved;
+    double t = now - c->head_at;
+    if (t < API_SETTLE_S || f->cfg.api_min_rate == 0 || c->deadline == INFINITY)
+        return 0;
+    request_overdue(f, c, now, &moved);
+    double due = t * (double)f->cfg.api_min_rate;
+    return (double)moved < due ? due - (double)moved : 0;
+}
+
+/* A connection shut down for its pace: a line per peer and
+ * --refusal-log-window, as anyone can open connections. */
+static void log_slow(gi_farm *f, gi_api_conn *c, double now, const char *why)
+{
+    gi_refusal_logf(&f->refusals, now, c->peer, "api: closed the connection of %s: %s", c->peer,
+                    why);
+}
+
+/* The longest idle connection if it was idle for API_SETTLE_S, else the
+ * request furthest behind, else the idle one all the same (one just opened,
+ * its head not read yet: a client's next request; or a flood of idle
+ * connections), else the new one if it is over the limit. */
+static gi_api_conn *shed_first(gi_api_conn *idle, gi_api_conn *behind, double now, int over,
+                               gi_api_conn *fresh)
+{
+    if (idle && now - idle->since >= API_SETTLE_S)
+        return idle;
+    return behind ? behind : idle ? idle : over ? fresh : NULL;
+}
+
 /* When the new connection fills its address's slots or all of them, the
  * connection waiting longest for a request head (idle: nothing sent yet, or
  * between two requests) gives its slot up, so that the next client gets in;
- * with none idle, the new one over the limit is closed. Otherwise a client
- * opening connections and sending nothing, again as each was cut after
- * --api-head-seconds, would hold every slot of its address (on loopback:
- * every local client's) or, from a few addresses, all of them. MHD's own
- * limits are higher: the connections cut here are only closed when MHD
- * next runs. */
+ * with none idle (for a second: shed_first), the request furthest behind
+ * --api-min-rate (request_behind); with none of those either, the new one
+ * over the limit is closed. Otherwise a client opening idle connections again as each was
+ * cut after --api-head-seconds, or trickling requests' bodies, would hold
+ * every slot of its address (on loopback: every local client's) or, from a
+ * few addresses, all of them. MHD's own limits are higher: the connections
+ * cut here are only closed when MHD next runs. */
 static void keep_a_slot_free(gi_farm *f, gi_api_conn *fresh)
 {
     unsigned all = 0, here = 0;
-    gi_api_conn *oldest = NULL, *oldest_here = NULL;
+    gi_api_conn *oldest = NULL, *oldest_here = NULL, *slowest = NULL, *slowest_here = NULL;
+    double behind_most = 0, behind_most_here = 0, now = gi_now();
     for (gi_api_conn *c = f->api_conns; c; c = c->next) {
         if (c->cut)
             continue;
         int mine = same_host(&c->addr, &fresh->addr);
         all++;
         here += mine;
-        if (c == fresh || c->in_request || c->fd < 0)
+        if (c == fresh || c->fd < 0)
             continue;
+        if (c->in_request) {
+            double b = request_behind(f, c, now);
+            if (b > behind_most)
+                behind_most = b, slowest = c;
+            if (mine && b > behind_most_here)
+                behind_most_here = b, slowest_here = c;
+            continue;
+        }
         if (!oldest || c->since < oldest->since)
             oldest = c;
         if (mine && (!oldest_here || c->since < oldest_here->since))
@@ -133,11 +252,20 @@ static void keep_a_slot_free(gi_farm *f, gi_api_conn *fresh)
     }
     gi_api_conn *shed = NULL;
     if (here >= API_CONNS_PER_ADDRESS)
-        shed = oldest_here ? oldest_here : here > API_CONNS_PER_ADDRESS ? fresh : NULL;
+        shed = shed_first(oldest_here, slowest_here, now, here > API_CONNS_PER_ADDRESS, fresh);
     else if (all >= API_CONNS_MAX)
-        shed = oldest ? oldest : all > API_CONNS_MAX ? fresh : NULL;
-    if (shed && shed->fd >= 0)
-        cut(shed, &f->m.api_conns_shed);
+        shed = shed_first(oldest, slowest, now, all > API_CONNS_MAX, fresh);
+    if (!shed || shed->fd < 0)
+        return;
+    if (shed->in_request) {
+        char why[300];
+        snprintf(why, sizeof why,
+                 "its request (%s) is behind --api-min-rate (%llu bytes/s) and its slot was "
+                 "needed",
+                 shed->what, (unsigned long long)f->cfg.api_min_rate);
+        log_slow(f, shed, now, why);
+    }
+    cut(shed, &f->m.api_conns_shed);
 }
 
 static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
@@ -151,8 +279,12 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
             MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
         c->fd = ci ? ci->connect_fd : -1;
         ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
-        if (ci && ci->client_addr)
+        if (ci && ci->client_addr) {
             remember_address(c, ci->client_addr);
+            gi_net_sockaddr_name(ci->client_addr, c->peer, sizeof c->peer);
+        } else {
+            snprintf(c->peer, sizeof c->peer, "?");
+        }
         c->since = gi_now();
         c->next = f->api_conns;
         if (c->next)
@@ -172,29 +304,34 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
     }
 }
 
-/* Shuts down the connections past their time for a request head (MHD
- * closes them when it next runs). */
+/* Shuts down the connections past their time for a request head, or
+ * their request's deadline (MHD closes them when it next runs). */
 static void cut_slow_connections(gi_farm *f)
 {
     double now = gi_now();
-    for (gi_api_conn *c = f->api_conns; c; c = c->next)
-        if (!c->in_request && !c->cut && c->fd >= 0 && now - c->since > f->cfg.api_head_s)
+    for (gi_api_conn *c = f->api_conns; c; c = c->next) {
+        if (c->cut || c->fd < 0)
+            continue;
+        char why[300];
+        uint64_t moved;
+        if (!c->in_request && now - c->since > f->cfg.api_head_s) {
+            snprintf(why, sizeof why, "no request head within --api-head-seconds (%g s)",
+                     f->cfg.api_head_s);
+            log_slow(f, c, now, why);
             cut(c, &f->m.api_slow_closed);
+        } else if (c->in_request && now > c->deadline && request_overdue(f, c, now, &moved)) {
+            snprintf(why, sizeof why,
+                     "its request (%s) moved %llu bytes in %.1f s, short of --api-request-seconds "
+                     "(%g s) and --api-min-rate (%llu bytes/s)",
+                     c->what, (unsigned long long)moved, now - c->head_at, f->cfg.api_request_s,
+                     (unsigned long long)f->cfg.api_min_rate);
+            log_slow(f, c, now, why);
+            cut(c, &f->m.api_slow_requests);
+        }
+    }
 }
 
 /* ---- helpers ------------------------------------------------------------- */
-
-/* A request target for logs: printable ASCII only, cut short. */
-static void log_safe(const char *in, char *out, size_t n)
-{
-    size_t k = 0;
-    for (; *in && k + 5 < n; in++)
-        if (isprint((unsigned char)*in))
-            out[k++] = *in;
-        else
-            k += (size_t)snprintf(out + k, n - k, "\\x%02x", (unsigned char)*in);
-    out[k] = '\0';
-}
 
 /* body is malloc'ed (freed by MHD) unless persistent. */
 static enum MHD_Result send_body_allow(struct MHD_Connection *conn, unsigned status, char *body,
@@ -629,7 +766,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     if (!r) {
         gi_api_conn *c = api_conn_of(conn);
         if (c)
-            c->in_request = 1;
+            request_began(f, c, method, url);
         r = gi_xcalloc(1, sizeof *r);
         gi_buf_init(&r->body);
         *con_cls = r;
@@ -691,13 +828,38 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     (void)conn;
 }
 
+/* MHD's messages are about one connection each ("closed by remote side",
+ * the ones cut here for their pace...) and say not which: a client opening
+ * connections by the hundred would write as many lines. The first in a
+ * --refusal-log-window is logged, the others counted and summed up when it
+ * is over (mhd_log_tick), with the last one. */
 static void on_mhd_log(void *cls, const char *fmt, va_list ap)
 {
-    char msg[600];
+    gi_farm *f = cls;
+    char msg[sizeof f->mhd_log_last];
     vsnprintf(msg, sizeof msg, fmt, ap);
     msg[strcspn(msg, "\n")] = '\0';
+    double now = gi_now();
+    if (f->cfg.refusal_window_s > 0 && f->mhd_log_since > 0 &&
+        now - f->mhd_log_since < f->cfg.refusal_window_s) {
+        f->mhd_log_suppressed++;
+        memcpy(f->mhd_log_last, msg, sizeof msg);
+        return;
+    }
+    f->mhd_log_since = now;
     gi_info("api: %s", msg);
-    (void)cls;
+}
+
+static void mhd_log_tick(gi_farm *f, double now)
+{
+    if (f->mhd_log_since <= 0 || now - f->mhd_log_since < f->cfg.refusal_window_s)
+        return;
+    if (f->mhd_log_suppressed)
+        gi_info("api: %llu more libmicrohttpd messages in the last %.0f s (the last: %s)",
+                (unsigned long long)f->mhd_log_suppressed, now - f->mhd_log_since,
+                f->mhd_log_last);
+    f->mhd_log_suppressed = 0;
+    f->mhd_log_since = 0;
 }
 
 static size_t unescape(void *cls, struct MHD_Connection *conn, char *s)
@@ -747,6 +909,7 @@ void gi_farm_api_run(gi_farm *f)
 {
     MHD_run(f->mhd);
     cut_slow_connections(f);
+    mhd_log_tick(f, gi_now());
 }
 
 void gi_farm_api_stop(gi_farm *f)

@@ -248,7 +248,9 @@ typedef struct gi_farm_metrics {
     uint64_t handshakes_displaced; /* closed unauthenticated for a newer connection */
     uint64_t api_requests, api_refused_auth, api_refused_input;
     uint64_t api_slow_closed; /* connections cut for a request head not sent in time */
-    uint64_t api_conns_shed; /* cut to keep a slot free (the longest idle, or one over) */
+    /* cut to keep a slot free (the longest idle, a request behind --api-min-rate, or one over) */
+    uint64_t api_conns_shed;
+    uint64_t api_slow_requests; /* requests cut past their deadline (--api-min-rate) */
     uint64_t assets_uploaded, asset_bytes_uploaded, assets_served;
 } gi_farm_metrics;
 
@@ -297,6 +299,10 @@ struct gi_farm {
     struct MHD_Daemon *mhd;
     struct gi_api_conn *api_conns; /* the API's TCP connections (gi_farm_api.c) */
     uint64_t submit_buffered; /* bytes of submission bodies held while they arrive */
+    /* libmicrohttpd's messages: a line per --refusal-log-window, then a count. */
+    double mhd_log_since;
+    uint64_t mhd_log_suppressed;
+    char mhd_log_last[300];
 
     /* ASSET_PUT frames served lately: each host asks for the same bytes. */
     gi_frame_cache asset_frames;

@@ -378,9 +378,13 @@ char *gi_farm_view_metrics(gi_farm *f)
             "API connections closed for not sending a request head in time.",
             (double)m->api_slow_closed);
     counter(&b, "gi_farm_api_conns_shed_total",
-            "API connections closed to keep a slot free: the longest idle, or a new one "
-            "over the limit.",
+            "API connections closed to keep a slot free: the longest idle, a request behind "
+            "--api-min-rate, or a new one over the limit.",
             (double)m->api_conns_shed);
+    counter(&b, "gi_farm_api_slow_requests_closed_total",
+            "API connections closed for a request past its deadline (--api-request-seconds, "
+            "--api-min-rate).",
+            (double)m->api_slow_requests);
     counter(&b, "gi_farm_assets_uploaded_total", "Assets uploaded.", (double)m->assets_uploaded);
     counter(&b, "gi_farm_asset_bytes_uploaded_total", "Bytes of assets uploaded.",
             (double)m->asset_bytes_uploaded);

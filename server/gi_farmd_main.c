@@ -57,6 +57,10 @@ static void usage(FILE *out)
             "  --max-jobs-memory B         what all jobs kept may hold, ended ones too (1G)\n"
             "  --check-timeout S --check-memory B             scene checker limits (300, 16G)\n"
             "  --api-head-seconds S        time an API client has to send a request's head (10)\n"
+            "  --api-request-seconds S --api-min-rate B   an API request (its body in, its\n"
+            "                              answer out) must be over S seconds after its head,\n"
+            "                              plus 1 s per B bytes moved; else it is closed\n"
+            "                              (10, 16K; --api-min-rate 0: no such limit)\n"
             "  --keep-ended DURATION       purge ended jobs (done, failed, cancelled) this long\n"
             "                              after they ended, e.g. 14d (default: until purged)\n"
             "  --keep-ended-bytes B        and ended ones while their files hold more (outputs,\n"
@@ -91,6 +95,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--blocklist-seconds", offsetof(gi_farm_config, blocklist_s), 0, 86400 * 30},
         {"--check-timeout", offsetof(gi_farm_config, check_timeout_s), 1, 86400},
         {"--api-head-seconds", offsetof(gi_farm_config, api_head_s), 0.1, 3600},
+        {"--api-request-seconds", offsetof(gi_farm_config, api_request_s), 0.1, 86400},
         {"--refusal-log-window", offsetof(gi_farm_config, refusal_window_s), 0, 3600},
         {"--task-timeout", offsetof(gi_farm_config, task_timeout_s), 0, GI_JOB_MAX_TASK_TIMEOUT},
     };
@@ -105,6 +110,7 @@ static int option(int argc, char **argv, int *i, gi_farm_config *c, const char *
         {"--max-pixels", offsetof(gi_farm_config, max_job_pixels)},
         {"--check-memory", offsetof(gi_farm_config, check_memory)},
         {"--keep-ended-bytes", offsetof(gi_farm_config, keep_ended_bytes)},
+        {"--api-min-rate", offsetof(gi_farm_config, api_min_rate)},
     };
     static const struct {
         const char *name;

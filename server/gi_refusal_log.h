@@ -2,7 +2,8 @@
  * who they are (API requests without the right token, worker connections
  * that fail or never finish their handshake). A scanner, or a host with a
  * wrong secret retrying as fast as it can, would otherwise write a log line
- * per attempt.
+ * per attempt. API connections closed for their pace (gi_farm_api.c) are
+ * logged this way too: anyone can open them, token or not.
  *
  * Per peer address (the port aside): its first refusal is logged in full
  * (the peer and the reason); the ones in the GI_REFUSAL_WINDOW_S after it
