@@ -9,7 +9,9 @@
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
 LOG="$TMP/farmd.log"
-start_farmd "$TMP/state" "$LOG"
+# No minimum rate: the held submissions below, whose bodies never come,
+# must keep their slots (farm_api_slow.sh tests the rate).
+start_farmd "$TMP/state" "$LOG" -- --api-min-rate 0
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cache"
 write_job "$TMP/job.json" <<JOB
 {"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 3,
