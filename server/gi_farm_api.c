@@ -219,11 +219,11 @@ static gi_api_conn *shed_first(gi_api_conn *idle, gi_api_conn *behind, double no
  * between two requests) gives its slot up, so that the next client gets in;
  * with none idle (for a second: shed_first), the request furthest behind
  * --api-min-rate (request_behind); with none of those either, the new one
- * over the limit is closed. Otherwise a client opening idle connections again as each was
- * cut after --api-head-seconds, or trickling requests' bodies, would hold
- * every slot of its address (on loopback: every local client's) or, from a
- * few addresses, all of them. MHD's own limits are higher: the connections
- * cut here are only closed when MHD next runs. */
+ * over the limit is closed. Otherwise a client opening idle connections
+ * again as each was cut after --api-head-seconds, or trickling requests'
+ * bodies, would hold every slot of its address (on loopback: every local
+ * client's) or, from a few addresses, all of them. MHD's own limits are
+ * higher: the connections cut here are only closed when MHD next runs. */
 static void keep_a_slot_free(gi_farm *f, gi_api_conn *fresh)
 {
     unsigned all = 0, here = 0;
