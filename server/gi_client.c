@@ -584,6 +584,25 @@ static int cmd_submit(client *c)
 
 /* ---- the other commands ---------------------------------------------------------- */
 
+/* The workers excluded from a job for failing its tasks, and whether its
+ * tasks wait for want of a worker: why a job makes no progress. */
+static void print_exclusions(const cJSON *job)
+{
+    const cJSON *xs = cJSON_GetObjectItemCaseSensitive(job, "excluded_workers");
+    int running = strcmp(str(job, "state"), "running") == 0;
+    for (const cJSON *x = xs ? xs->child : NULL; x; x = x->next) {
+        if (cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(x, "excluded")) && running)
+            printf("  worker %s excluded from this job until %s (%.0f s more); last: %s\n",
+                   str(x, "worker"), str(x, "until"), num(x, "seconds", 0), str(x, "last_error"));
+        else
+            printf("  worker %s was excluded from this job (until %s); last: %s\n",
+                   str(x, "worker"), str(x, "until"), str(x, "last_error"));
+    }
+    if (cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(job, "waiting_for_workers")))
+        printf("  waiting: no connected worker may take its tasks now (excluded from it, "
+               "blocklisted, or none)\n");
+}
+
 static int cmd_status(client *c, uint64_t id)
 {
     cJSON *job = NULL;
@@ -627,6 +646,7 @@ static int cmd_status(client *c, uint64_t id)
         printf("  ended %s; purged at %s by the farm's retention%s\n", str(job, "ended"),
                str(job, "purge_at"),
                done && !str(job, "fetched")[0] ? " (fetch its outputs before)" : "");
+    print_exclusions(job);
     const cJSON *te = cJSON_GetObjectItemCaseSensitive(job, "task_errors");
     int n = cJSON_GetArraySize(te);
     if (n > 0)

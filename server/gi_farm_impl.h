@@ -59,6 +59,16 @@ typedef struct gi_fj_task_error {
     char message[512];
 } gi_fj_task_error;
 
+/* A worker's standing with one job (gi_farm_sched.c, Exclusions): in
+ * memory only, like the blocklist. */
+typedef struct gi_fj_exclusion {
+    struct gi_farm_host *host;
+    uint32_t streak;       /* its failures of this job's tasks since its last result of them */
+    uint32_t times;        /* how often it was excluded from the job */
+    double until;          /* monotonic: excluded until then; 0: never was */
+    char last_error[256];
+} gi_fj_exclusion;
+
 struct gi_farm_job {
     uint64_t id;
     gi_fj_state state;
@@ -139,6 +149,10 @@ struct gi_farm_job {
      * another host when one can take it (a full disk, a broken GPU driver:
      * host trouble follows the host, not the task). */
     gi_affinity failed_on;
+    /* Workers whose failures of this job's tasks excluded them from it, or
+     * that have a streak of them (gi_farm_sched.c, Exclusions). */
+    gi_fj_exclusion *excl;
+    size_t excl_count, excl_cap;
     uint64_t ckpt_seq, ckpt_merged;
     char ckpt_error[512]; /* why the last checkpoint failed; "" if it did not */
     double ckpt_done_cost;
@@ -190,6 +204,11 @@ typedef struct gi_farm_lease {
 typedef struct gi_farm_host {
     char name[GI_MSG_MAX_NAME + 1];
     uint32_t consecutive_failures;
+    /* The job of the streak's first failure; wide: the streak has failures
+     * of another job too, or of the host's own disk (GI_EHOST), so it may
+     * blocklist the host (gi_farm_sched.c, Exclusions). */
+    uint64_t streak_job;
+    int streak_wide;
     uint64_t failures, successes;
     /* Losses with tasks held (gi_farm_sched.c, Blocklisting); consecutive:
      * since its last result. */
@@ -241,6 +260,7 @@ typedef struct gi_farm_metrics {
     uint64_t tasks_lost; /* runs lost with their host: requeued, not counted as attempts */
     uint64_t host_losses; /* hosts lost with tasks held, once per loss (blocklisting) */
     uint64_t task_timeouts; /* runs stopped for their time limit: failed (attempts) */
+    uint64_t job_exclusions; /* a worker excluded from one job (gi_farm_sched.c, Exclusions) */
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;
@@ -463,6 +483,11 @@ void gi_farm_sched_job_over(gi_farm *f, uint64_t id);
 void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c);
 gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
 int gi_farm_host_blocked(const gi_farm_host *h, double now);
+/* Is h excluded from job j now (gi_farm_sched.c, Exclusions)? */
+int gi_farm_job_excludes(const gi_farm_job *j, const gi_farm_host *h, double now);
+/* Can some connected worker take j's tasks now, slots or not (active, not
+ * blocklisted, not excluded from j)? */
+int gi_farm_job_has_host(const gi_farm *f, const gi_farm_job *j, double now);
 /* Makes a job that just became runnable start at the current fair share. */
 void gi_farm_sched_join(gi_farm *f, gi_farm_job *j);
 /* The job's affinity owners, by host name, in a file beside its checkpoint

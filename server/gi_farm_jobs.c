@@ -122,6 +122,7 @@ static void job_free(gi_farm_job *j)
     if (j->ckpt_w) /* only at exit, after gi_farm_jobs_checkpoint_all */
         gi_file_writer_finish(j->ckpt_w, NULL, NULL);
     run_free(j);
+    free(j->excl);
     free(j->file);
     free(j->text);
     free(j->submit_key);
@@ -506,6 +507,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->resumed_merged = j->results_accepted = j->results_late = 0;
     j->leases = j->lease_expiries = j->result_bytes = j->merged_bytes = 0;
     j->host_disk_errors = j->task_timeouts = 0;
+    j->excl_count = 0; /* a retried job gives every worker a new chance */
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
     j->disk_measured = 0;

@@ -60,11 +60,17 @@
  * slot). An absent owner's keys go to the first host asking (gi_affinity.h).
  *
  * Blocklisting. A worker (by name, across reconnections) whose tasks fail
- * `blocklist_failures` times in a row gets no tasks for `blocklist_s`.
- * Failures that are the job's fault (GI_EINVAL: bad input) do not count,
- * nor do timeouts (lease_overdue does not report them as host failures).
- * So does a host lost with tasks held `blocklist_losses` times (3 by
- * default) with no result accepted from it in between (host_lost): a
+ * `blocklist_failures` times in a row gets no tasks for `blocklist_s`,
+ * provided the streak holds failures of at least two jobs, or one of the
+ * host's own disk (GI_EHOST: the host's fault whatever the job): a streak
+ * of one job's failures is evidence against that job as much as the host,
+ * and excludes the host from that job only (Exclusions, below). A streak
+ * goes on across jobs: a host excluded from one job whose next task, of
+ * another job, fails is blocklisted. Failures that are the job's fault
+ * (GI_EINVAL: bad input) do not count, nor do timeouts (lease_overdue
+ * does not report them as host failures). So is a host lost with tasks
+ * held `blocklist_losses` times (3 by default) with no result accepted
+ * from it in between (host_lost), whatever the jobs: a
  * machine that keeps dying (bad memory, an OOM killer, a flapping link)
  * would otherwise take tasks again and again and lose them. A loss is one
  * event however many tasks it held: a connection lost or closed for an
@@ -77,7 +83,21 @@
  * a row happen to a healthy host (a reboot during a network outage), a
  * third without one task finished between them rarely does. A task that
  * takes every host down can blocklist a host it meets three times before
- * that host finishes anything, but max_losses (8) fails its job soon. */
+ * that host finishes anything, but max_losses (8) fails its job soon.
+ *
+ * Exclusions. A worker whose runs of one job's tasks fail
+ * `blocklist_failures` times with no result of that job from it in between
+ * gets no more of that job's tasks for `blocklist_s`, and keeps serving the
+ * other jobs: a job whose tasks crash the renderer everywhere would
+ * otherwise blocklist the whole farm, host after host, stalling every other
+ * job (render farms keep such "bad worker" evidence per job). Its tasks go
+ * to the other hosts, so it reaches its max_attempts and fails soon; when
+ * every host is excluded from it, it waits (its log says so, and its view
+ * lists the exclusions and until when). What counts is what counts for
+ * blocklisting, but for the host's disk errors (the host's fault: they
+ * count towards its blocklisting only). As the blocklist, exclusions live
+ * in memory: a restarted coordinator starts them afresh, and so does a
+ * retried job. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -116,6 +136,20 @@ gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name)
 int gi_farm_host_blocked(const gi_farm_host *h, double now)
 {
     return h && h->blocked_until > now;
+}
+
+static gi_fj_exclusion *exclusion_find(const gi_farm_job *j, const gi_farm_host *h)
+{
+    for (size_t i = 0; i < j->excl_count; i++)
+        if (j->excl[i].host == h)
+            return &j->excl[i];
+    return NULL;
+}
+
+int gi_farm_job_excludes(const gi_farm_job *j, const gi_farm_host *h, double now)
+{
+    const gi_fj_exclusion *x = h ? exclusion_find(j, h) : NULL;
+    return x && x->until > now;
 }
 
 static const char *conn_name(const gi_farm_conn *c)
@@ -230,23 +264,30 @@ static void mark_present(gi_farm *f, double now)
     }
 }
 
-static int host_present(void *ctx, const void *owner)
-{
-    (void)ctx;
-    return ((const gi_farm_host *)owner)->present;
-}
-
 typedef struct taker {
     const gi_farm *farm;
     const gi_farm_job *job;
     const gi_farm_host *host;
+    double now;
 } taker;
 
-/* Some host other than `host` can take work now. */
-static int another_present(const gi_farm *f, const gi_farm_host *host)
+/* The host can take the job's work: an owner excluded from the job is as
+ * good as absent for its keys. */
+static int usable(const taker *k, const gi_farm_host *h)
 {
-    for (size_t i = 0; i < f->host_count; i++)
-        if (f->hosts[i] != host && f->hosts[i]->present)
+    return h->present && !gi_farm_job_excludes(k->job, h, k->now);
+}
+
+static int host_present(void *ctx, const void *owner)
+{
+    return usable(ctx, owner);
+}
+
+/* Some host other than the taker's can take the job's work now. */
+static int another_present(const taker *k)
+{
+    for (size_t i = 0; i < k->farm->host_count; i++)
+        if (k->farm->hosts[i] != k->host && usable(k, k->farm->hosts[i]))
             return 1;
     return 0;
 }
@@ -255,10 +296,20 @@ static int may_take(void *ctx, const gi_task *t)
 {
     const taker *k = ctx;
     /* Not back to the host it just failed on, while another can take it. */
-    if (gi_affinity_owner(&k->job->failed_on, t->id + 1) == k->host &&
-        another_present(k->farm, k->host))
+    if (gi_affinity_owner(&k->job->failed_on, t->id + 1) == k->host && another_present(k))
         return 0;
-    return gi_affinity_may_take(&k->job->affinity, t->affinity, k->host, host_present, NULL);
+    return gi_affinity_may_take(&k->job->affinity, t->affinity, k->host, host_present, ctx);
+}
+
+int gi_farm_job_has_host(const gi_farm *f, const gi_farm_job *j, double now)
+{
+    for (size_t ci = 0; ci < f->conn_count; ci++) {
+        const gi_farm_conn *c = f->conns[ci];
+        if (c->host && c->state == GI_FC_ACTIVE && c->fd >= 0 && c->hello.slots > 0 &&
+            !gi_farm_host_blocked(c->host, now) && !gi_farm_job_excludes(j, c->host, now))
+            return 1;
+    }
+    return 0;
 }
 
 /* host now owns the key (it took or returned the key's task). */
@@ -364,13 +415,18 @@ static long pick_job(const candidates *cand)
 
 /* A task for connection c, from the job with the lowest pass that has one
  * it may take. */
-static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, candidates *cand, gi_farm_job **job)
+static const gi_task *lease_for(gi_farm *f, gi_farm_conn *c, candidates *cand, gi_farm_job **job,
+                               double now)
 {
     memset(cand->passed, 0, cand->count);
     long i;
     while ((i = pick_job(cand)) >= 0) {
         gi_farm_job *j = cand->jobs[i];
-        taker k = {f, j, c->host};
+        if (gi_farm_job_excludes(j, c->host, now)) {
+            cand->passed[i] = 1;
+            continue;
+        }
+        taker k = {f, j, c->host, now};
         uint64_t refused;
         const gi_task *t = gi_jobrun_lease_if(&j->jr, may_take, &k, &refused);
         if (t) {
@@ -405,7 +461,7 @@ void gi_farm_schedule(gi_farm *f)
             if (!conn_takes_work(f, c, now))
                 continue;
             gi_farm_job *j = NULL;
-            const gi_task *t = lease_for(f, c, &cand, &j);
+            const gi_task *t = lease_for(f, c, &cand, &j, now);
             if (!t)
                 continue;
             affinity_own(j, t->affinity, c->host, "its owner cannot take work");
@@ -443,15 +499,57 @@ static void host_block(gi_farm *f, gi_farm_host *h, uint32_t count, uint32_t bou
             f->cfg.blocklist_s, count, what, last);
 }
 
-static void host_failure(gi_farm *f, gi_farm_conn *c, const gi_error *e)
+/* h failed one more of j's tasks: excluded from j after a streak of them
+ * (see the header: Exclusions). */
+static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_error *e)
+{
+    gi_fj_exclusion *x = exclusion_find(j, h);
+    if (!x) {
+        if (j->excl_count == j->excl_cap) {
+            j->excl_cap = j->excl_cap ? 2 * j->excl_cap : 4;
+            j->excl = gi_xrealloc(j->excl, j->excl_cap * sizeof *j->excl);
+        }
+        x = &j->excl[j->excl_count++];
+        memset(x, 0, sizeof *x);
+        x->host = h;
+    }
+    x->streak++;
+    snprintf(x->last_error, sizeof x->last_error, "%.250s", e->msg);
+    double now = gi_now();
+    if (x->streak < f->cfg.blocklist_failures || x->until > now)
+        return;
+    x->until = now + f->cfg.blocklist_s;
+    x->times++;
+    f->m.job_exclusions++;
+    /* One line, in the coordinator's log (a warning) and the job's. */
+    gi_farm_job_warn(j, "worker %s excluded from it for %.0f s after %u of its task failures "
+                     "in a row (it still serves other jobs); last: %s", h->name,
+                     f->cfg.blocklist_s, x->streak, e->msg);
+    if (!gi_farm_job_has_host(f, j, now))
+        gi_farm_job_log(j, "no connected worker may take its tasks now (excluded or "
+                        "blocklisted): they wait, %.0f s at most", f->cfg.blocklist_s);
+}
+
+static void host_failure(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_error *e)
 {
     gi_farm_host *h = c->host;
     if (!h || e->code == GI_EINVAL)
         return;
+    int own = e->code == GI_EHOST; /* its disk: the host's fault whatever the job */
+    if (h->consecutive_failures == 0) {
+        h->streak_job = j->id;
+        h->streak_wide = own;
+    } else if (own || h->streak_job != j->id) {
+        h->streak_wide = 1;
+    }
     h->failures++;
     h->consecutive_failures++;
     snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
-    host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures, "task failures", e->msg);
+    if (!own)
+        job_exclude(f, j, h, e);
+    if (h->streak_wide)
+        host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures,
+                   "task failures (of more than one job, or its disk's)", e->msg);
 }
 
 /* c's host was lost with tasks held (see the header: Blocklisting). Leases
@@ -546,7 +644,7 @@ static void answer_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_
                           const gi_error *e)
 {
     charge(j, -l->est_s);
-    host_failure(f, c, e);
+    host_failure(f, c, j, e);
     task_failed(f, c, j, l, e);
 }
 
@@ -589,6 +687,9 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         c->host->consecutive_failures = 0;
         c->host->consecutive_losses = 0;
         c->host->successes++;
+        gi_fj_exclusion *x = exclusion_find(j, c->host);
+        if (x)
+            x->streak = 0;
     }
     const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l.task_id);
     if (jt)

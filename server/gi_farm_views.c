@@ -60,6 +60,32 @@ static cJSON *job_summary(const gi_farm_job *j)
     return o;
 }
 
+/* The workers excluded from the job (gi_farm_sched.c, Exclusions), now or
+ * before, and whether its pending tasks wait for want of a worker. */
+static void add_exclusions(const gi_farm *f, const gi_farm_job *j, cJSON *o)
+{
+    double now = gi_now(), wall = gi_farm_wallnow();
+    cJSON *a = cJSON_AddArrayToObject(o, "excluded_workers");
+    for (size_t i = 0; i < j->excl_count; i++) {
+        const gi_fj_exclusion *x = &j->excl[i];
+        if (!x->times)
+            continue; /* a streak that has not excluded it (yet) */
+        int on = x->until > now;
+        cJSON *w = cJSON_CreateObject();
+        cJSON_AddStringToObject(w, "worker", x->host->name);
+        cJSON_AddBoolToObject(w, "excluded", on);
+        cJSON_AddNumberToObject(w, "seconds", on ? x->until - now : 0);
+        add_time(w, "until", wall + (x->until - now));
+        cJSON_AddNumberToObject(w, "times", x->times);
+        cJSON_AddNumberToObject(w, "consecutive_failures", x->streak);
+        cJSON_AddStringToObject(w, "last_error", x->last_error);
+        cJSON_AddItemToArray(a, w);
+    }
+    int waiting = j->state == GI_FJ_RUNNING && j->loaded && gi_jobrun_pending_count(&j->jr) > 0 &&
+                  !gi_farm_job_has_host(f, j, now);
+    cJSON_AddBoolToObject(o, "waiting_for_workers", waiting);
+}
+
 char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
 {
     cJSON *o = job_summary(j);
@@ -163,10 +189,10 @@ char *gi_farm_view_job(gi_farm *f, const gi_farm_job *j)
         cJSON_AddStringToObject(x, "message", e->message);
         cJSON_AddItemToArray(errs, x);
     }
+    add_exclusions(f, j, o);
     cJSON *log = cJSON_AddArrayToObject(o, "log");
     for (int i = 0; i < j->log_count; i++)
         cJSON_AddItemToArray(log, cJSON_CreateString(j->log[(j->log_start + i) % GI_FJ_LOG_KEEP]));
-    (void)f;
     return print(o);
 }
 
@@ -342,6 +368,9 @@ char *gi_farm_view_metrics(gi_farm *f)
             "Hosts lost with tasks held (connection lost, leases expired), once per loss "
             "however many tasks: they count towards blocklisting.",
             (double)m->host_losses);
+    counter(&b, "gi_farm_job_exclusions_total",
+            "Workers excluded from one job (not blocklisted) for failing its tasks in a row.",
+            (double)m->job_exclusions);
     counter(&b, "gi_farm_late_results_total", "Results and failures discarded: lease no longer held.",
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);

@@ -1,5 +1,6 @@
-# Task failures on the farm: a worker whose tasks keep failing is
-# blocklisted and the others finish the job (identical image); a task that
+# Task failures on the farm: a worker whose tasks of a job keep failing is
+# excluded from that job (not blocklisted: farm_job_exclusions.sh) and the
+# others finish the job (identical image); a task that
 # fails on every attempt fails its job with the task's error; a task that
 # failed on one host is retried on another one; two live workers of one
 # name are warned about.
@@ -18,15 +19,19 @@ JOB
 "$GI_RELEASE" render "$TMP/job.json" --workers 1 --out "$TMP/ref" --progress none >/dev/null 2>&1
 
 # A worker whose children die on task 0 (three attempts in a row, since a
-# retry goes first in line): it is blocklisted, and a healthy worker then
-# does the rest.
+# retry goes first in line): it is excluded from the job (gi status says
+# for how long and why), not blocklisted, and a healthy worker then does
+# the rest.
 start_worker "$TMP/bad.log" env GI_FAULT_CRASH_TASK="0:0,0:1,0:2" -- \
     --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/c1" --name bad
 id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
-wait_log "$LOG" "worker bad blocklisted"
+wait_log "$LOG" "job $id: worker bad excluded from it for 600 s after 3 of its task failures"
+"$GI" status "$id" >"$TMP/status.txt"
+grep -q "^  worker bad excluded from this job until .* ([0-9]* s more); last: .*pool child" \
+    "$TMP/status.txt" || { cat "$TMP/status.txt"; fail "gi status does not show it excluded"; }
 "$GI" workers >"$TMP/workers.txt"
-grep -A1 "^bad .*blocklisted" "$TMP/workers.txt" | grep -q "^    for [0-9]* s more; last: .*pool child" ||
-    { cat "$TMP/workers.txt"; fail "gi workers does not show it blocklisted, for how long and why"; }
+grep -q "^bad .* active " "$TMP/workers.txt" ||
+    { cat "$TMP/workers.txt"; fail "one job's failures took the worker out of the farm"; }
 start_worker "$TMP/good.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c2" --name good
 wait_state "$id" done 60
 "$GI" fetch "$id" --out "$TMP/out" >/dev/null || fail "fetch"
