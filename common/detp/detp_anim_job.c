@@ -108,14 +108,16 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
 
 /* Decodes a batch's result into h, checked against the frame's running
  * totals (detp_decode_anim) and, with apply, added into them. */
-static int decode_result(const detp_state *st, const gi_task *t, const gi_buf *result,
-                         int apply, detp_anim_result *h, gi_error *err)
+static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *result, int apply,
+                         detp_anim_result *h, gi_error *err)
 {
+    const detp_state *st = job->state;
     const detp_anim_state *a = st->anim;
-    gi_reader pr;
-    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp animation task");
-    uint32_t frame = gi_get_u32(&pr), batch = gi_get_u32(&pr);
-    if (pr.failed || frame != a->frame)
+    detp_task_in in;
+    if (detp_task_decode(job, t, 0, &in, err))
+        return -1;
+    uint32_t frame = in.frame, batch = in.batch;
+    if (frame != a->frame)
         return gi_fail(err, GI_EPROTO, "a task of frame %u while at frame %u", frame,
                        a->frame);
     gi_reader r;
@@ -133,20 +135,21 @@ static int decode_result(const detp_state *st, const gi_task *t, const gi_buf *r
  * that checks, and by the frame's finish (on a thread of its own in
  * gi-farmd), which starts once all the frame's tasks are merged: none is
  * leased then, so none is checked. */
-int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
+int detp_anim_check(const gi_job *job, const gi_task *t, const gi_buf *result,
                     gi_error *err)
 {
     detp_anim_result h;
-    return decode_result(st, t, result, 0, &h, err);
+    return decode_result(job, t, result, 0, &h, err);
 }
 
-int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err)
+int detp_anim_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_error *err)
 {
+    detp_state *st = job->state;
     detp_anim_state *a = st->anim;
     detp_anim_result h;
     /* Against the totals as they now stand: results merged since its
      * arrival's check may have brought them close to the limit. */
-    if (decode_result(st, t, result, 1, &h, err))
+    if (decode_result(job, t, result, 1, &h, err))
         return gi_error_prefix(err, "detp task %llu", (unsigned long long)t->id);
     uint32_t frame = h.frame;
     detp_anim_result *s = &a->tot;

@@ -151,10 +151,10 @@ static void read_timing(gi_reader *r, double *seconds, uint64_t *rays)
 static int tile_result(const gi_job *job, const gi_task *t, const gi_buf *result, gi_tile *tile,
                        double *seconds, uint64_t *rays, gi_buf *px, gi_error *err)
 {
-    gi_reader pr;
-    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp tile task");
-    if (gi_tile_read(&pr, job->width, job->height, tile, err))
+    detp_task_in in;
+    if (detp_task_decode(job, t, 0, &in, err))
         return -1;
+    *tile = in.tile;
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp tile result");
     read_timing(&r, seconds, rays);
@@ -165,28 +165,18 @@ static int tile_result(const gi_job *job, const gi_task *t, const gi_buf *result
     return 0;
 }
 
-/* The [a, b) range of a visibility or reference task's payload. */
-static int merge_range(const gi_task *t, uint32_t *a, uint32_t *b, uint32_t lim, gi_error *err)
-{
-    gi_reader pr;
-    gi_reader_init(&pr, t->payload.data, t->payload.len, "detp task");
-    *a = gi_get_u32(&pr);
-    *b = gi_get_u32(&pr);
-    if (gi_reader_finish(&pr, err) || *a >= *b || *b > lim)
-        return gi_fail(err, GI_EPROTO, "detp task %llu: bad range", (unsigned long long)t->id);
-    return 0;
-}
-
 /* A visibility (one f32 in [0, 1] per vertex, into vis) or reference
  * (`reference`: four finite f64s per sample, added into ref) task's result,
  * after its timing (added into *seconds and *rays). vis and ref NULL: only
  * checks it (detp_check_result), by the same rules as the merge. */
-static int range_result(const gi_task *t, const gi_buf *result, uint32_t lim, int reference,
-                        float *vis, double *ref, double *seconds, uint64_t *rays, gi_error *err)
+static int range_result(const gi_job *job, const gi_task *t, const gi_buf *result, uint32_t lim,
+                        int reference, float *vis, double *ref, double *seconds, uint64_t *rays,
+                        gi_error *err)
 {
-    uint32_t a, b;
-    if (merge_range(t, &a, &b, lim, err))
+    detp_task_in in;
+    if (detp_task_decode(job, t, lim, &in, err))
         return -1;
+    uint32_t a = in.a, b = in.b;
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp result");
     read_timing(&r, seconds, rays);
@@ -232,16 +222,16 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
     case DETP_TASK_VISIBILITY:
         if (!st->visible)
             return gi_fail(err, GI_EPROTO, "unexpected visibility result");
-        return range_result(t, result, st->nv, 0, st->visible, NULL, &st->sec_visibility,
+        return range_result(job, t, result, st->nv, 0, st->visible, NULL, &st->sec_visibility,
                             &st->rays_visibility, err);
     case DETP_TASK_REFERENCE:
-        return range_result(t, result, st->nref, 1, NULL, st->ref, &st->sec_reference,
+        return range_result(job, t, result, st->nref, 1, NULL, st->ref, &st->sec_reference,
                             &st->rays_reference, err);
     case DETP_TASK_ANIM_BATCH:
     case DETP_TASK_ANIM_UPDATE:
         if (!st->anim)
             return gi_fail(err, GI_EPROTO, "unexpected detp animation result");
-        return detp_anim_merge(st, t, result, err);
+        return detp_anim_merge(job, t, result, err);
     case DETP_TASK_TILE:
     case DETP_TASK_ANIM_TILE: {
         gi_tile tile;
@@ -380,14 +370,14 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
     case DETP_TASK_BATCH:
         return detp_decode_batch(&r, st->nv, &h, NULL, NULL, err);
     case DETP_TASK_VISIBILITY:
-        return st->visible ? range_result(t, result, st->nv, 0, NULL, NULL, &seconds, &rays,
+        return st->visible ? range_result(job, t, result, st->nv, 0, NULL, NULL, &seconds, &rays,
                                           err)
                            : 0;
     case DETP_TASK_REFERENCE:
-        return range_result(t, result, st->nref, 1, NULL, NULL, &seconds, &rays, err);
+        return range_result(job, t, result, st->nref, 1, NULL, NULL, &seconds, &rays, err);
     case DETP_TASK_ANIM_BATCH:
     case DETP_TASK_ANIM_UPDATE:
-        return st->anim ? detp_anim_check(st, t, result, err) : 0;
+        return st->anim ? detp_anim_check(job, t, result, err) : 0;
     }
     if (t->kind != DETP_TASK_TILE && t->kind != DETP_TASK_ANIM_TILE)
         return 0;

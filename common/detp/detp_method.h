@@ -169,12 +169,12 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
  * the job only if refused on every attempt. Real sums stay many powers of
  * two below the limit: a vertex gets a small share of a job's photons, each
  * worth about 2^32 units.) */
-int detp_anim_check(const detp_state *st, const gi_task *t, const gi_buf *result,
+int detp_anim_check(const gi_job *job, const gi_task *t, const gi_buf *result,
                     gi_error *err);
 /* Adds a batch's result; a malformed one, or one whose sums overflow the
  * totals, fails the job (EPROTO: its message names the task, frame, batch,
  * vertex and why) and leaves the totals as they were. */
-int detp_anim_merge(detp_state *st, const gi_task *t, const gi_buf *result, gi_error *err);
+int detp_anim_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_error *err);
 /* Before a frame's outputs: irr and hits from the exact sums, and the
  * coordinator's scene posed for the frame. */
 int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err);
