@@ -114,8 +114,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
     f->finish_wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     if (f->finish_wake_fd < 0)
         return gi_fail(err, GI_EIO, "eventfd: %s", strerror(errno));
-    const char *delay = getenv(GI_FAULT_FINISH_DELAY_ENV);
-    f->finish_delay_s = delay ? atof(delay) : 0;
+    f->finish_gate = getenv(GI_FAULT_FINISH_GATE_ENV);
     f->started = gi_now();
     f->started_wall = gi_farm_wallnow();
     f->next_job_id = 1;

@@ -332,7 +332,7 @@ struct gi_farm {
     /* Written by a job's finish thread when it ends (gi_jobrun_opts):
      * an eventfd in the poll set, so that the loop takes the end in at once. */
     int finish_wake_fd;
-    double finish_delay_s; /* GI_FAULT_FINISH_DELAY_ENV */
+    const char *finish_gate; /* GI_FAULT_FINISH_GATE_ENV, or NULL */
     /* The loop's longest iteration (time out of poll) in each of the last
      * GI_FARM_STALL_WINDOW seconds, by second, and since it started. */
     double stall_max[GI_FARM_STALL_WINDOW];
@@ -400,10 +400,12 @@ void gi_farm_job_checked(gi_farm *f, gi_farm_job *j, const gi_error *why);
  * environment, every checker crashes (SIGSEGV) as a hostile mesh might make
  * it. */
 #define GI_FAULT_CHECK_CRASH_ENV "GI_FAULT_CHECK_CRASH"
-/* Test hook: with GI_FAULT_FINISH_DELAY=S in gi-farmd's environment, every
- * job's finish waits S seconds on its thread before it writes the outputs,
- * so that tests can look at, cancel or stop a finishing job. */
-#define GI_FAULT_FINISH_DELAY_ENV "GI_FAULT_FINISH_DELAY"
+/* Test hook: with GI_FAULT_FINISH_GATE=PATH in gi-farmd's environment, every
+ * job's finish waits on its thread, before it writes the outputs, until a
+ * file PATH exists (and removes it: one file lets one finish through), so
+ * that tests can look at, cancel or stop a finishing job whatever the
+ * machine's load. */
+#define GI_FAULT_FINISH_GATE_ENV "GI_FAULT_FINISH_GATE"
 int gi_farm_check_start(gi_farm *f, gi_farm_job *j, gi_error *err);
 /* Reads what the checker wrote; at its end, calls gi_farm_job_checked. */
 void gi_farm_check_readable(gi_farm *f, gi_farm_job *j);

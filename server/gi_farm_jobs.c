@@ -1157,7 +1157,7 @@ static int load_for_run(gi_farm *f, gi_farm_job *j, gi_error *err)
 static gi_jobrun_opts run_opts(const gi_farm *f)
 {
     return (gi_jobrun_opts){.finish_threaded = 1, .finish_wake_fd = f->finish_wake_fd,
-                            .finish_delay_s = f->finish_delay_s};
+                            .finish_gate = f->finish_gate};
 }
 
 /* The job failed writing its outputs, its whole result in its checkpoint. */

@@ -31,7 +31,7 @@ struct gi_jobrun_finisher {
     gi_thread_call *call;
     gi_job *job;
     gi_task_queue q; /* its follow-up tasks */
-    double delay_s;
+    const char *gate;
     int rc;
     gi_error err;
     double seconds;
@@ -316,12 +316,23 @@ static void finisher_keep_line(void *ctx, gi_log_level level, const char *msg)
     fz->lines[fz->line_count++] = (finish_line){level, gi_xstrdup(msg)};
 }
 
+/* The test hook's wait: whichever finish removes the file goes on (one file,
+ * one finish). Ten minutes at most, so that a test that forgets the file
+ * does not leave gi-farmd unable to stop. */
+static void finisher_gate(const char *path)
+{
+    for (int i = 0; path && i < 60000; i++) {
+        if (unlink(path) == 0)
+            return;
+        usleep(10000);
+    }
+}
+
 static void finisher_main(void *arg)
 {
     gi_jobrun_finisher *fz = arg;
     gi_log_hook_set(finisher_keep_line, fz);
-    if (fz->delay_s > 0)
-        usleep((useconds_t)(fz->delay_s * 1e6));
+    finisher_gate(fz->gate);
     double t0 = gi_now();
     fz->rc = fz->job->method->finish(fz->job, &fz->q, &fz->err);
     fz->seconds = gi_now() - t0;
@@ -332,7 +343,7 @@ static void finisher_start(gi_jobrun *jr)
 {
     gi_jobrun_finisher *fz = gi_xcalloc(1, sizeof *fz);
     fz->job = jr->job;
-    fz->delay_s = jr->opts.finish_delay_s;
+    fz->gate = jr->opts.finish_gate;
     gi_task_queue_init(&fz->q, jr->task_count);
     gi_error_clear(&fz->err);
     jr->finisher = fz;

@@ -40,13 +40,14 @@ typedef struct gi_jobrun_finisher gi_jobrun_finisher;
  * gi_jobrun_finish_poll takes the finish's end in. Meanwhile the method's
  * state and job (its outputs, its published data) are the thread's: nothing
  * may read them, nor checkpoint the run. The thread writes 8 bytes to
- * finish_wake_fd (>= 0: an eventfd) when it ends. finish_delay_s: a test
- * hook (gi-farmd's GI_FAULT_FINISH_DELAY): the thread sleeps this long
- * before finish, so that tests can act meanwhile. */
+ * finish_wake_fd (>= 0: an eventfd) when it ends. finish_gate: a test hook
+ * (gi-farmd's GI_FAULT_FINISH_GATE), NULL or a path: the thread waits
+ * before finish until that file exists and it removed it, so that tests
+ * can act meanwhile. */
 typedef struct gi_jobrun_opts {
     int finish_threaded;
     int finish_wake_fd;
-    double finish_delay_s;
+    const char *finish_gate;
 } gi_jobrun_opts;
 
 typedef struct gi_jobrun {

@@ -1,5 +1,6 @@
 # A job's finish (writing its outputs) runs on a thread of gi-farmd's, not
-# on its loop; GI_FAULT_FINISH_DELAY holds each finish there 2 s here.
+# on its loop; GI_FAULT_FINISH_GATE holds each finish there until the test
+# lets it through (release), whatever the machine's load.
 # 1. Meanwhile the job shows as "finishing" (its view, `gi status`, the
 #    metrics), its outputs are not served yet, and the API answers; then it
 #    is done with the image `gi render` gives, and the loop's longest round
@@ -10,13 +11,14 @@
 # 3. Cancelled while finishing: the cancel answers at once, the job still
 #    finishing (its log says why), its END journaled then; a second cancel
 #    and a purge are refused meanwhile; the loop does not wait for the
-#    finish (its longest round stays under the 2 s of the finish). Once the
+#    finish (its longest round stays under 1.5 s, the finish held longer). Once the
 #    finish has returned the job is cancelled, its outputs not served, with
 #    no second END; a retry ends done, with the same image.
 # 3b. gi-farmd killed between such a cancel and the finish's return: the
 #    restarted one has the job cancelled.
 # 4. gi-farmd stopped (SIGTERM) while a job finishes: it waits for the
-#    finish and journals the job done; restarted, it serves the outputs.
+#    finish (still running while the finish is held) and journals the job
+#    done; restarted, it serves the outputs.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -24,9 +26,16 @@ cornell_job "$TMP/job.json" 7 64 48 64
 LOG="$TMP/farmd.log"
 OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
 # shellcheck disable=SC2086
-start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_DELAY=2 -- $OPTS
+GATE="$TMP/finish-gate"
+start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_GATE="$GATE" -- $OPTS
 PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
+# Lets one finish through (the finish removes the file: the one before
+# must have been taken).
+release() {
+    [ ! -e "$GATE" ] || fail "a finish was let through and none took it"
+    : >"$GATE"
+}
 submit() {
     "$GI" submit "$TMP/job.json" 2>"$TMP/submit.log" || { cat "$TMP/submit.log"; fail "submit"; }
 }
@@ -39,6 +48,9 @@ wait_state "$id" finishing 120
 code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
 [ "$code" = 409 ] || fail "an output of a finishing job was answered $code"
 [ "$(jnum "$id" merged)" = "$(jnum "$id" total)" ] || fail "finishing before every task merged"
+sleep 1
+[ "$(jstate "$id")" = finishing ] || fail "the held finish ended: $(jstate "$id")"
+release
 wait_state "$id" done 60
 "$GI" fetch "$id" --out "$TMP/o1" >/dev/null || fail "fetch 1"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o1/img.exr" || fail "the image differs from gi render"
@@ -50,12 +62,14 @@ awk -v s="$stall" 'BEGIN {exit !(s > 0)}' || fail "no loop stall metric ($stall)
 id=$(submit)
 wait_state "$id" finishing 120
 mkdir -p "$TMP/state/jobs/$id/out/img.exr"
+release
 wait_state "$id" failed 60
 api "/api/v1/jobs/$id" |
     grep -q 'img.exr: rename.*the whole result is kept in checkpoint [0-9]*: a retry only writes' ||
     { api "/api/v1/jobs/$id"; fail "no reason, or the result was not kept"; }
 [ "$(jckpt "$id" merged)" = "$(jnum "$id" total)" ] || fail "the checkpoint lacks part of the result"
 rmdir "$TMP/state/jobs/$id/out/img.exr"
+release # for the retry's finish
 "$GI" retry "$id" --wait --out "$TMP/o2" --progress none >"$TMP/retry2.log" 2>&1 ||
     { cat "$TMP/retry2.log"; fail "gi retry --wait"; }
 [ "$(jnum "$id" results_this_run)" = 0 ] || fail "the retry ran tasks again"
@@ -81,6 +95,7 @@ code=$(api "/api/v1/jobs/$id" -X DELETE -o "$TMP/cancel2.json" -w '%{http_code}'
 code=$(api "/api/v1/jobs/$id?purge=1" -X DELETE -o "$TMP/purge.json" -w '%{http_code}')
 [ "$code" = 409 ] && grep -q "still being written" "$TMP/purge.json" ||
     { cat "$TMP/purge.json"; fail "a purge of the cancelling job was answered $code"; }
+release
 wait_state "$id" cancelled 60
 code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
 [ "$code" = 409 ] || fail "an output of the cancelled job was answered $code"
@@ -88,6 +103,7 @@ code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
 stall=$(metric gi_farm_loop_stall_max_seconds)
 echo "the loop's longest round so far: $stall s"
 awk -v s="$stall" 'BEGIN {exit !(s < 1.5)}' || fail "the loop stalled for $stall s"
+release
 "$GI" retry "$id" --wait --out "$TMP/o3" --progress none >"$TMP/retry3.log" 2>&1 ||
     { cat "$TMP/retry3.log"; fail "gi retry --wait of the cancelled job"; }
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o3/img.exr" || fail "the image after cancel + retry differs"
@@ -99,13 +115,18 @@ wait_state "$id" finishing 120
 kill -KILL "$FARMD_PID"
 wait "$FARMD_PID" 2>/dev/null || true
 # shellcheck disable=SC2086
-start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_DELAY=2 -- $OPTS $PORTS
+start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_GATE="$GATE" -- $OPTS $PORTS
 [ "$(jstate "$id")" = cancelled ] || fail "job $id is $(jstate "$id") after the restart"
 
 # 4. Stopped while finishing.
 id=$(submit)
 wait_state "$id" finishing 120
-stop_farmd "$LOG"
+kill -TERM "$FARMD_PID"
+sleep 1
+kill -0 "$FARMD_PID" 2>/dev/null || fail "gi-farmd did not wait for the held finish"
+! grep -q " done: " "$TMP/state/jobs/$id/log" || fail "the job is done, its finish held"
+release
+farmd_stopped "$LOG"
 grep -q " done: " "$TMP/state/jobs/$id/log" ||
     { cat "$TMP/state/jobs/$id/log"; fail "the stop did not wait for the finish"; }
 # shellcheck disable=SC2086
@@ -114,3 +135,4 @@ start_farmd "$TMP/state" "$LOG" -- $OPTS $PORTS
 "$GI" fetch "$id" --out "$TMP/o4" >/dev/null || fail "fetch 4"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o4/img.exr" || fail "the image after the stop differs"
 stop_farmd "$LOG"
+[ ! -e "$GATE" ] || fail "a finish was let through and none took it"

@@ -134,9 +134,14 @@ metric() {
     api /metrics | awk -v m="$1" '$1 == m {print $2}'
 }
 
-# stop_farmd: SIGTERM, a clean exit (status 0) and, under ASan, no leaks.
+# stop_farmd LOG: SIGTERM, a clean exit (status 0) and, under ASan, no leaks.
 stop_farmd() {
     kill -TERM "$FARMD_PID"
+    farmd_stopped "$1"
+}
+
+# farmd_stopped LOG: gi-farmd, sent SIGTERM, exits cleanly.
+farmd_stopped() {
     wait "$FARMD_PID" || { tail -n 30 "$1"; fail "gi-farmd exited with status $? on SIGTERM"; }
     ! grep -q "LeakSanitizer\|AddressSanitizer\|runtime error" "$1" || { cat "$1"; fail "sanitizer report"; }
 }
