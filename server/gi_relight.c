@@ -5,6 +5,7 @@
  * and a local pool (image tiles run on workers). */
 #include "gi_relight.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -210,6 +211,15 @@ static int relight(const relight_args *a, gi_error *err)
         goto done;
     }
     fpath = gi_path_join(a->out, ffile);
+    /* The usual slip: the job was rendered into another --out, or not yet. */
+    if (access(fpath, F_OK) != 0 && errno == ENOENT) {
+        gi_fail(err, GI_EINVAL,
+                "%s: no such file: relight reads the factorization the job wrote; render it "
+                "first (gi render %s --out DIR, or gi fetch ID --out DIR from a farm) and give "
+                "relight the same --out DIR",
+                fpath, a->job);
+        goto done;
+    }
     double t0 = now_ms();
     if (gi_rad_file_read(fpath, &info, &md, &f, err))
         goto done;

@@ -155,21 +155,56 @@ void gi_rad_emissions_scene(gi_rad_emissions *em)
     em->items[0].scale = 1.0f;
 }
 
+/* "a, b, c": the names a misspelt one was meant to be, cut to fit the
+ * one-line error (a mesh file may bring hundreds of materials). */
+static const char *name_list(char *buf, size_t cap, uint32_t count, const char *(*name)(
+                                 const gi_rad_model *, uint32_t), const gi_rad_model *md)
+{
+    size_t len = 0;
+    buf[0] = '\0';
+    for (uint32_t i = 0; i < count; i++) {
+        const char *s = name(md, i);
+        size_t need = strlen(s) + (i ? 2 : 0);
+        if (len + need + 5 >= cap) { /* room for ", ..." */
+            snprintf(buf + len, cap - len, "%s...", i ? ", " : "");
+            break;
+        }
+        len += (size_t)snprintf(buf + len, cap - len, "%s%s", i ? ", " : "", s);
+    }
+    return buf;
+}
+
+static const char *material_name(const gi_rad_model *md, uint32_t i)
+{
+    return md->materials[i].name;
+}
+
+static const char *object_name(const gi_rad_model *md, uint32_t i)
+{
+    return md->objects[i];
+}
+
 int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
                            gi_error *err)
 {
+    char names[400];
     for (uint32_t i = 0; i < em->count; i++) {
         const gi_rad_emission *e = &em->items[i];
         for (uint32_t j = 0; j < e->material_count; j++)
             if (gi_rad_model_find_material(md, e->materials[j].name) < 0)
                 return gi_fail(err, GI_EINVAL,
-                               "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene", file,
-                               i, e->name, e->materials[j].name);
+                               "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene "
+                               "(its materials: %s)",
+                               file, i, e->name, e->materials[j].name,
+                               name_list(names, sizeof names, md->material_count, material_name,
+                                         md));
         for (uint32_t j = 0; j < e->object_count; j++)
             if (gi_rad_model_find_object(md, e->objects[j].name) < 0)
                 return gi_fail(err, GI_EINVAL,
-                               "%s: emissions[%u] (\"%s\"): no object \"%s\" in the scene", file, i,
-                               e->name, e->objects[j].name);
+                               "%s: emissions[%u] (\"%s\"): no object \"%s\" in the scene "
+                               "(its objects: %s)",
+                               file, i, e->name, e->objects[j].name,
+                               name_list(names, sizeof names, md->object_count, object_name, md));
     }
     return 0;
 }

@@ -52,7 +52,16 @@ expect_error() {
     grep -qF -- "$what" "$TMP/stderr" || fail "relight $*: '$(cat "$TMP/stderr")' does not say '$what'"
 }
 echo '{"emissions": [{"name": "x", "materials": {"velvet": [1, 1, 1]}}]}' >"$TMP/bad1.json"
-expect_error 'no material "velvet"' "$TMP/job.json" "$TMP/bad1.json" --out "$TMP/out"
+expect_error 'no material "velvet" in the scene (its materials: white, red, green, light)' \
+    "$TMP/job.json" "$TMP/bad1.json" --out "$TMP/out"
+echo '{"emissions": [{"name": "x", "objects": {"box": [1, 1, 1]}}]}' >"$TMP/bad3.json"
+expect_error 'no object "box" in the scene (its objects: floor, light, ceiling,' \
+    "$TMP/job.json" "$TMP/bad3.json" --out "$TMP/out"
+# A factorization that is not there (another --out, or no render yet) says
+# what to do.
+expect_error "$TMP/elsewhere/cb.fact: no such file: relight reads the factorization the job wrote" \
+    "$TMP/job.json" "$TMP/em.json" --out "$TMP/elsewhere"
+[ ! -e "$TMP/elsewhere" ] || fail "a relight with no factorization made its --out"
 echo '{"emissions": [{"name": "x", "scale": "big"}]}' >"$TMP/bad2.json"
 expect_error "bad2.json: emissions[0].scale" "$TMP/job.json" "$TMP/bad2.json" --out "$TMP/out"
 cp "$TMP/out/cb.fact" "$TMP/good.fact"
