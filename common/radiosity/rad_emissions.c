@@ -155,15 +155,13 @@ void gi_rad_emissions_scene(gi_rad_emissions *em)
     em->items[0].scale = 1.0f;
 }
 
-/* "a, b, c": the names a misspelt one was meant to be, cut to fit the
- * one-line error (a mesh file may bring hundreds of materials). */
-static const char *name_list(char *buf, size_t cap, uint32_t count, const char *(*name)(
-                                 const gi_rad_model *, uint32_t), const gi_rad_model *md)
+const char *gi_rad_name_list(char *buf, size_t cap, uint32_t count,
+                             const char *(*name)(const void *ctx, uint32_t i), const void *ctx)
 {
     size_t len = 0;
     buf[0] = '\0';
     for (uint32_t i = 0; i < count; i++) {
-        const char *s = name(md, i);
+        const char *s = name(ctx, i);
         size_t need = strlen(s) + (i ? 2 : 0);
         if (len + need + 5 >= cap) { /* room for ", ..." */
             snprintf(buf + len, cap - len, "%s...", i ? ", " : "");
@@ -174,14 +172,14 @@ static const char *name_list(char *buf, size_t cap, uint32_t count, const char *
     return buf;
 }
 
-static const char *material_name(const gi_rad_model *md, uint32_t i)
+static const char *material_name(const void *md, uint32_t i)
 {
-    return md->materials[i].name;
+    return ((const gi_rad_model *)md)->materials[i].name;
 }
 
-static const char *object_name(const gi_rad_model *md, uint32_t i)
+static const char *object_name(const void *md, uint32_t i)
 {
-    return md->objects[i];
+    return ((const gi_rad_model *)md)->objects[i];
 }
 
 int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
@@ -196,15 +194,16 @@ int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, c
                                "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene "
                                "(its materials: %s)",
                                file, i, e->name, e->materials[j].name,
-                               name_list(names, sizeof names, md->material_count, material_name,
-                                         md));
+                               gi_rad_name_list(names, sizeof names, md->material_count,
+                                                material_name, md));
         for (uint32_t j = 0; j < e->object_count; j++)
             if (gi_rad_model_find_object(md, e->objects[j].name) < 0)
                 return gi_fail(err, GI_EINVAL,
                                "%s: emissions[%u] (\"%s\"): no object \"%s\" in the scene "
                                "(its objects: %s)",
                                file, i, e->name, e->objects[j].name,
-                               name_list(names, sizeof names, md->object_count, object_name, md));
+                               gi_rad_name_list(names, sizeof names, md->object_count,
+                                                object_name, md));
     }
     return 0;
 }

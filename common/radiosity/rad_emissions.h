@@ -57,6 +57,10 @@ void gi_rad_emissions_free(gi_rad_emissions *em);
 /* The set with only the scene's emission, named "scene". */
 void gi_rad_emissions_scene(gi_rad_emissions *em);
 
+/* "a, b, c": the names an unknown one was meant to be, for an error
+ * message, cut with "..." to fit cap (a mesh file may bring hundreds). */
+const char *gi_rad_name_list(char *buf, size_t cap, uint32_t count,
+                             const char *(*name)(const void *ctx, uint32_t i), const void *ctx);
 /* Checks that every material and object named exists in the model
  * (GI_EINVAL naming `file`, the set and the name). */
 int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,

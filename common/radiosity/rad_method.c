@@ -193,10 +193,21 @@ static uint32_t tracked_level(const gi_rad_params *p)
     return p->factorization == GI_RAD_2MF ? p->patch_level : p->max_level;
 }
 
+static const char *scene_material(const void *s, uint32_t i)
+{
+    return ((const gi_scene *)s)->materials[i].name;
+}
+
+static const char *scene_object(const void *s, uint32_t i)
+{
+    return ((const gi_scene *)s)->objects[i].name;
+}
+
 static int rad_check_scene(gi_job *job, gi_error *err)
 {
     const gi_rad_params *p = job->params;
     const gi_scene *s = &job->scene;
+    char names[400];
     /* Elements emit from their front face only: a two-sided emitter would
      * silently lose half its light (and its back would stay dark). */
     for (uint32_t m = 0; m < s->material_count; m++)
@@ -215,8 +226,10 @@ static int rad_check_scene(gi_job *job, gi_error *err)
             if (m == s->material_count)
                 return gi_fail(err, GI_EINVAL,
                                "%s: radiosity.emissions[%u].materials: no material \"%s\" in "
-                               "the scene",
-                               job->file, i, e->materials[j].name);
+                               "the scene (its materials: %s)",
+                               job->file, i, e->materials[j].name,
+                               gi_rad_name_list(names, sizeof names, s->material_count,
+                                                scene_material, s));
             if (s->materials[m].two_sided)
                 return gi_fail(err, GI_EINVAL,
                                "%s: radiosity.emissions[%u].materials: \"%s\" is two-sided, and "
@@ -227,8 +240,10 @@ static int rad_check_scene(gi_job *job, gi_error *err)
             if (gi_scene_find_object(s, e->objects[j].name) < 0)
                 return gi_fail(err, GI_EINVAL,
                                "%s: radiosity.emissions[%u].objects: no object \"%s\" in the "
-                               "scene",
-                               job->file, i, e->objects[j].name);
+                               "scene (its objects: %s)",
+                               job->file, i, e->objects[j].name,
+                               gi_rad_name_list(names, sizeof names, s->object_count,
+                                                scene_object, s));
     }
     /* The sizes, before any work: n, and k (2MF) or its bound (2MCE). */
     gi_rad_mesh m;

@@ -256,6 +256,27 @@ GI_TEST(test_rad_emissions_refuse_bad_input)
     }
 }
 
+static const char *nth_name(const void *ctx, uint32_t i)
+{
+    return ((const char *const *)ctx)[i];
+}
+
+GI_TEST(test_rad_name_list_fits_its_buffer)
+{
+    const char *names[] = {"white", "red", "green", "light"};
+    char buf[32];
+    GI_CHECK(strcmp(gi_rad_name_list(buf, sizeof buf, 4, nth_name, names),
+                    "white, red, green, light") == 0);
+    GI_CHECK(strcmp(gi_rad_name_list(buf, sizeof buf, 0, nth_name, names), "") == 0);
+    /* Too many for the buffer: as many as fit, then "...". */
+    char small[20];
+    GI_CHECK_MSG(strcmp(gi_rad_name_list(small, sizeof small, 4, nth_name, names),
+                        "white, red, ...") == 0,
+                 "got \"%s\"", small);
+    const char *long_one[] = {"a-name-longer-than-the-buffer-itself"};
+    GI_CHECK(strcmp(gi_rad_name_list(small, sizeof small, 1, nth_name, long_one), "...") == 0);
+}
+
 GI_TEST(test_rad_output_names_of_several_sets_must_not_meet)
 {
     gi_error err;
