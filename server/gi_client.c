@@ -816,7 +816,7 @@ int gi_client_main(int argc, char **argv)
             return fail_msg(2, "tokens are not taken from the command line (other users can read "
                                "it): use --token-file or GI_FARM_TOKEN");
         else if (argv[i][0] == '-' && argv[i][1])
-            return fail_msg(2, "%s: unknown option %s", cmd, argv[i]);
+            return fail_msg(2, "%s: unknown option %s (gi --help lists them)", cmd, argv[i]);
         else if (c.arg)
             return fail_msg(2, "%s: more than one operand (%s, %s)", cmd, c.arg, argv[i]);
         else

@@ -3,7 +3,7 @@
  *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE] [--checkpoint S]
  *             [--resume] [--task-timeout S]
  *   gi validate JOB.json
- *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] ...
+ *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--progress MODE] ...
  *   gi methods
  *
  * Exit status: 0 success, 2 invalid input (job, scene, mesh, arguments),
@@ -33,7 +33,7 @@ static void usage(FILE *out)
             "                          [--checkpoint S] [--resume] [--task-timeout S]\n"
             "       gi validate JOB.json | SCENE\n"
             "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images]\n"
-            "                 [--workers N] [--threads N]\n"
+            "                 [--workers N] [--threads N] [--progress MODE]\n"
             "       gi methods\n"
             "       gi --version\n"
             "%s"
@@ -50,7 +50,8 @@ static void usage(FILE *out)
             "validate  checks a job and its scene without rendering (or a scene alone: a scene\n"
             "          JSON, OBJ, PLY or glTF file)\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
-            "          (in DIR): PLY and report per emission set; --images renders the camera\n"
+            "          (in DIR, where gi render wrote it; default out): PLY and glTF per\n"
+            "          emission set, and a report; --images renders the camera too\n"
             "methods   lists the rendering methods\n"
             "\n"
             "submit    uploads a job's files to a farm and queues it; --wait follows it and\n"
@@ -136,7 +137,7 @@ static int cmd_render(int argc, char **argv)
             continue;
         }
         if (argv[i][0] == '-' && argv[i][1]) {
-            fprintf(stderr, "gi render: unknown option %s\n", argv[i]);
+            fprintf(stderr, "gi render: unknown option %s (gi --help lists them)\n", argv[i]);
             return 2;
         }
         if (job_path) {

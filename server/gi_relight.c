@@ -77,7 +77,7 @@ static int parse_args(int argc, char **argv, relight_args *a)
                                  strcmp(arg, "--workers") == 0 ? &a->workers : &a->threads))
                 return -1;
         } else if (arg[0] == '-' && arg[1]) {
-            fprintf(stderr, "gi relight: unknown option %s\n", arg);
+            fprintf(stderr, "gi relight: unknown option %s (gi --help lists them)\n", arg);
             return -1;
         } else if (!a->job) {
             a->job = arg;

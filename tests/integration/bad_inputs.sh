@@ -44,5 +44,10 @@ for args in "render" "render a.json b.json" "render x.json --workers 0" "render 
     rc=$?
     set -e
     [ $rc -eq 2 ] || fail "gi $args: exit status $rc, expected 2"
+    # An unknown option points at where the known ones are.
+    case "$args" in
+    *--frobnicate) grep -q "unknown option --frobnicate (gi --help lists them)" "$TMP/stderr" ||
+        fail "gi $args: $(cat "$TMP/stderr")" ;;
+    esac
 done
 echo "$n malformed inputs refused"
