@@ -93,7 +93,7 @@ static int read_secret_file(const char *path, const char *what, gi_buf *out, gi_
 }
 
 int gi_secret_read(const char *file, const char *env_file, const char *env_value,
-                   const char *what, gi_buf *out, gi_error *err)
+                   const char *what, const char *option, gi_buf *out, gi_error *err)
 {
     gi_secret_free(out);
     int rc;
@@ -106,8 +106,11 @@ int gi_secret_read(const char *file, const char *env_file, const char *env_value
     } else {
         const char *v = env_value ? getenv(env_value) : NULL;
         if (!v || !v[0])
-            return gi_fail(err, GI_EINVAL, "no %s: name a file with its option or %s, or set %s",
-                           what, env_file ? env_file : "-", env_value ? env_value : "-");
+            return gi_fail(err, GI_EINVAL,
+                           "no %s: name its file with %s or %s, or set %s (docs/farm.md, "
+                           "\"Quick start\", makes one)",
+                           what, option ? option : "the program's option",
+                           env_file ? env_file : "-", env_value ? env_value : "-");
         size_t n = strlen(v);
         if (n > GI_SECRET_MAX_BYTES)
             return gi_fail(err, GI_EINVAL, "%s in %s: longer than %d bytes", what, env_value,

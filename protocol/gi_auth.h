@@ -27,10 +27,12 @@
  * (which is then removed from the environment, so children do not inherit
  * it). Trailing white space (a final newline) is dropped. Refuses a file
  * that group or others may read, and secrets shorter than
- * GI_SECRET_MIN_BYTES. `what` names the secret in messages ("farm secret");
- * the messages never contain secret bytes. out is cleared first. */
+ * GI_SECRET_MIN_BYTES. `what` names the secret in messages ("farm secret"),
+ * `option` the program's option that names its file ("--secret-file", or
+ * NULL), so that a missing secret says how to give it; the messages never
+ * contain secret bytes. out is cleared first. */
 int gi_secret_read(const char *file, const char *env_file, const char *env_value,
-                   const char *what, gi_buf *out, gi_error *err);
+                   const char *what, const char *option, gi_buf *out, gi_error *err);
 /* Overwrites and frees a secret. */
 void gi_secret_free(gi_buf *secret);
 

@@ -846,7 +846,8 @@ int gi_client_main(int argc, char **argv)
         return fail_msg(2, "%s", err.msg);
     gi_buf tok;
     gi_buf_init(&tok);
-    if (gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token", &tok, &err)) {
+    if (gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token",
+                       "--token-file", &tok, &err)) {
         gi_http_url_free(&c.url);
         return fail_msg(2, "%s", err.msg);
     }

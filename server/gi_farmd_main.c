@@ -234,9 +234,9 @@ int main(int argc, char **argv)
     }
     gi_error err;
     if (gi_secret_read(secret_file, "GI_FARM_SECRET_FILE", "GI_FARM_SECRET", "farm secret",
-                       &cfg.secret, &err) ||
-        gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token", &cfg.token,
-                       &err)) {
+                       "--secret-file", &cfg.secret, &err) ||
+        gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token",
+                       "--token-file", &cfg.token, &err)) {
         fprintf(stderr, "gi-farmd: %s\n", err.msg);
         gi_secret_free(&cfg.secret);
         return 2;

@@ -139,7 +139,7 @@ int main(int argc, char **argv)
     gi_error err;
     gi_buf_init(&o.secret);
     if (gi_secret_read(secret_file, "GI_FARM_SECRET_FILE", "GI_FARM_SECRET", "farm secret",
-                       &o.secret, &err)) {
+                       "--secret-file", &o.secret, &err)) {
         fprintf(stderr, "gi-worker: %s\n", err.msg);
         free(cache);
         return 2;

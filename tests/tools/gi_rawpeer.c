@@ -86,7 +86,8 @@ static int authenticate(int fd, gi_error *err)
 {
     gi_buf secret;
     gi_buf_init(&secret);
-    if (gi_secret_read(NULL, "GI_FARM_SECRET_FILE", "GI_FARM_SECRET", "farm secret", &secret, err))
+    if (gi_secret_read(NULL, "GI_FARM_SECRET_FILE", "GI_FARM_SECRET", "farm secret", NULL, &secret,
+                       err))
         return -1;
     uint8_t key[GI_AUTH_KEY_BYTES];
     gi_auth_key(&secret, key);

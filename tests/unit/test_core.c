@@ -220,7 +220,7 @@ GI_TEST(test_fifo_is_refused_without_blocking)
     gi_buf_init(&b);
     GI_CHECK(gi_read_file(path, 100, &b, &err) == -1 && err.code == GI_EINVAL);
     GI_CHECK_MSG(strstr(err.msg, path) && strstr(err.msg, "not a regular file"), "%s", err.msg);
-    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &b, &err) != 0);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", NULL, &b, &err) != 0);
     GI_CHECK_MSG(strstr(err.msg, "not a regular file"), "%s", err.msg);
     int w, h;
     unsigned char *rgb = NULL;

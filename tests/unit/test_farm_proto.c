@@ -293,11 +293,11 @@ GI_TEST(test_secret_read)
     gi_buf_init(&s);
     gi_error err;
     write_file(path, "0123456789abcdef0123\n", 0600);
-    GI_REQUIRE_OK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err));
+    GI_REQUIRE_OK(gi_secret_read(path, NULL, NULL, "farm secret", NULL, &s, &err));
     GI_CHECK(s.len == 20 && memcmp(s.data, "0123456789abcdef0123", 20) == 0);
     /* Readable by others: refused, and the message holds no secret byte. */
     chmod(path, 0644);
-    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", NULL, &s, &err) != 0);
     GI_CHECK(strstr(err.msg, "chmod 600") && !strstr(err.msg, "0123456789"));
     /* systemd's credentials directory: a credential shows 0440 where ACLs
      * grant it to the service's user; others' bits are still refused. */
@@ -307,31 +307,37 @@ GI_TEST(test_secret_read)
     chmod(creds, 0700);
     snprintf(cred, sizeof cred, "%s/farm-secret", creds);
     write_file(cred, "0123456789abcdef0123\n", 0440);
-    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", NULL, &s, &err) != 0);
     setenv("CREDENTIALS_DIRECTORY", creds, 1);
-    GI_REQUIRE_OK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err));
+    GI_REQUIRE_OK(gi_secret_read(cred, NULL, NULL, "farm secret", NULL, &s, &err));
     GI_CHECK(s.len == 20);
     chmod(cred, 0444);
-    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(gi_secret_read(cred, NULL, NULL, "farm secret", NULL, &s, &err) != 0);
     chmod(path, 0640); /* not in the credentials directory */
-    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", NULL, &s, &err) != 0);
     unsetenv("CREDENTIALS_DIRECTORY");
     write_file(path, "short\n", 0600);
-    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", &s, &err) != 0);
+    GI_CHECK(gi_secret_read(path, NULL, NULL, "farm secret", NULL, &s, &err) != 0);
     GI_CHECK(strstr(err.msg, "shorter than 16 bytes") != NULL);
     /* From a variable naming a file, then from the value itself, which is
      * then removed from the environment. */
     write_file(path, "file secret, long enough", 0600);
     setenv("GI_TEST_SECRET_FILE", path, 1);
-    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", &s, &err));
+    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", NULL, &s,
+                                 &err));
     GI_CHECK(s.len == 24);
     unsetenv("GI_TEST_SECRET_FILE");
     setenv("GI_TEST_SECRET", "environment secret value", 1);
-    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", &s, &err));
+    GI_REQUIRE_OK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "x", NULL, &s,
+                                 &err));
     GI_CHECK(s.len == 24 && memcmp(s.data, "environment", 11) == 0);
     GI_CHECK(getenv("GI_TEST_SECRET") == NULL);
-    GI_CHECK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "API token", &s, &err) != 0);
-    GI_CHECK(strstr(err.msg, "no API token") && strstr(err.msg, "GI_TEST_SECRET"));
+    GI_CHECK(gi_secret_read(NULL, "GI_TEST_SECRET_FILE", "GI_TEST_SECRET", "API token",
+                            "--token-file", &s, &err) != 0);
+    /* It says how to give one: the option, the variables. */
+    GI_CHECK_MSG(strstr(err.msg, "no API token: name its file with --token-file or "
+                                 "GI_TEST_SECRET_FILE, or set GI_TEST_SECRET"),
+                 "%s", err.msg);
     gi_secret_free(&s);
 }
 
