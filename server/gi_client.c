@@ -761,8 +761,16 @@ static int cmd_fetch(client *c, uint64_t id)
     int rc = get_job(c, id, &job);
     if (rc)
         return rc;
-    if (strcmp(str(job, "state"), "done") != 0)
-        rc = fail_msg(1, "job %llu is %s, not done", (unsigned long long)id, str(job, "state"));
+    const char *state = str(job, "state");
+    unsigned long long n = (unsigned long long)id;
+    /* What to do instead: an ended job has no outputs to wait for. */
+    if (strcmp(state, "failed") == 0 || strcmp(state, "cancelled") == 0)
+        rc = fail_msg(1, "job %llu is %s, not done: it has no outputs (`gi status %llu` says "
+                         "why; `gi retry %llu --wait` runs it again and fetches them)",
+                      n, state, n, n);
+    else if (strcmp(state, "done") != 0)
+        rc = fail_msg(1, "job %llu is %s, not done yet (`gi wait %llu` waits for it and fetches "
+                         "its outputs)", n, state, n);
     else
         rc = fetch_outputs(c, id, job);
     cJSON_Delete(job);

@@ -98,6 +98,14 @@ set +e
 rc=$?
 set -e
 [ $rc -eq 1 ] && grep -q "cancelled" "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "gi wait on a cancelled job: $rc"; }
+# gi fetch of it says it has no outputs and what to do instead.
+set +e
+"$GI" fetch "$id" --out "$TMP/none" >/dev/null 2>"$TMP/fetch.log"
+rc=$?
+set -e
+want="job $id is cancelled, not done: it has no outputs (\`gi status $id\` says why; \`gi retry $id"
+[ $rc -eq 1 ] && grep -qF "$want --wait\` runs it again" "$TMP/fetch.log" ||
+    { cat "$TMP/fetch.log"; fail "gi fetch of a cancelled job: $rc"; }
 # JSON progress: outputs fetched and the end, or the state it ended in.
 "$GI" wait "$hi" --out "$TMP/fetched2" --progress json >/dev/null 2>"$TMP/wait.json" || fail "gi wait done job"
 grep -q '^{"event":"output","job":"high","kind":"exr","path":"'"$TMP"'/fetched2/high.exr"}$' "$TMP/wait.json" &&
