@@ -232,23 +232,30 @@ static int cmd_render(int argc, char **argv)
     return status;
 }
 
-/* A scene rather than a job: a bare mesh file, or JSON with "objects". */
-static int is_scene_file(const char *path)
+enum { FILE_JOB, FILE_SCENE, FILE_EMISSIONS };
+
+/* What gi validate was given: a scene (a bare mesh file, or JSON with
+ * "objects"), an emissions file for gi relight, or a job. */
+static int file_kind(const char *path)
 {
     const char *dot = strrchr(path, '.');
     if (!dot || strcmp(dot, ".json") != 0)
-        return 1;
+        return FILE_SCENE;
     gi_buf b;
     gi_buf_init(&b);
-    int scene = 0;
+    int kind = FILE_JOB;
     if (gi_read_file(path, (size_t)64 << 20, &b, NULL) == 0) {
         cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
-        scene = cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "objects") &&
-                !cJSON_GetObjectItemCaseSensitive(doc, "method");
+        int method = cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "method");
+        if (!method && cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "objects"))
+            kind = FILE_SCENE;
+        else if (!method && cJSON_IsObject(doc) &&
+                 cJSON_GetObjectItemCaseSensitive(doc, "emissions"))
+            kind = FILE_EMISSIONS;
         cJSON_Delete(doc);
     }
     gi_buf_free(&b);
-    return scene;
+    return kind;
 }
 
 /* gi validate SCENE: the scene alone, as every method loads it. */
@@ -280,8 +287,17 @@ static int cmd_validate(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    if (is_scene_file(argv[2]))
+    int kind = file_kind(argv[2]);
+    if (kind == FILE_SCENE)
         return validate_scene(argv[2]);
+    /* Its names are the scene's, which only the job knows. */
+    if (kind == FILE_EMISSIONS) {
+        fprintf(stderr,
+                "gi: %s: an emissions file, not a job or a scene: gi relight JOB.json %s checks "
+                "it against the radiosity job's scene (gi validate takes a job or a scene)\n",
+                argv[2], argv[2]);
+        return 2;
+    }
     gi_error err;
     gi_job job;
     int rc = gi_job_load(argv[2], &job, &err);

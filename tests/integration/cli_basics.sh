@@ -22,6 +22,14 @@ rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q 'material "x" is not defined' "$TMP/bad-scene.log" ||
     { cat "$TMP/bad-scene.log"; fail "a bad scene: exit $rc"; }
+# An emissions file is neither: validate says where it is checked (exit 2).
+echo '{"emissions": [{"name": "scene"}]}' >"$TMP/em.json"
+set +e
+"$GI" validate "$TMP/em.json" 2>"$TMP/em.log"
+rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "em.json: an emissions file, not a job or a scene: gi relight JOB.json" \
+    "$TMP/em.log" || { cat "$TMP/em.log"; fail "validate an emissions file: exit $rc"; }
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
