@@ -37,14 +37,25 @@ static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
 }
 
 /* Runs on the coordinator and in every worker, so both see the same
- * refined mesh and derived parameters; warnings are the coordinator's. */
+ * refined mesh and derived parameters; warnings are the coordinator's (and
+ * gi validate's, gi submit's). */
 static int detp_check_scene(gi_job *job, gi_error *err)
 {
     gi_detp_params *p = job->params;
     if (gi_detp_resolve_params(p, &job->scene, job->file, err))
         return -1;
-    if (!job->on_worker)
-        gi_detp_anim_warn_keys(&p->anim, &job->scene, job->file);
+    if (job->on_worker)
+        return 0;
+    gi_detp_anim_warn_keys(&p->anim, &job->scene, job->file);
+    /* "auto" discs are the mesh's own spacing: on an unsubdivided scene of
+     * big faces that is a blurred, dark-edged bake, and nothing else says so.
+     * Said at load, so that gi validate and gi submit say it before a run. */
+    if (p->radius.kind == GI_DETP_LEN_AUTO && p->disc_radius > 0.05 * p->scene_size)
+        gi_warn("%s: detp: the discs' radius is %.3g (%.0f%% of the scene's size, the mesh's mean "
+                "edge with %u vertices): a coarse bake; set detp.subdivide (\"2%%\", say) for "
+                "finer lighting",
+                job->name, (double)p->disc_radius, 100.0 * p->disc_radius / p->scene_size,
+                job->scene.vertex_count);
     return 0;
 }
 
@@ -107,14 +118,6 @@ static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     if (state_new(job, &st, err))
         return -1;
     job->state = st;
-    /* "auto" discs are the mesh's own spacing: on an unsubdivided scene of
-     * big faces that is a blurred, dark-edged bake, and nothing else says so. */
-    if (p->radius.kind == GI_DETP_LEN_AUTO && p->disc_radius > 0.05 * p->scene_size)
-        gi_warn("%s: detp: the discs' radius is %.3g (%.0f%% of the scene's size, the mesh's mean "
-                "edge with %u vertices): a coarse bake; set detp.subdivide (\"2%%\", say) for "
-                "finer lighting",
-                job->name, (double)p->disc_radius, 100.0 * p->disc_radius / p->scene_size,
-                job->scene.vertex_count);
     if (p->anim.enabled)
         return detp_anim_plan(job, st, q, err);
     for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch) {

@@ -10,6 +10,14 @@ JOB
 "$GI" validate "$TMP/obj.json" >"$TMP/validate.txt" || fail "validate"
 grep -q "ok (pt, scene two_materials.obj: 1 objects, 3 triangles, 1 emissive)" "$TMP/validate.txt" ||
     { cat "$TMP/validate.txt"; fail "validate output"; }
+# A detp bake of big faces with "auto" discs is warned about by validate
+# already, not only once the render runs.
+write_job "$TMP/coarse.json" <<JOB
+{"scene": "two_materials.obj", "method": "detp", "detp": {"photons": 1000}}
+JOB
+"$GI" validate "$TMP/coarse.json" >/dev/null 2>"$TMP/coarse.err" || fail "validate a coarse bake"
+grep -q "warning: coarse: detp: the discs' radius is .*: a coarse bake; set detp.subdivide" \
+    "$TMP/coarse.err" || { cat "$TMP/coarse.err"; fail "validate does not warn of a coarse bake"; }
 # A scene alone: a bare mesh, a scene JSON; a bad one is refused (exit 2).
 "$GI" validate "$TMP/two_materials.obj" | grep -q "two_materials.obj: ok (scene: 1 objects, 3 triangles, 1 emissive)" ||
     fail "validate a bare mesh"

@@ -37,7 +37,8 @@ same_frames() { # same_frames DIR_A DIR_B WHAT
 # A key that puts the mobile wholly outside the room is validated with a
 # warning naming it (units or a sign gone wrong); the job's own keys, none.
 "$GI" validate "$TMP/job.json" >/dev/null 2>"$TMP/validate.err" || fail "validate"
-[ ! -s "$TMP/validate.err" ] || { cat "$TMP/validate.err"; fail "the job's keys were warned about"; }
+# (Its discs are coarse, 6% of the scene, and validate says that too.)
+! grep -q "keyframes" "$TMP/validate.err" || { cat "$TMP/validate.err"; fail "the job's keys were warned about"; }
 sed 's/"translate": \[268, -338.9, -20.4\]/"translate": [268, -338.9, -2000]/' "$TMP/job.json" >"$TMP/away.json"
 "$GI" validate "$TMP/away.json" >/dev/null 2>"$TMP/away.err" || fail "validate away"
 grep -q "detp.animation.keyframes\[1\]: at frame 5 the mobile lies wholly outside" "$TMP/away.err" ||
