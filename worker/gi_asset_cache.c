@@ -51,8 +51,27 @@ static void scan(const gi_asset_cache *c, file_list *out)
 int gi_asset_cache_open(gi_asset_cache *c, const char *dir, uint64_t max_bytes, gi_error *err)
 {
     memset(c, 0, sizeof *c);
+    c->lock_fd = -1;
     if (gi_mkdirs(dir, err))
         return gi_error_prefix(err, "asset cache");
+    char lock[4200];
+    snprintf(lock, sizeof lock, "%s/.lock", dir);
+    int fd = open(lock, O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+    if (fd < 0)
+        return gi_fail(err, GI_EIO, "asset cache: %s: %s", lock, strerror(errno));
+    /* A POSIX record lock: held by this process, not by the pool children
+     * it forks (a worker killed -9 frees it at once, even while they die),
+     * and honoured over NFS. A file system without locks (ENOLCK) is let be. */
+    struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET};
+    if (fcntl(fd, F_SETLK, &fl) != 0 && (errno == EACCES || errno == EAGAIN)) {
+        close(fd);
+        return gi_fail(err, GI_EINVAL,
+                       "asset cache %s is in use by another gi-worker (on this host, or on one "
+                       "that shares the directory): give each gi-worker a --cache DIR of its "
+                       "own, and a --name",
+                       dir);
+    }
+    c->lock_fd = fd;
     c->dir = gi_xstrdup(dir);
     c->max_bytes = max_bytes;
     file_list l = {0};
@@ -67,6 +86,9 @@ void gi_asset_cache_close(gi_asset_cache *c)
 {
     free(c->dir);
     c->dir = NULL;
+    if (c->lock_fd >= 0)
+        close(c->lock_fd);
+    c->lock_fd = -1;
 }
 
 static void path_of(const gi_asset_cache *c, const char *hash, char *out, size_t n)

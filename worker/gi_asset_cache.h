@@ -6,7 +6,11 @@
  * <dir>/<first two hex digits>/<hash>, written atomically. Reads verify the
  * bytes against the name (a damaged file is deleted and fetched again).
  * When the total passes max_bytes, the least recently used files (by mtime,
- * refreshed on every read) are deleted down to 90%. */
+ * refreshed on every read) are deleted down to 90%.
+ *
+ * One gi-worker per directory, enforced with a lock (<dir>/.lock): a second
+ * one would delete the first's half-written files as leftovers, and their
+ * batch directories (CACHE/batches by default) would mix. */
 #ifndef GI_ASSET_CACHE_H
 #define GI_ASSET_CACHE_H
 
@@ -18,10 +22,13 @@
 
 typedef struct gi_asset_cache {
     char *dir;
+    int lock_fd; /* holds the directory's lock while open */
     uint64_t max_bytes, bytes;
     uint64_t hits, misses, evicted;
 } gi_asset_cache;
 
+/* Fails (GI_EINVAL, naming dir) when another process holds it open (a
+ * process may open it twice: the lock is per process). */
 int gi_asset_cache_open(gi_asset_cache *c, const char *dir, uint64_t max_bytes, gi_error *err);
 void gi_asset_cache_close(gi_asset_cache *c);
 /* 1 with the bytes in out, 0 if not cached, -1 on an I/O error. */

@@ -267,6 +267,29 @@ GI_TEST(test_http_url_parse)
     GI_CHECK(gi_http_url_parse("http:///x", &u, &err) != 0);
 }
 
+/* In a child process (the lock is per process): 0 if it opens the cache,
+ * 1 if it is refused as in use, saying what to do; 2 otherwise. */
+static int other_process_opens(const char *dir)
+{
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        gi_asset_cache c;
+        gi_error err;
+        if (gi_asset_cache_open(&c, dir, 3000, &err) == 0)
+            _exit(c.bytes > 0 ? 0 : 2);
+        _exit(err.code == GI_EINVAL && strstr(err.msg, dir) &&
+                      strstr(err.msg, "in use by another gi-worker") &&
+                      strstr(err.msg, "--cache DIR of its own")
+                  ? 1
+                  : 2);
+    }
+    int status = 0;
+    if (pid < 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status))
+        return -1;
+    return WEXITSTATUS(status);
+}
+
 GI_TEST(test_asset_cache)
 {
     char dir[512];
@@ -306,7 +329,11 @@ GI_TEST(test_asset_cache)
     /* A cache reopened knows its size. */
     GI_REQUIRE_OK(gi_asset_cache_open(&c, dir, 3000, &err));
     GI_CHECK(c.bytes > 0 && c.bytes <= 3000);
+    /* One user at a time: a second gi-worker given the same directory is
+     * refused, saying what to do; once the first closes it, it may. */
+    GI_CHECK(other_process_opens(dir) == 1);
     gi_asset_cache_close(&c);
+    GI_CHECK(other_process_opens(dir) == 0);
     gi_buf_free(&b);
 }
 
