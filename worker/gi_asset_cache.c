@@ -8,10 +8,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
+#include "gi_clock.h"
 #include "gi_fs.h"
 #include "gi_log.h"
+
+#define LOCK_WAIT_S 3.0 /* for the directory's lock, held by another worker */
 
 typedef struct cached_file {
     char path[4600];
@@ -63,7 +67,14 @@ int gi_asset_cache_open(gi_asset_cache *c, const char *dir, uint64_t max_bytes, 
      * it forks (a worker killed -9 frees it at once, even while they die),
      * and honoured over NFS. A file system without locks (ENOLCK) is let be. */
     struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET};
-    if (fcntl(fd, F_SETLK, &fl) != 0 && (errno == EACCES || errno == EAGAIN)) {
+    /* A worker just killed may still be on its way out (kill returns before
+     * the process is gone; a restart script goes on at once): wait for it. */
+    int busy;
+    double give_up = gi_now() + LOCK_WAIT_S;
+    while ((busy = fcntl(fd, F_SETLK, &fl) != 0 && (errno == EACCES || errno == EAGAIN)) &&
+           gi_now() < give_up)
+        nanosleep(&(struct timespec){0, 50 * 1000 * 1000}, NULL);
+    if (busy) {
         close(fd);
         return gi_fail(err, GI_EINVAL,
                        "asset cache %s is in use by another gi-worker (on this host, or on one "

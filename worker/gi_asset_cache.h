@@ -27,8 +27,9 @@ typedef struct gi_asset_cache {
     uint64_t hits, misses, evicted;
 } gi_asset_cache;
 
-/* Fails (GI_EINVAL, naming dir) when another process holds it open (a
- * process may open it twice: the lock is per process). */
+/* Fails (GI_EINVAL, naming dir) when another process holds it open still
+ * after a few seconds (a process may open it twice: the lock is per
+ * process). */
 int gi_asset_cache_open(gi_asset_cache *c, const char *dir, uint64_t max_bytes, gi_error *err);
 void gi_asset_cache_close(gi_asset_cache *c);
 /* 1 with the bytes in out, 0 if not cached, -1 on an I/O error. */

@@ -89,6 +89,7 @@ start_farmd "$S2" "$LOG" -- $OPTS $PORTS
 "$GI" fetch "$id" --out "$TMP/out3" >/dev/null || fail "fetch 3"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/out3/img.exr" || fail "job 3's image differs from gi render"
 stop_farmd "$LOG"
+kill -9 "$WORKER_PID" # step 4's worker takes its cache (one gi-worker per cache)
 
 # 4. A held result across a restart: the disk (a tmpfs) outlives gi-farmd in
 # a mount namespace a sleeping process keeps.
