@@ -1,5 +1,6 @@
 #!/bin/sh
-# make demo: renders the Cornell box with every method into out/.
+# make demo: renders the Cornell box with every method into out/, then
+# relights the radiosity bake with scenes/cornell-box/emissions.json.
 #   scripts/demo.sh BUILD_DIR OUT_DIR
 set -eu
 BIN=${1:-build/release}
@@ -13,6 +14,11 @@ for job in "$SRC"/scenes/cornell-box/*.json; do
     echo "== $(basename "$job")"
     "$BIN/gi" render "$job" --out "$OUT"
 done
+# New light for the radiosity bake, from the factorization it left: no
+# form factors, milliseconds (README, docs/job-format.md "gi relight").
+echo "== relight: radiosity.json emissions.json"
+box="$SRC/scenes/cornell-box"
+"$BIN/gi" relight "$box/radiosity.json" "$box/emissions.json" --out "$OUT"
 echo
 echo "Outputs are in $OUT/:"
 ls -1 "$OUT" | sed "s|^|  $OUT/|"

@@ -39,6 +39,11 @@ grep -q '"name":	"block"' "$TMP/out/cb-relight.json" || fail "report lacks the s
 cmp "$TMP/out/cb.exr" "$TMP/out/cb-scene.exr" || fail "the scene's emission does not reproduce the job's EXR"
 cmp "$TMP/out/cb.ply" "$TMP/out/cb-scene.ply" || fail "PLY differs with --images"
 
+# The emissions file the README and make demo use stays valid for the box.
+"$GI" relight "$TMP/job.json" "$SRC/scenes/cornell-box/emissions.json" --out "$TMP/out" \
+    >"$TMP/shipped.log" 2>&1 || { cat "$TMP/shipped.log"; fail "relight with scenes/cornell-box/emissions.json"; }
+grep -q "relit 3 emission sets" "$TMP/shipped.log" || fail "the shipped emissions file"
+
 # Errors: exit 2, one line, naming the file.
 expect_error() {
     what=$1
