@@ -109,12 +109,16 @@ static void error_text(const gi_buf *body, char *out, size_t n)
 }
 
 /* Exit status for an HTTP failure: 2 for the caller's input, 1 otherwise. */
-static int http_failure(const char *what, int status, const gi_buf *body)
+static int http_failure(const client *c, const char *what, int status, const gi_buf *body)
 {
     char msg[1200];
     error_text(body, msg, sizeof msg);
     if (status == 401)
         return fail_msg(1, "%s: the farm refused the API token: %s", what, msg);
+    /* A job id from another farm ($GI_FARM, --farm) or one purged. */
+    if (status == 404 && strncmp(what, "/api/v1/jobs/", 13) == 0)
+        return fail_msg(1, "%s: %s (HTTP 404 from the farm at %s; `gi jobs` lists its jobs)", what,
+                        msg, c->url.hostport);
     return fail_msg(status == 400 ? 2 : 1, "%s: %s (HTTP %d)", what, msg, status);
 }
 
@@ -190,7 +194,7 @@ static int call(client *c, const char *method, const char *path, const void *bod
     if (st < 0)
         return fail_msg(1, "%s", err.msg);
     if (st != want && (!want2 || st != want2))
-        return http_failure(path, st, resp);
+        return http_failure(c, path, st, resp);
     return 0;
 }
 
@@ -232,7 +236,7 @@ static int look_at_job(client *c, uint64_t id, cJSON **doc, char *why, size_t n)
             snprintf(why, n, "HTTP %d", st);
         rc = -1;
     } else if (st != 200) {
-        rc = http_failure(path, st, &b);
+        rc = http_failure(c, path, st, &b);
     } else if (!(*doc = cJSON_ParseWithLength((const char *)b.data, b.len))) {
         rc = fail_msg(1, "%s: the farm's answer is not JSON", path);
     }
@@ -499,7 +503,9 @@ static int upload_assets(client *c, const gi_job *job)
         gi_buf_init(&b);
         gi_error err;
         int st = request(c, "HEAD", path, NULL, 0, NULL, &b, NULL, &err);
-        int rc = st < 0 ? fail_msg(1, "%s", err.msg) : st == 200 || st == 404 ? 0 : http_failure(path, st, &b);
+        int rc = st < 0                    ? fail_msg(1, "%s", err.msg)
+                 : st == 200 || st == 404 ? 0
+                                          : http_failure(c, path, st, &b);
         if (rc == 0 && st == 404) {
             const gi_buf *bytes = job->assets ? gi_asset_store_get(job->assets, e->hash) : NULL;
             if (!bytes)

@@ -62,6 +62,13 @@ api "/api/v1/jobs/$hi/outputs/high.exr" -o "$TMP/curl.exr"
 cmp "$TMP/ref/high.exr" "$TMP/curl.exr" || fail "curl download differs"
 [ "$(api "/api/v1/jobs/$hi/outputs/nope.exr" -o /dev/null -w '%{http_code}')" = 404 ] || fail "unknown output"
 [ "$(api "/api/v1/jobs/999" -o /dev/null -w '%{http_code}')" = 404 ] || fail "unknown job"
+# gi says which farm has no such job (another $GI_FARM?) and where the ids are.
+set +e
+"$GI" status 999 2>"$TMP/nojob.log"
+rc=$?
+set -e
+[ $rc -eq 1 ] && grep -qF "no job 999 (HTTP 404 from the farm at ${GI_FARM#http://}; \`gi jobs\` lists" \
+    "$TMP/nojob.log" || { cat "$TMP/nojob.log"; fail "gi status of an unknown job: $rc"; }
 curl -s "$GI_FARM/" | grep -q "<title>gi-farm</title>" || fail "dashboard"
 h=$(b2sum -l 256 "$SRC/scenes/cornell-box/scene.json" | cut -d' ' -f1)
 [ "$(api "/api/v1/assets/$h" -o /dev/null -I -w '%{http_code}')" = 200 ] || fail "HEAD of an uploaded asset"
