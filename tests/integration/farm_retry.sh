@@ -78,7 +78,7 @@ st=0
     { cat "$TMP/retry3.log"; fail "retrying a done job: exit $st"; }
 st=0
 "$GI" retry 999 >"$TMP/retry4.log" 2>&1 || st=$?
-[ $st -eq 1 ] && grep -q "no job 999 (HTTP 404)" "$TMP/retry4.log" ||
+[ $st -eq 1 ] && grep -q "no job 999 (HTTP 404 from the farm at" "$TMP/retry4.log" ||
     { cat "$TMP/retry4.log"; fail "retrying a missing job: exit $st"; }
 [ "$(api "/api/v1/jobs/$id/retry" -o /dev/null -w '%{http_code}')" = 405 ] || fail "GET .../retry"
 [ "$(metric gi_farm_jobs_retried_total)" = 2 ] || fail "retries counted: $(metric gi_farm_jobs_retried_total)"
