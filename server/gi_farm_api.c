@@ -72,14 +72,38 @@ static void log_safe(const char *in, char *out, size_t n)
  * ever.
  *
  * Once the head is in, the request (its body in, its answer out) keeps a
- * pace: by --api-request-seconds after the head, and one second more for
- * every --api-min-rate bytes moved since, it must be over, or it is shut
- * down too. Bytes moved are the kernel's count of bytes received and of
- * bytes the client acknowledged (TCP_INFO), so that an answer counts as
- * the client takes it, not as MHD hands it to the socket; a body MHD reads
- * only to discard it counts as well. Without a pace, a token holder
- * sending a submission a byte a second (never idle for MHD) holds its slot
- * for ever, and 64 of them every other client of its address. */
+ * pace, as a credit of time: it starts with --api-request-seconds (S), is
+ * spent a second a second and earns a second for every --api-min-rate (B)
+ * bytes moved, but never holds more than S; once it is spent, the request
+ * is shut down. So every stretch of T seconds of a request must move
+ * (T - S) x B bytes: one moving B bytes a second or more is never cut,
+ * however long it takes; one that stops (an upload no longer sent, an
+ * answer no longer read) is cut S seconds after it stopped, however much
+ * it moved before; one slower than B once it is S seconds' worth of bytes
+ * behind since it last kept up. Averaged since the head instead, a request
+ * that moved 100 MiB fast would have had 6400 s in hand, to stall in (until
+ * MHD's 60 s without a byte) or trickle a byte every 50 s in.
+ *
+ * Bytes moved are the kernel's count of bytes received and of bytes the
+ * client acknowledged (TCP_INFO), so that an answer counts as the client
+ * takes it, not as MHD hands it to the socket; a body MHD reads only to
+ * discard it counts as well. An answer MHD has handed whole to the kernel
+ * (one smaller than the socket's send buffer) ends the request, read or
+ * not: its connection then waits for a head (--api-head-seconds).
+ * Without a pace, a token holder sending a submission a byte a second
+ * (never idle for MHD) holds its slot for ever, and 64 of them every other
+ * client of its address.
+ *
+ * No request waits on the server by design: every answer is queued as soon
+ * as its head, or its body, is in (no long poll: `gi wait` asks again).
+ * The coordinator's loop can be away, though (a merge, a checkpoint
+ * written): while it is, MHD neither reads nor writes, so the time between
+ * two turns of the API past API_AWAY_S is not spent (api_away).
+ *
+ * A kernel whose TCP_INFO has no byte counts (they came with Linux 4.1)
+ * keeps no pace: a request is then closed only after MHD's 60 s without a
+ * byte, and never shed for its pace (heads are still timed: that needs no
+ * counts). gi-farmd says so once, when the first request comes. */
 typedef struct gi_api_conn {
     int fd;
     struct sockaddr_storage addr; /* the client's; port ignored */
@@ -90,7 +114,13 @@ typedef struct gi_api_conn {
     char what[120]; /* the request under way, for logs: "POST /api/v1/jobs" */
     double head_at; /* when its head came */
     uint64_t moved_at_head; /* bytes moved (received + acknowledged) by then */
-    double deadline;        /* the request's, as of the bytes moved when last looked at */
+    /* The request's credit as of looked_at and moved_at_look, the bytes
+     * moved then; INFINITY: no pace kept. */
+    double credit, looked_at;
+    uint64_t moved_at_look;
+    double full_at; /* its credit was last whole (for logs: since when it is behind) */
+    uint64_t moved_at_full;
+    double deadline; /* looked_at + credit: when it is spent if no byte moves */
     struct gi_api_conn *prev, *next;
 } gi_api_conn;
 
@@ -103,6 +133,12 @@ typedef struct gi_api_conn {
  * client needs to get going (its head read, its body flowing), during which
  * keep_a_slot_free spares it if it can. */
 #define API_SETTLE_S 1.0
+/* A request's credit is brought up to date this often at least, so that
+ * bytes moved and then a stall are told apart to this much. */
+#define API_LOOK_S 0.25
+/* The loop turns every 50 ms (gi_farm.c); two turns of the API further apart
+ * than this, the loop was away: the time over it is not spent. */
+#define API_AWAY_S 1.0
 
 static gi_api_conn *api_conn_of(struct MHD_Connection *conn)
 {
@@ -142,56 +178,91 @@ static int same_host(const struct sockaddr_storage *a, const struct sockaddr_sto
 }
 
 /* Bytes the connection has received and had acknowledged, from the
- * kernel; -1 when it cannot say (then no pace is kept). */
-static int bytes_moved(int fd, uint64_t *out)
+ * kernel: 0; -1 when it cannot say (then no pace is kept), with *no_counts
+ * set if that is for want of the counts in TCP_INFO. */
+static int bytes_moved(int fd, uint64_t *out, int *no_counts)
 {
     struct tcp_info ti;
     socklen_t n = sizeof ti;
     memset(&ti, 0, sizeof ti);
-    if (fd < 0 || getsockopt(fd, IPPROTO_TCP, TCP_INFO, &ti, &n) != 0 ||
-        n < offsetof(struct tcp_info, tcpi_bytes_received) + sizeof ti.tcpi_bytes_received)
+    *no_counts = 0;
+    if (fd < 0 || getsockopt(fd, IPPROTO_TCP, TCP_INFO, &ti, &n) != 0)
         return -1;
+    if (n < offsetof(struct tcp_info, tcpi_bytes_received) + sizeof ti.tcpi_bytes_received) {
+        *no_counts = 1;
+        return -1;
+    }
     *out = ti.tcpi_bytes_acked + ti.tcpi_bytes_received;
     return 0;
 }
 
-static void request_began(const gi_farm *f, gi_api_conn *c, const char *method, const char *url)
+static void request_began(gi_farm *f, gi_api_conn *c, const char *method, const char *url)
 {
     char u[100];
     log_safe(url, u, sizeof u);
     snprintf(c->what, sizeof c->what, "%.10s %s", method, u);
     c->in_request = 1;
-    c->head_at = gi_now();
-    c->deadline = c->head_at + f->cfg.api_request_s;
-    if (bytes_moved(c->fd, &c->moved_at_head))
-        c->deadline = INFINITY;
+    c->head_at = c->looked_at = c->full_at = gi_now();
+    c->credit = f->cfg.api_request_s;
+    int no_counts = 0;
+    if (f->cfg.api_min_rate == 0 || bytes_moved(c->fd, &c->moved_at_head, &no_counts)) {
+        c->credit = INFINITY;
+        if (f->cfg.api_min_rate && no_counts && !f->api_pace_unknown)
+            gi_warn("api: this kernel's TCP_INFO has no byte counts (Linux 4.1 has them): "
+                    "--api-request-seconds and --api-min-rate are not kept; a request is "
+                    "closed after 60 s without a byte only");
+        f->api_pace_unknown |= no_counts;
+    }
+    c->moved_at_look = c->moved_at_full = c->moved_at_head;
+    c->deadline = c->looked_at + c->credit;
 }
 
-/* Looks again at the bytes the request has moved; sets *moved to them and
- * returns 1 if it is past its deadline. */
-static int request_overdue(const gi_farm *f, gi_api_conn *c, double now, uint64_t *moved)
+/* Brings the request's credit up to now: spent for the time since it was
+ * last looked at, earned for the bytes moved meanwhile, S at most (the
+ * comment above gi_api_conn). Returns 1 if it is spent. */
+static int pace_look(const gi_farm *f, gi_api_conn *c, double now)
 {
     uint64_t total;
-    *moved = 0;
-    if (f->cfg.api_min_rate == 0 || c->deadline == INFINITY || bytes_moved(c->fd, &total))
+    int no_counts;
+    if (c->credit == INFINITY || bytes_moved(c->fd, &total, &no_counts))
         return 0;
-    *moved = total - c->moved_at_head;
-    c->deadline = c->head_at + f->cfg.api_request_s + (double)*moved / (double)f->cfg.api_min_rate;
-    return now > c->deadline;
+    c->credit += (double)(total - c->moved_at_look) / (double)f->cfg.api_min_rate -
+                 (now - c->looked_at);
+    c->looked_at = now;
+    c->moved_at_look = total;
+    if (c->credit >= f->cfg.api_request_s) {
+        c->credit = f->cfg.api_request_s;
+        c->full_at = now;
+        c->moved_at_full = total;
+    }
+    c->deadline = now + c->credit;
+    return c->credit < 0;
 }
 
-/* A request under way for a second or more that has moved fewer bytes than
- * --api-min-rate for its time (the deadline allows --api-request-seconds
- * more): how far behind it is, in bytes; 0 if not. */
+/* How far behind --api-min-rate a request under way is, in seconds of its
+ * credit spent: 0 if less than API_SETTLE_S, so that one just begun, or
+ * one keeping the pace with a hiccup, is spared. */
 static double request_behind(const gi_farm *f, gi_api_conn *c, double now)
 {
-    uint64_t moved;
-    double t = now - c->head_at;
-    if (t < API_SETTLE_S || f->cfg.api_min_rate == 0 || c->deadline == INFINITY)
+    if (c->credit == INFINITY)
         return 0;
-    request_overdue(f, c, now, &moved);
-    double due = t * (double)f->cfg.api_min_rate;
-    return (double)moved < due ? due - (double)moved : 0;
+    pace_look(f, c, now);
+    double spent = f->cfg.api_request_s - c->credit;
+    return spent >= API_SETTLE_S ? spent : 0;
+}
+
+/* The loop was away from the API (api_ran_at): the time over API_AWAY_S
+ * is given back to the requests under way, which could not move. */
+static void api_away(gi_farm *f, double now)
+{
+    double away = f->api_ran_at > 0 ? now - f->api_ran_at - API_AWAY_S : 0;
+    if (away <= 0)
+        return;
+    for (gi_api_conn *c = f->api_conns; c; c = c->next)
+        if (c->in_request && c->credit != INFINITY) {
+            c->looked_at += away;
+            c->deadline += away;
+        }
 }
 
 /* A connection shut down for its pace: a line per peer and
@@ -223,7 +294,18 @@ static gi_api_conn *shed_first(gi_api_conn *idle, gi_api_conn *behind, double no
  * again as each was cut after --api-head-seconds, or trickling requests'
  * bodies, would hold every slot of its address (on loopback: every local
  * client's) or, from a few addresses, all of them. MHD's own limits are
- * higher: the connections cut here are only closed when MHD next runs. */
+ * higher: the connections cut here are only closed when MHD next runs.
+ *
+ * Four addresses or more can fill the 256 slots (64 each) with no limit
+ * per address reached; the next connection, from any address, then sheds
+ * one of theirs as above. So a slot is held past its first second only by
+ * a request keeping --api-min-rate, which costs its client that bandwidth
+ * (256 x 16 KiB/s), not by one waiting for its deadline: a request that
+ * moved fast and then stopped is behind a second after it stopped (its
+ * credit holds --api-request-seconds at most), not only once its deadline
+ * averaged over the bytes it moved (as it was) came. What this does not
+ * stop is a flood (more than 256 connections a second, each shed within
+ * its first second): a matter for a firewall's limit on new connections. */
 static void keep_a_slot_free(gi_farm *f, gi_api_conn *fresh)
 {
     unsigned all = 0, here = 0;
@@ -312,19 +394,20 @@ static void cut_slow_connections(gi_farm *f)
     for (gi_api_conn *c = f->api_conns; c; c = c->next) {
         if (c->cut || c->fd < 0)
             continue;
-        char why[300];
-        uint64_t moved;
+        char why[400];
         if (!c->in_request && now - c->since > f->cfg.api_head_s) {
             snprintf(why, sizeof why, "no request head within --api-head-seconds (%g s)",
                      f->cfg.api_head_s);
             log_slow(f, c, now, why);
             cut(c, &f->m.api_slow_closed);
-        } else if (c->in_request && now > c->deadline && request_overdue(f, c, now, &moved)) {
+        } else if (c->in_request && (now > c->deadline || now - c->looked_at >= API_LOOK_S) &&
+                   pace_look(f, c, now)) {
             snprintf(why, sizeof why,
-                     "its request (%s) moved %llu bytes in %.1f s, short of --api-request-seconds "
-                     "(%g s) and --api-min-rate (%llu bytes/s)",
-                     c->what, (unsigned long long)moved, now - c->head_at, f->cfg.api_request_s,
-                     (unsigned long long)f->cfg.api_min_rate);
+                     "its request (%s) fell --api-request-seconds (%g s) behind --api-min-rate "
+                     "(%llu bytes/s): %llu bytes moved in the last %.1f s, %llu in %.1f s in all",
+                     c->what, f->cfg.api_request_s, (unsigned long long)f->cfg.api_min_rate,
+                     (unsigned long long)(c->moved_at_look - c->moved_at_full), now - c->full_at,
+                     (unsigned long long)(c->moved_at_look - c->moved_at_head), now - c->head_at);
             log_slow(f, c, now, why);
             cut(c, &f->m.api_slow_requests);
         }
@@ -907,9 +990,11 @@ int gi_farm_api_timeout_ms(gi_farm *f)
 
 void gi_farm_api_run(gi_farm *f)
 {
+    api_away(f, gi_now());
     MHD_run(f->mhd);
     cut_slow_connections(f);
-    mhd_log_tick(f, gi_now());
+    f->api_ran_at = gi_now();
+    mhd_log_tick(f, f->api_ran_at);
 }
 
 void gi_farm_api_stop(gi_farm *f)

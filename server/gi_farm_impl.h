@@ -270,7 +270,7 @@ typedef struct gi_farm_metrics {
     uint64_t api_slow_closed; /* connections cut for a request head not sent in time */
     /* cut to keep a slot free (the longest idle, a request behind --api-min-rate, or one over) */
     uint64_t api_conns_shed;
-    uint64_t api_slow_requests; /* requests cut past their deadline (--api-min-rate) */
+    uint64_t api_slow_requests; /* requests cut out of time in hand (--api-min-rate) */
     uint64_t assets_uploaded, asset_bytes_uploaded, assets_served;
 } gi_farm_metrics;
 
@@ -318,6 +318,8 @@ struct gi_farm {
     char api_addr[80];
     struct MHD_Daemon *mhd;
     struct gi_api_conn *api_conns; /* the API's TCP connections (gi_farm_api.c) */
+    double api_ran_at;        /* the end of the API's last turn in the loop */
+    int api_pace_unknown;     /* the kernel gave no TCP byte counts: said once */
     uint64_t submit_buffered; /* bytes of submission bodies held while they arrive */
     /* libmicrohttpd's messages: a line per --refusal-log-window, then a count. */
     double mhd_log_since;

@@ -411,8 +411,8 @@ char *gi_farm_view_metrics(gi_farm *f)
             "--api-min-rate, or a new one over the limit.",
             (double)m->api_conns_shed);
     counter(&b, "gi_farm_api_slow_requests_closed_total",
-            "API connections closed for a request past its deadline (--api-request-seconds, "
-            "--api-min-rate).",
+            "API connections closed for a request that fell --api-request-seconds behind "
+            "--api-min-rate.",
             (double)m->api_slow_requests);
     counter(&b, "gi_farm_assets_uploaded_total", "Assets uploaded.", (double)m->assets_uploaded);
     counter(&b, "gi_farm_asset_bytes_uploaded_total", "Bytes of assets uploaded.",

@@ -6,12 +6,16 @@
 # byte at a time, and header lines trickled without a token, each reopened
 # as soon as it is closed: a normal client from that address still submits,
 # waits and fetches its outputs meanwhile, never turned away, and the first
-# 64 are all closed within a few seconds. An upload and a download at a
-# slow but sufficient rate get through. The log says why connections were
-# closed, a line per window, not one per connection (nor one per connection
-# from libmicrohttpd). Last, with a deadline longer than the test, 64
+# 64 are all closed within a few seconds. A download at a slow but
+# sufficient rate gets through. The log says why connections were closed,
+# a line per window, not one per connection (nor one per connection from
+# libmicrohttpd). Then, with more time in hand than the test takes, 64
 # trickled submissions give their slots up to a normal client once they
-# are behind the rate.
+# are behind the rate, and so do 64 uploads that sent fast and stopped.
+# Last, a download read fast and then not at all and an upload sent fast
+# and then stopped are closed --api-request-seconds after they stopped,
+# while others are answered, and steady ones at a few times the rate,
+# uploads and downloads, are not closed.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -134,12 +138,7 @@ wait $holder || { cat "$TMP/hold.out"; fail "the holder"; }
 grep -q "first 64 closed: 64, longest lived [0-4]\." "$TMP/hold.out" ||
     { cat "$TMP/hold.out"; fail "the slow connections were not all closed in time"; }
 
-# An upload and a download at 8 KiB/s (2.5 s each, past --api-request-seconds).
-head -c 20000 /dev/urandom >"$TMP/asset"
-h=$(b2sum -l 256 "$TMP/asset" | cut -d' ' -f1)
-code=$(api "/api/v1/assets/$h" -o "$TMP/r" -w '%{http_code}' -X PUT --limit-rate 8K \
-    --data-binary @"$TMP/asset")
-[ "$code" = 201 ] || { cat "$TMP/r"; fail "a slow but sufficient upload: HTTP $code"; }
+# A download at 8 KiB/s (an upload: below, curl's pace has 1 s pauses).
 api /api/v1/jobs/1/outputs/img.exr -o "$TMP/slow.exr" --limit-rate 8K ||
     fail "a slow but sufficient download"
 cmp "$TMP/out/img.exr" "$TMP/slow.exr" || fail "the slow download differs"
@@ -147,7 +146,7 @@ cmp "$TMP/out/img.exr" "$TMP/slow.exr" || fail "the slow download differs"
 # Why, once per window (3 s here): of 100 and more connections closed, a
 # line per window and its count at its end. The first, with the deadline's
 # reason, came from the requests above; the holder's were counted.
-grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (POST /api/v1/jobs) moved [0-9]* bytes in [0-9.]* s, short of --api-request-seconds (1 s) and --api-min-rate (1024 bytes/s)" "$LOG" ||
+grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (POST /api/v1/jobs) fell --api-request-seconds (1 s) behind --api-min-rate (1024 bytes/s)" "$LOG" ||
     fail "a request's closing not logged with its reason"
 wait_log "$LOG" "more refusals from 127.0.0.1 in the last"
 # gi's connections took slots the holder's slow ones gave up.
@@ -166,7 +165,8 @@ stop_farmd "$LOG"
 # makes the one furthest behind give its slot up: gi submits and fetches,
 # never turned away, and no request reaches its deadline.
 LOG2="$TMP/farmd2.log"
-start_farmd "$TMP/state" "$LOG2" -- --api-request-seconds 60 --api-min-rate 1K
+start_farmd "$TMP/state" "$LOG2" -- --api-request-seconds 60 --api-min-rate 1K \
+    --refusal-log-window 0
 hold 0
 # Until a client was let in for one of them (before, one whose head was not
 # read yet, idle, may give its slot up; or the client is turned away).
@@ -186,4 +186,192 @@ grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (POST /api/v1/jo
     fail "a slot given up not logged with its reason"
 [ "$(metric gi_farm_api_conns_shed_total)" -ge 3 ] && [ "$(metric gi_farm_api_slow_requests_closed_total)" = 0 ] ||
     { api /metrics | grep api_; fail "slots given up: not counted, or deadlines reached"; }
+
+# Uploads that sent 100 KB (at 1 KiB/s, 100 s of credit if averaged since
+# the head) and then stopped hold every slot of 127.0.0.1: a second after
+# they stopped they are behind, and a new client is let in for one.
+shed=$(metric gi_farm_api_conns_shed_total)
+rm -f "$TMP/release"
+python3 - "$API" "$(cat "$TMP/token")" "$TMP/release" >"$TMP/uploads.out" 2>&1 <<'PY' &
+import os, select, socket, sys, time
+host, port = sys.argv[1].rsplit(":", 1)
+def upload():
+    s = socket.create_connection((host, int(port)))
+    s.sendall(b"PUT /api/v1/assets/%s HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+              b"Content-Length: 1000000\r\n\r\n" % (b"b" * 64, sys.argv[2].encode()))
+    return s
+# The 64th connection, its head not read yet, sheds one not read yet either
+# (keep_a_slot_free): opened again once theirs are read, until none is shed.
+conns, opened = [None] * 64, 1
+while opened:
+    opened = 0
+    for i, s in enumerate(conns):
+        if s is None or select.select([s], [], [], 0)[0]:
+            conns[i], opened = upload(), opened + 1
+    time.sleep(0.5)  # their heads read: the bytes below count as moved by the requests
+for s in conns:
+    s.sendall(b"x" * 100000)
+print("stopped", flush=True)
+t0 = time.time()
+while not os.path.exists(sys.argv[3]) and time.time() - t0 < 60:
+    time.sleep(0.1)
+print("closed by gi-farmd: %d" % len(select.select(conns, [], [], 0)[0]))
+PY
+uploader=$!
+FARM_PIDS="$FARM_PIDS $uploader"
+n=0
+until grep -q stopped "$TMP/uploads.out" 2>/dev/null; do
+    n=$((n + 1)); [ $n -lt 200 ] || { cat "$TMP/uploads.out"; fail "the uploads did not start"; }
+    sleep 0.05
+done
+sleep 2
+api /api/v1/workers -o /dev/null || fail "a client turned away by uploads that stopped"
+: >"$TMP/release"
+wait $uploader || { cat "$TMP/uploads.out"; fail "the uploads"; }
+grep -q "closed by gi-farmd: [1-9]" "$TMP/uploads.out" || { cat "$TMP/uploads.out"; fail "uploads"; }
+grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (PUT /api/v1/assets/b*) is behind --api-min-rate (1024 bytes/s) and its slot was needed" "$LOG2" ||
+    fail "an upload's slot given up not logged with its reason"
+[ "$(metric gi_farm_api_conns_shed_total)" -gt "$shed" ] &&
+    [ "$(metric gi_farm_api_slow_requests_closed_total)" = 0 ] ||
+    { api /metrics | grep api_; fail "the uploads' slots: not counted, or deadlines reached"; }
 stop_farmd "$LOG2"
+
+# A request's credit holds --api-request-seconds at most, however many
+# bytes it moved: a download read fast (200 KB, at 4 KiB/s 50 s of credit
+# if averaged since the head) and then not at all, and an upload sent fast
+# and then stopped, are each closed about 3 s after they stopped (the test
+# allows 2 to 15 s; before, only libmicrohttpd's 60 s without a byte
+# closed them), while another client is answered every half second. An
+# upload and a download at 16 KiB/s (4 x --api-min-rate, 10 s and 12 s:
+# past their 3 s many times over) are not cut: the download then reads its
+# rest at full speed and has every byte of the output.
+LOG3="$TMP/farmd3.log"
+start_farmd "$TMP/state3" "$LOG3" -- --api-request-seconds 3 --api-min-rate 4K \
+    --refusal-log-window 0
+start_worker "$TMP/worker3.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cache3"
+write_job "$TMP/big.json" <<JOB
+{
+  "scene": "$SRC/scenes/cornell-box/scene.json",
+  "method": "pt",
+  "seed": 1,
+  "image": {"width": 1024, "height": 1024},
+  "pt": {"spp": 1, "tile": 64, "pass_spp": 1},
+  "outputs": {"exr": "img.exr"}
+}
+JOB
+"$GI" submit "$TMP/big.json" --wait --out "$TMP/big" --progress none >"$TMP/big.log" 2>&1 ||
+    { cat "$TMP/big.log"; fail "gi submit --wait of the large job"; }
+# Larger than the kernel's largest send buffer (net.ipv4.tcp_wmem, 4 MiB by
+# default), so that the answer is still under way (not all handed to the
+# kernel) when its reader stops.
+[ "$(wc -c <"$TMP/big/img.exr")" -gt 8000000 ] || fail "the large job's output is too small"
+st=0
+tok=$(cat "$TMP/token")
+python3 - "$API" "$tok" "$LOG3" "$TMP/big/img.exr" >"$TMP/stall.out" 2>&1 <<'PY' || st=$?
+import hashlib, os, select, socket, sys, threading, time
+host, port = sys.argv[1].rsplit(":", 1)
+token, log, ref = sys.argv[2].encode(), sys.argv[3], open(sys.argv[4], "rb").read()
+out = {}
+def conn(rcvbuf=0):  # a small receive buffer: the kernel acknowledges what is read, and
+    s = socket.socket()  # little more
+    if rcvbuf:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
+    s.connect((host, int(port)))
+    s.settimeout(60)
+    return s
+def head(s, method, path, length=None):
+    cl = b"Content-Length: %d\r\n" % length if length is not None else b""
+    s.sendall(b"%s %s HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n%s\r\n" % (
+        method, path, token, cl))
+def closed_line(s):  # gi-farmd's line for this connection closed, if any yet
+    mark = "closed the connection of 127.0.0.1:%d:" % s.getsockname()[1]
+    return next((l.strip() for l in open(log, errors="replace") if mark in l), None)
+def stalled_download():
+    s = conn(16384)
+    head(s, b"GET", b"/api/v1/jobs/1/outputs/img.exr")
+    got = 0
+    while got < 200000:
+        got += len(s.recv(65536))
+    stop = time.time()
+    while not closed_line(s) and time.time() - stop < 40:
+        time.sleep(0.1)
+    out["download stalled"] = (time.time() - stop, closed_line(s))
+def stalled_upload():
+    s = conn()
+    head(s, b"PUT", b"/api/v1/assets/" + b"a" * 64, 1000000)
+    time.sleep(0.5)  # the head read first: the body counts as moved by the request
+    s.sendall(b"x" * 200000)
+    stop = time.time()
+    try:  # closed by gi-farmd: readable, at its end or reset
+        select.select([s], [], [], 40)
+        s.recv(4096)
+    except OSError:
+        pass
+    out["upload stalled"] = (time.time() - stop, closed_line(s))
+def steady_upload():
+    data = os.urandom(160 << 10)
+    s = conn()
+    name = hashlib.blake2b(data, digest_size=32).hexdigest().encode()
+    head(s, b"PUT", b"/api/v1/assets/" + name, len(data))
+    t0 = time.time()
+    for k in range(0, len(data), 4096):  # 4 KiB every 0.25 s, late pieces caught up
+        time.sleep(max(0, t0 + k / 16384 - time.time()))
+        s.sendall(data[k:k + 4096])
+    out["upload steady"] = (s.recv(64).split(b"\r\n")[0].decode(), closed_line(s))
+def steady_download():
+    s = conn(16384)
+    head(s, b"GET", b"/api/v1/jobs/1/outputs/img.exr")
+    t0, buf, piece = time.time(), b"", b" "
+    while piece and time.time() - t0 < 12:  # 16 KiB/s for 12 s, then the rest at once
+        time.sleep(0.05)
+        while piece and len(buf) < (time.time() - t0) * 16384:
+            piece = s.recv(4096)
+            buf += piece
+    while piece and len(buf) < buf.find(b"\r\n\r\n") + 4 + len(ref):
+        piece = s.recv(65536)
+        buf += piece
+    body = buf[buf.find(b"\r\n\r\n") + 4:]
+    out["download steady"] = (buf.split(b"\r\n")[0].decode(), body == ref, closed_line(s))
+workers = [threading.Thread(target=f) for f in
+           (stalled_download, stalled_upload, steady_upload, steady_download)]
+for w in workers:
+    w.start()
+served = []  # another client meanwhile: a request every half second
+while any(w.is_alive() for w in workers):
+    t = time.time()
+    try:
+        s = conn()
+        head(s, b"GET", b"/api/v1/workers")
+        served.append((s.recv(64).split(b"\r\n")[0].decode(), time.time() - t))
+        s.close()
+    except OSError as e:
+        served.append((str(e), time.time() - t))
+    time.sleep(0.5)
+for w in workers:
+    w.join()
+for k in sorted(out):
+    print(k, out[k])
+print("served: %d requests, %d answered 200, the slowest in %.1f s" % (
+    len(served), sum(r[0] == "HTTP/1.1 200 OK" for r in served), max(r[1] for r in served)))
+ok = all(2 <= out[k][0] <= 15 and out[k][1] for k in ("download stalled",
+                                                      "upload stalled"))
+ok &= out["upload steady"] == ("HTTP/1.1 201 Created", None)
+ok &= out["download steady"] == ("HTTP/1.1 200 OK", True, None)
+ok &= len(served) >= 10 and all(r[0] == "HTTP/1.1 200 OK" and r[1] < 5 for r in served)
+sys.exit(0 if ok else 1)
+PY
+[ $st -eq 0 ] || { cat "$TMP/stall.out"; fail "requests that stopped, and steady ones"; }
+cat "$TMP/stall.out"
+grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (GET /api/v1/jobs/1/outputs/img.exr) fell --api-request-seconds (3 s) behind --api-min-rate (4096 bytes/s): [0-9]* bytes moved in the last [0-9.]* s, [0-9]* in [0-9.]* s in all" "$LOG3" ||
+    fail "a stalled download's closing not logged with its reason"
+# curl's --limit-rate sends a second's worth at once, then waits for the
+# next second: at 16 KiB/s, 64 KiB in 4 s, 2 s of the 3 in hand to spare.
+head -c 65536 /dev/urandom >"$TMP/asset"
+h=$(b2sum -l 256 "$TMP/asset" | cut -d' ' -f1)
+code=$(api "/api/v1/assets/$h" -o "$TMP/r" -w '%{http_code}' -X PUT --limit-rate 16K \
+    --data-binary @"$TMP/asset")
+[ "$code" = 201 ] || { cat "$TMP/r"; fail "a slow but sufficient upload: HTTP $code"; }
+[ "$(metric gi_farm_api_slow_requests_closed_total)" = 2 ] ||
+    { api /metrics | grep api_; fail "not two requests closed for their pace"; }
+kill "$WORKER_PID" 2>/dev/null || true
+stop_farmd "$LOG3"
