@@ -66,6 +66,17 @@ sys.exit(0 if len(ends) == 3 and all(1 <= e < 4 for e in ends.values()) else 1)
 PY
 [ $st -eq 0 ] && grep -q "paced: HTTP/1.1 400" "$TMP/pace.out" ||
     { cat "$TMP/pace.out"; fail "the deadline of a request"; }
+# started PID OUT WORD: the client PID (killed at the end if still there)
+# has written WORD to OUT, within 10 s.
+started() {
+    FARM_PIDS="$FARM_PIDS $1"
+    n=0
+    until grep -q "$3" "$2" 2>/dev/null; do
+        n=$((n + 1)); [ $n -lt 200 ] || { cat "$2"; fail "$2: no \"$3\" from the client"; }
+        sleep 0.05
+    done
+}
+
 # hold HEADS: all of 127.0.0.1's 64 slots, 64 - HEADS trickled submissions
 # and HEADS trickled heads, a byte or a line every 0.2 s, each reopened when
 # it is closed, until $TMP/release appears and, with HEADS > 0, the first
@@ -116,12 +127,7 @@ print("first 64 closed: %d, longest lived %.1f s; closed in all: %d"
       % (len(lived), max(lived, default=0), closed), flush=True)
 PY
     holder=$!
-    FARM_PIDS="$FARM_PIDS $holder"
-    n=0
-    until grep -q holding "$TMP/hold.out" 2>/dev/null; do
-        n=$((n + 1)); [ $n -lt 200 ] || { cat "$TMP/hold.out"; fail "the holder did not start"; }
-        sleep 0.05
-    done
+    started $holder "$TMP/hold.out" holding
 }
 
 # 48 trickled submissions and 16 trickled heads.
@@ -200,17 +206,18 @@ def upload():
     s.sendall(b"PUT /api/v1/assets/%s HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
               b"Content-Length: 1000000\r\n\r\n" % (b"b" * 64, sys.argv[2].encode()))
     return s
-# The 64th connection, its head not read yet, sheds one not read yet either
-# (keep_a_slot_free): opened again once theirs are read, until none is shed.
-conns, opened = [None] * 64, 1
-while opened:
-    opened = 0
-    for i, s in enumerate(conns):
-        if s is None or select.select([s], [], [], 0)[0]:
-            conns[i], opened = upload(), opened + 1
+def stall(conns):
     time.sleep(0.5)  # their heads read: the bytes below count as moved by the requests
-for s in conns:
-    s.sendall(b"x" * 100000)
+    for s in conns:
+        s.sendall(b"x" * 100000)
+# A 64th coming while the others' heads are not read yet (they are idle)
+# would shed one of them: it comes once they are under way, not behind.
+conns = [upload() for _ in range(63)]
+stall(conns)
+conns.append(upload())
+stall(conns[-1:])
+if select.select(conns, [], [], 0)[0]:
+    sys.exit("closed before they all stopped")
 print("stopped", flush=True)
 t0 = time.time()
 while not os.path.exists(sys.argv[3]) and time.time() - t0 < 60:
@@ -218,12 +225,7 @@ while not os.path.exists(sys.argv[3]) and time.time() - t0 < 60:
 print("closed by gi-farmd: %d" % len(select.select(conns, [], [], 0)[0]))
 PY
 uploader=$!
-FARM_PIDS="$FARM_PIDS $uploader"
-n=0
-until grep -q stopped "$TMP/uploads.out" 2>/dev/null; do
-    n=$((n + 1)); [ $n -lt 200 ] || { cat "$TMP/uploads.out"; fail "the uploads did not start"; }
-    sleep 0.05
-done
+started $uploader "$TMP/uploads.out" stopped
 sleep 2
 api /api/v1/workers -o /dev/null || fail "a client turned away by uploads that stopped"
 : >"$TMP/release"
