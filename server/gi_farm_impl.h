@@ -66,8 +66,20 @@ typedef struct gi_fj_exclusion {
     uint32_t streak;       /* its failures of this job's tasks since its last result of them */
     uint32_t times;        /* how often it was excluded from the job */
     double until;          /* monotonic: excluded until then; 0: never was */
+    /* host->results when it first failed one of the job's tasks (an entry
+     * exists once it has): more since, and the job fails on a host that
+     * works (gi_farm_sched.c, Blame). */
+    uint64_t results_at_failure;
     char last_error[256];
 } gi_fj_exclusion;
+
+/* A failure of one of the job's tasks on a host, not judged yet: the host's
+ * fault or the job's (gi_farm_sched.c, Blame). */
+typedef struct gi_fj_suspect {
+    uint64_t task_id;
+    struct gi_farm_host *host;
+    uint64_t results_at; /* host->results then: more since, its streak has ended */
+} gi_fj_suspect;
 
 struct gi_farm_job {
     uint64_t id;
@@ -153,6 +165,9 @@ struct gi_farm_job {
      * that have a streak of them (gi_farm_sched.c, Exclusions). */
     gi_fj_exclusion *excl;
     size_t excl_count, excl_cap;
+    /* Its task failures waiting for a verdict (gi_farm_sched.c, Blame). */
+    gi_fj_suspect *suspects;
+    size_t suspect_count, suspect_cap;
     uint64_t ckpt_seq, ckpt_merged;
     char ckpt_error[512]; /* why the last checkpoint failed; "" if it did not */
     double ckpt_done_cost;
@@ -203,13 +218,17 @@ typedef struct gi_farm_lease {
 /* A worker by name: what outlives its connections (blocklisting). */
 typedef struct gi_farm_host {
     char name[GI_MSG_MAX_NAME + 1];
+    /* Its failures judged its own (gi_farm_sched.c, Blame) since its last
+     * result: the streak that blocklists it. */
     uint32_t consecutive_failures;
     /* The job of the streak's first failure; wide: the streak has failures
      * of another job too, or of the host's own disk (GI_EHOST), so it may
-     * blocklist the host (gi_farm_sched.c, Exclusions). */
+     * blocklist the host (gi_farm_sched.c, Blocklisting). */
     uint64_t streak_job;
     int streak_wide;
-    uint64_t failures, successes;
+    uint64_t failures; /* its task failures that count (not bad input, not timeouts) */
+    uint64_t own_failures; /* those judged its own */
+    uint64_t results;   /* results accepted from it */
     /* Losses with tasks held (gi_farm_sched.c, Blocklisting); consecutive:
      * since its last result. */
     uint32_t consecutive_losses;
@@ -261,6 +280,8 @@ typedef struct gi_farm_metrics {
     uint64_t host_losses; /* hosts lost with tasks held, once per loss (blocklisting) */
     uint64_t task_timeouts; /* runs stopped for their time limit: failed (attempts) */
     uint64_t job_exclusions; /* a worker excluded from one job (gi_farm_sched.c, Exclusions) */
+    /* Task failures judged the host's, or the job's (gi_farm_sched.c, Blame). */
+    uint64_t failures_host, failures_job;
     uint64_t result_bytes, merged_bytes;
     double merge_s, finish_s;
     uint64_t checkpoints, checkpoint_bytes, checkpoint_failures;

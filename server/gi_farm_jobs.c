@@ -123,6 +123,7 @@ static void job_free(gi_farm_job *j)
         gi_file_writer_finish(j->ckpt_w, NULL, NULL);
     run_free(j);
     free(j->excl);
+    free(j->suspects);
     free(j->file);
     free(j->text);
     free(j->submit_key);
@@ -508,6 +509,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->leases = j->lease_expiries = j->result_bytes = j->merged_bytes = 0;
     j->host_disk_errors = j->task_timeouts = 0;
     j->excl_count = 0; /* a retried job gives every worker a new chance */
+    j->suspect_count = 0;
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
     j->disk_measured = 0;

@@ -59,19 +59,49 @@
  * such tasks over (they stay pending, in order, for the owner's next free
  * slot). An absent owner's keys go to the first host asking (gi_affinity.h).
  *
- * Blocklisting. A worker (by name, across reconnections) whose tasks fail
- * `blocklist_failures` times in a row gets no tasks for `blocklist_s`,
- * provided the streak holds failures of at least two jobs, or one of the
- * host's own disk (GI_EHOST: the host's fault whatever the job): a streak
- * of one job's failures is evidence against that job as much as the host,
- * and excludes the host from that job only (Exclusions, below). A streak
- * goes on across jobs: a host excluded from one job whose next task, of
- * another job, fails is blocklisted. Failures that are the job's fault
- * (GI_EINVAL: bad input) do not count, nor do timeouts (lease_overdue
- * does not report them as host failures). So is a host lost with tasks
- * held `blocklist_losses` times (3 by default) with no result accepted
- * from it in between (host_lost), whatever the jobs: a
- * machine that keeps dying (bad memory, an OOM killer, a flapping link)
+ * Blame. A task failure is the host's fault or the job's, and one host
+ * cannot tell which: the evidence is what the other hosts do with the same
+ * work. A failure of j's task t on host h (that counts: not bad input
+ * (GI_EINVAL), not a timeout, not h's disk) is held as a suspect of j's
+ * until t returns a result, and judged then (judge):
+ *   - on h itself: passing trouble, judged nobody's (h's result ends its
+ *     streak anyway);
+ *   - on another host g: the task runs elsewhere, so the failure is h's,
+ *     unless j's tasks also fail on another host that works (one that
+ *     failed one of j's tasks and has returned a result, of any job,
+ *     since; g counts): then j is flaky or broken, and the failure is j's.
+ * A task that never returns a result (a job whose tasks crash everywhere)
+ * leaves its failures unjudged: they are dropped when its job ends. So two
+ * broken jobs at once, which fail on every host, blocklist no host (before,
+ * any host's failures of both in a row did), while a bad host, whose tasks
+ * other hosts then run, is found; two bad hosts failing the same tasks are
+ * both found, as long as some host works. Failures judged the host's make
+ * its streak (consecutive_failures, since its last result: a failure
+ * judged after a result of the host is counted, not streaked). The host's
+ * disk errors (GI_EHOST) are its fault whatever the job, and join its
+ * streak at once. What is judged is counted (failures_host, failures_job:
+ * /metrics). A farm of one host has nothing to compare with: its task
+ * failures are never judged its own, so it is excluded from failing jobs
+ * (Exclusions) and never blocklisted for them; its disk errors and losses
+ * still blocklist it.
+ *
+ * Blocklisting. A worker (by name, across reconnections) whose streak of
+ * failures judged its own reaches `blocklist_failures` gets no tasks for
+ * `blocklist_s`, provided the streak holds failures of at least two jobs,
+ * or one of its disk: the tasks of several jobs that run elsewhere fail on
+ * it. A streak of one job's failures is evidence against the pair, and
+ * that job's exclusion (below) handles it. An exclusion ends the streak it
+ * came from as far as the farm goes: the failures that excluded the host
+ * from a job count globally only once the same tasks have run on other
+ * hosts; a job's failures that stay unjudged (it fails everywhere) never
+ * do, so a host excluded from a broken job whose next task, of another
+ * job, fails is not blocklisted. The failures other hosts confirm stay
+ * evidence: otherwise a bad host would escape, excluded job by job
+ * (a job's exclusion comes as soon as its own streak does). Bad input
+ * and timeouts do not count (above). So is a host blocklisted when lost
+ * with tasks held `blocklist_losses` times (3 by default) with no result
+ * accepted from it in between (host_lost), whatever the jobs: a machine
+ * that keeps dying (bad memory, an OOM killer, a flapping link)
  * would otherwise take tasks again and again and lose them. A loss is one
  * event however many tasks it held: a connection lost or closed for an
  * error while holding leases, or leases of a connection expiring (those
@@ -94,10 +124,11 @@
  * to the other hosts, so it reaches its max_attempts and fails soon; when
  * every host is excluded from it, it waits (its log says so, and its view
  * lists the exclusions and until when). What counts is what counts for
- * blocklisting, but for the host's disk errors (the host's fault: they
- * count towards its blocklisting only). As the blocklist, exclusions live
- * in memory: a restarted coordinator starts them afresh, and so does a
- * retried job. */
+ * blocklisting (Blame), judged or not: the pair's streak needs no verdict,
+ * for excluding a host from one job costs the farm little. The host's disk
+ * errors count towards its blocklisting only. As the blocklist, exclusions
+ * and unjudged failures live in memory: a restarted coordinator starts
+ * them afresh, and so does a retried job. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -512,6 +543,7 @@ static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_er
         x = &j->excl[j->excl_count++];
         memset(x, 0, sizeof *x);
         x->host = h;
+        x->results_at_failure = h->results;
     }
     x->streak++;
     snprintf(x->last_error, sizeof x->last_error, "%.250s", e->msg);
@@ -530,26 +562,88 @@ static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_er
                         "blocklisted): they wait, %.0f s at most", f->cfg.blocklist_s);
 }
 
-static void host_failure(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_error *e)
+/* One more failure of h judged its own (see the header: Blame), of job
+ * `job`'s task, or of its disk (disk): blocklisted after a streak of them
+ * that is not one job's alone. */
+static void streak_add(gi_farm *f, gi_farm_host *h, uint64_t job, int disk, const char *last)
+{
+    if (h->consecutive_failures == 0) {
+        h->streak_job = job;
+        h->streak_wide = disk;
+    } else if (disk || h->streak_job != job) {
+        h->streak_wide = 1;
+    }
+    h->consecutive_failures++;
+    if (h->streak_wide)
+        host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures,
+                   "task failures of its own (tasks of more than one job that other hosts "
+                   "ran, or its disk's)", last);
+}
+
+/* Some host other than h has failed one of j's tasks and returned a result
+ * (of any job) since: j's tasks fail on hosts that work. */
+static int job_fails_elsewhere(const gi_farm_job *j, const gi_farm_host *h)
+{
+    for (size_t i = 0; i < j->excl_count; i++) {
+        const gi_fj_exclusion *x = &j->excl[i];
+        if (x->host != h && x->host->results > x->results_at_failure)
+            return 1;
+    }
+    return 0;
+}
+
+/* Task task_id of j returned a result on host g: its failures on other
+ * hosts get their verdict (see the header: Blame). */
+static void judge(gi_farm *f, gi_farm_job *j, uint64_t task_id, const gi_farm_host *g)
+{
+    for (size_t i = 0; i < j->suspect_count;) {
+        gi_fj_suspect s = j->suspects[i];
+        if (s.task_id != task_id) {
+            i++;
+            continue;
+        }
+        j->suspects[i] = j->suspects[--j->suspect_count];
+        if (s.host == g)
+            continue; /* it failed there and then ran there: passing trouble */
+        if (job_fails_elsewhere(j, s.host)) {
+            f->m.failures_job++;
+            continue;
+        }
+        f->m.failures_host++;
+        s.host->own_failures++;
+        gi_debug("job %llu: task %llu's failure on worker %s is that host's: it ran on %s",
+                 (unsigned long long)j->id, (unsigned long long)task_id, s.host->name, g->name);
+        if (s.host->results == s.results_at) /* else a result of it ended that streak */
+            streak_add(f, s.host, j->id, 0, s.host->last_error);
+    }
+}
+
+static void suspect_add(gi_farm_job *j, uint64_t task_id, gi_farm_host *h)
+{
+    if (j->suspect_count == j->suspect_cap) {
+        j->suspect_cap = j->suspect_cap ? 2 * j->suspect_cap : 8;
+        j->suspects = gi_xrealloc(j->suspects, j->suspect_cap * sizeof *j->suspects);
+    }
+    j->suspects[j->suspect_count++] = (gi_fj_suspect){task_id, h, h->results};
+}
+
+/* c's host failed task l of j (see the header: Blame, Exclusions). */
+static void host_failure(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_farm_lease *l,
+                         const gi_error *e)
 {
     gi_farm_host *h = c->host;
     if (!h || e->code == GI_EINVAL)
         return;
-    int own = e->code == GI_EHOST; /* its disk: the host's fault whatever the job */
-    if (h->consecutive_failures == 0) {
-        h->streak_job = j->id;
-        h->streak_wide = own;
-    } else if (own || h->streak_job != j->id) {
-        h->streak_wide = 1;
-    }
     h->failures++;
-    h->consecutive_failures++;
     snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
-    if (!own)
-        job_exclude(f, j, h, e);
-    if (h->streak_wide)
-        host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures,
-                   "task failures (of more than one job, or its disk's)", e->msg);
+    if (e->code == GI_EHOST) { /* its disk: the host's fault whatever the job */
+        h->own_failures++;
+        f->m.failures_host++;
+        streak_add(f, h, j->id, 1, e->msg);
+        return;
+    }
+    job_exclude(f, j, h, e);
+    suspect_add(j, l->task_id, h);
 }
 
 /* c's host was lost with tasks held (see the header: Blocklisting). Leases
@@ -644,7 +738,7 @@ static void answer_failed(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_
                           const gi_error *e)
 {
     charge(j, -l->est_s);
-    host_failure(f, c, j, e);
+    host_failure(f, c, j, l, e);
     task_failed(f, c, j, l, e);
 }
 
@@ -686,10 +780,11 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
     if (c->host) {
         c->host->consecutive_failures = 0;
         c->host->consecutive_losses = 0;
-        c->host->successes++;
+        c->host->results++;
         gi_fj_exclusion *x = exclusion_find(j, c->host);
         if (x)
             x->streak = 0;
+        judge(f, j, l.task_id, c->host);
     }
     const gi_jobrun_task *jt = gi_jobrun_task_at(&j->jr, l.task_id);
     if (jt)
@@ -924,6 +1019,7 @@ void gi_farm_sched_job_over(gi_farm *f, uint64_t id) { broadcast_cancel(f, id, G
 
 void gi_farm_sched_drop_job(gi_farm *f, gi_farm_job *j)
 {
+    j->suspect_count = 0; /* not judged now: their tasks run no more */
     for (size_t ci = 0; ci < f->conn_count; ci++) {
         gi_farm_conn *c = f->conns[ci];
         for (size_t i = 0; i < c->lease_count;) {

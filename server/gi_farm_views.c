@@ -259,6 +259,7 @@ char *gi_farm_view_workers(gi_farm *f)
         const gi_farm_host *h = c->host;
         int blocked = h && gi_farm_host_blocked(h, now);
         cJSON_AddNumberToObject(o, "consecutive_failures", h ? h->consecutive_failures : 0);
+        cJSON_AddNumberToObject(o, "own_failures", h ? (double)h->own_failures : 0);
         cJSON_AddNumberToObject(o, "losses", h ? (double)h->losses : 0);
         cJSON_AddNumberToObject(o, "consecutive_losses", h ? h->consecutive_losses : 0);
         cJSON_AddNumberToObject(o, "blocklisted_seconds",
@@ -371,6 +372,14 @@ char *gi_farm_view_metrics(gi_farm *f)
     counter(&b, "gi_farm_job_exclusions_total",
             "Workers excluded from one job (not blocklisted) for failing its tasks in a row.",
             (double)m->job_exclusions);
+    counter(&b, "gi_farm_task_failures_host_total",
+            "Task failures judged the host's (they count towards blocklisting): the task then "
+            "ran on another host, and its job fails on no other host that works; or its disk's.",
+            (double)m->failures_host);
+    counter(&b, "gi_farm_task_failures_job_total",
+            "Task failures judged the job's: the task then ran on another host, but its job "
+            "fails on other hosts that work too.",
+            (double)m->failures_job);
     counter(&b, "gi_farm_late_results_total", "Results and failures discarded: lease no longer held.",
             (double)m->late_results);
     counter(&b, "gi_farm_lease_expiries_total", "Leases that expired.", (double)m->lease_expiries);
