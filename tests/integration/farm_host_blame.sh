@@ -1,0 +1,147 @@
+# Whose fault is a task failure, the host's or the job's (docs/farm.md,
+# "Fault tolerance", "Blame"):
+# (a) Two broken jobs at once (their tasks 10-15 crash on every host) on a
+#     3-worker farm: their failures are never held against a host, so no
+#     worker is blocklisted, and a good job submitted with them is done.
+# (b) A bad host (every run crashes): alone, it is only excluded from each
+#     job (nothing to compare it with); once a healthy host has run the
+#     tasks it failed, of two jobs, it is blocklisted, and gi workers and
+#     /metrics say so.
+# (c) A worker excluded from a broken job A that then fails a task of a
+#     job B is not blocklisted.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+# Broken jobs: 4 tiles x 4 passes = 16 tasks; good jobs: 4 tasks (0-3).
+cornell_job "$TMP/broken.json" 8 32 32 32
+cornell_job "$TMP/good.json" 9 32 32 8
+render_refs good
+
+# runs IDS...: every attempt (0-7) of those task ids, as the hooks name runs.
+runs() {
+    for t in "$@"; do for k in 0 1 2 3 4 5 6 7; do printf '%s:%s,' "$t" "$k"; done; done |
+        sed 's/,$//'
+}
+BROKEN="$(runs 10 11 12 13 14 15)"
+
+# excluded ID: the workers excluded from the job now, by name, sorted.
+excluded() {
+    api "/api/v1/jobs/$1" | tr '{' '\n' | sed -n 's/^"worker":"\([^"]*\)","excluded":true,.*/\1/p' |
+        sort | tr '\n' ' '
+}
+
+stop_workers() {
+    for w in $WORKER_PIDS; do kill "$w" 2>/dev/null || true; done
+    for w in $WORKER_PIDS; do wait "$w" 2>/dev/null || true; done
+    WORKER_PIDS=""
+}
+
+# (a) Two broken jobs and a good one at once.
+LOG="$TMP/farmd-a.log"
+start_farmd "$TMP/state-a" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 2 \
+    --blocklist-seconds 3 --max-attempts 4
+for w in w1 w2 w3; do
+    start_worker "$TMP/a-$w.log" env "GI_FAULT_CRASH_TASK=$BROKEN" -- --connect "$WADDR" \
+        --procs 1 --queue 0 --cache "$TMP/ca-$w" --name "$w"
+done
+wait_workers 3
+a1=$("$GI" submit "$TMP/broken.json" 2>/dev/null) || fail "submit A1"
+a2=$("$GI" submit "$TMP/broken.json" 2>/dev/null) || fail "submit A2"
+g=$("$GI" submit "$TMP/good.json" 2>/dev/null) || fail "submit G"
+wait_state "$g" done 60
+"$GI" fetch "$g" --out "$TMP/out-g" >/dev/null || fail "fetch G"
+cmp "$TMP/ref-good/img.exr" "$TMP/out-g/img.exr" || fail "G's image differs"
+wait_state "$a1" failed 90
+wait_state "$a2" failed 90
+# Both broken jobs failed on every worker, each worker failed both.
+for j in $a1 $a2; do
+    for w in w1 w2 w3; do
+        grep -q "job $j: task 1[0-5] (attempt [0-9]*) failed on $w" "$LOG" ||
+            fail "job $j's tasks did not fail on $w: nothing tested"
+    done
+done
+! grep -q "blocklisted for" "$LOG" || { grep "blocklisted for" "$LOG"; fail "(a): blocklisted"; }
+[ "$(metric 'gi_farm_workers{state="blocklisted"}')" = 0 ] || fail "(a): blocklisted workers"
+[ "$(metric gi_farm_task_failures_host_total)" = 0 ] ||
+    fail "(a): failures held against a host: $(metric gi_farm_task_failures_host_total)"
+[ "$(metric gi_farm_task_failures_total)" -ge 8 ] ||
+    fail "(a): only $(metric gi_farm_task_failures_total) failures"
+api /api/v1/workers | grep -q '"consecutive_failures":[1-9]' &&
+    { api /api/v1/workers; fail "(a): a worker has a streak of its own failures"; }
+stop_farmd "$LOG"
+stop_workers
+
+# (b) A bad host, alone and then beside a healthy one.
+LOG="$TMP/farmd-b.log"
+start_farmd "$TMP/state-b" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 3 \
+    --blocklist-seconds 600 --max-attempts 20
+start_worker "$TMP/bad.log" env "GI_FAULT_CRASH_TASK=*" -- --connect "$WADDR" --procs 1 \
+    --queue 0 --cache "$TMP/c-bad" --name bad
+wait_workers 1
+c=$("$GI" submit "$TMP/good.json" 2>/dev/null) || fail "submit C"
+d=$("$GI" submit "$TMP/good.json" 2>/dev/null) || fail "submit D"
+n=0
+until [ "$(excluded "$c")" = "bad " ] && [ "$(excluded "$d")" = "bad " ]; do
+    n=$((n + 1))
+    [ $n -lt 300 ] || { api "/api/v1/jobs/$d"; fail "bad was not excluded from C and D"; }
+    sleep 0.05
+done
+# Alone, nothing says it is the host and not the jobs: not blocklisted.
+! grep -q "blocklisted for" "$LOG" || fail "(b): a lone host was blocklisted"
+[ "$(metric gi_farm_task_failures_host_total)" = 0 ] || fail "(b): judged with nothing to compare"
+start_worker "$TMP/healthy.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/c-healthy" \
+    --name healthy
+wait_state "$c" done 60
+wait_state "$d" done 60
+wait_log "$LOG" "worker bad blocklisted for 600 s after [0-9]* task failures of its own (tasks \
+of more than one job that other hosts ran, or its disk's) in a row; last: bad: pool child"
+grep -c "blocklisted for" "$LOG" | grep -q '^1$' || fail "(b): not one host blocklisted once"
+"$GI" workers >"$TMP/workers-b.txt"
+grep -A1 "^bad .*blocklisted" "$TMP/workers-b.txt" |
+    grep -q "^    for [0-9]* s more; last: .*pool child" ||
+    { cat "$TMP/workers-b.txt"; fail "gi workers does not show bad blocklisted, how long and why"; }
+grep -q "^healthy .* active " "$TMP/workers-b.txt" ||
+    { cat "$TMP/workers-b.txt"; fail "the healthy worker is not active"; }
+[ "$(metric gi_farm_task_failures_host_total)" -ge 6 ] ||
+    fail "(b): $(metric gi_farm_task_failures_host_total) failures judged the host's, not >= 6"
+[ "$(metric 'gi_farm_workers{state="blocklisted"}')" = 1 ] || fail "(b): no blocklisted worker"
+"$GI" fetch "$d" --out "$TMP/out-d" >/dev/null || fail "fetch D"
+cmp "$TMP/ref-good/img.exr" "$TMP/out-d/img.exr" || fail "D's image differs"
+stop_farmd "$LOG"
+stop_workers
+
+# (c) Excluded from broken job A, then a failure of job B.
+LOG="$TMP/farmd-c.log"
+start_farmd "$TMP/state-c" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 2 \
+    --blocklist-seconds 600 --max-attempts 20
+for w in x y; do
+    start_worker "$TMP/c-$w.log" env "GI_FAULT_CRASH_TASK=$BROKEN" -- --connect "$WADDR" \
+        --procs 1 --queue 0 --cache "$TMP/cc-$w" --name "$w"
+    eval "pid_$w=\$WORKER_PID"
+done
+wait_workers 2
+a=$("$GI" submit "$TMP/broken.json" 2>/dev/null) || fail "submit A"
+n=0
+until [ "$(excluded "$a")" = "x y " ]; do
+    n=$((n + 1))
+    [ $n -lt 300 ] || { api "/api/v1/jobs/$a"; fail "x and y were not excluded from A"; }
+    sleep 0.05
+done
+# x comes back (it held nothing: a drain) failing the first run of any of
+# B's tasks; A's tasks 0-3 are done, so only B's runs are hit.
+kill -TERM "$pid_x"
+wait "$pid_x" 2>/dev/null || true
+start_worker "$TMP/c-x2.log" env "GI_FAULT_CRASH_TASK=$BROKEN,0:0,1:0,2:0,3:0" -- \
+    --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/cc-x" --name x
+wait_workers 2
+b=$("$GI" submit "$TMP/good.json" 2>/dev/null) || fail "submit B"
+wait_state "$b" done 60
+grep -q "job $b: task [0-3] (attempt 0) failed on x" "$LOG" ||
+    { tail -n 30 "$LOG"; fail "(c): x failed none of B's tasks: nothing tested"; }
+! grep -q "blocklisted for" "$LOG" || { grep "blocklisted for" "$LOG"; fail "(c): blocklisted"; }
+"$GI" workers | grep -q "^x .* active " || { "$GI" workers; fail "(c): x is not active"; }
+[ "$(excluded "$a")" = "x y " ] || fail "(c): the exclusions from A ended"
+"$GI" fetch "$b" --out "$TMP/out-b" >/dev/null || fail "fetch B"
+cmp "$TMP/ref-good/img.exr" "$TMP/out-b/img.exr" || fail "B's image differs"
+stop_farmd "$LOG"
+echo ok
