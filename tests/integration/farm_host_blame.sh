@@ -17,18 +17,8 @@ cornell_job "$TMP/broken.json" 8 32 32 32
 cornell_job "$TMP/good.json" 9 32 32 8
 render_refs good
 
-# runs IDS...: every attempt (0-7) of those task ids, as the hooks name runs.
-runs() {
-    for t in "$@"; do for k in 0 1 2 3 4 5 6 7; do printf '%s:%s,' "$t" "$k"; done; done |
-        sed 's/,$//'
-}
-BROKEN="$(runs 10 11 12 13 14 15)"
+BROKEN="$(fault_runs 10 11 12 13 14 15)"
 
-# excluded ID: the workers excluded from the job now, by name, sorted.
-excluded() {
-    api "/api/v1/jobs/$1" | tr '{' '\n' | sed -n 's/^"worker":"\([^"]*\)","excluded":true,.*/\1/p' |
-        sort | tr '\n' ' '
-}
 
 stop_workers() {
     for w in $WORKER_PIDS; do kill "$w" 2>/dev/null || true; done

@@ -13,21 +13,9 @@ LOG="$TMP/farmd.log"
 # A: 4 tiles x 4 passes = 16 tasks; B: 4 tasks (0-3).
 cornell_job "$TMP/a.json" 8 32 32 32
 cornell_job "$TMP/b.json" 9 32 32 8
-
-# excluded ID: the workers excluded from the job now, by name, sorted.
-excluded() {
-    api "/api/v1/jobs/$1" | tr '{' '\n' | sed -n 's/^"worker":"\([^"]*\)","excluded":true,.*/\1/p' |
-        sort | tr '\n' ' '
-}
-
 start_farmd "$TMP/state" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 2 \
     --blocklist-seconds 6 --max-attempts 4
-# runs IDS...: every attempt (0-7) of those task ids, as the hooks name runs.
-runs() {
-    for t in "$@"; do for k in 0 1 2 3 4 5 6 7; do printf '%s:%s,' "$t" "$k"; done; done |
-        sed 's/,$//'
-}
-CRASH="GI_FAULT_CRASH_TASK=$(runs 10 11 12 13 14 15)"
+CRASH="GI_FAULT_CRASH_TASK=$(fault_runs 10 11 12 13 14 15)"
 for w in w1 w2; do
     start_worker "$TMP/$w.log" env "$CRASH" -- --connect "$WADDR" --procs 1 --cache "$TMP/c-$w" \
         --name "$w"

@@ -282,3 +282,17 @@ shift
 exec unshare -m sh -c 'mount -t tmpfs -o size=$1 tmpfs "\$0" && exec "\$@"' "\$dir" "\$@"
 EOF
 }
+
+# fault_runs IDS...: every attempt (0-7) of those task ids, as the fault
+# hooks name runs (GI_FAULT_CRASH_TASK=$(fault_runs 10 11)).
+fault_runs() {
+    for t in "$@"; do for k in 0 1 2 3 4 5 6 7; do printf '%s:%s,' "$t" "$k"; done; done |
+        sed 's/,$//'
+}
+
+# excluded ID: the workers excluded from job ID now, by name, sorted, each
+# followed by a space ("w1 w2 ").
+excluded() {
+    api "/api/v1/jobs/$1" | tr '{' '\n' | sed -n 's/^"worker":"\([^"]*\)","excluded":true,.*/\1/p' |
+        sort | tr '\n' ' '
+}
