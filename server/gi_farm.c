@@ -138,6 +138,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
         return -1;
     if (gi_farm_jobs_replay(f, err))
         return -1;
+    gi_farm_standing_load(f);
     if (write_addresses(f, err))
         return -1;
     gi_info("state in %s; workers connect to %s; API on http://%s/", f->cfg.state_dir,
@@ -267,6 +268,7 @@ int gi_farm_run(gi_farm *f, gi_error *err)
         gi_farm_conns_tick(f);
         gi_refusal_tick(&f->refusals, gi_now());
         gi_farm_jobs_tick(f);
+        gi_farm_standing_tick(f);
         gi_farm_schedule(f);
         gi_farm_conns_reap(f);
     }
@@ -276,6 +278,7 @@ int gi_farm_run(gi_farm *f, gi_error *err)
         return -1;
     gi_info("stopping: checkpointing running jobs");
     gi_farm_jobs_checkpoint_all(f);
+    gi_farm_standing_save(f);
     return 0;
 }
 

@@ -6,6 +6,7 @@
  *   gi_farm_jobs.c   job records: submit, check, run, checkpoint, end, replay
  *   gi_farm_check.c  the forked scene checker
  *   gi_farm_store.c  the content-addressed asset store on disk
+ *   gi_farm_standing.c  the workers' standing kept across restarts
  *   gi_farm_api.c    the HTTP API (libmicrohttpd), gi_farm_views.c its JSON
  * Everything runs on the loop's thread, but for writes handed to threads
  * of their own: checkpoints (gi_file_writer) and a job's finish, its
@@ -59,8 +60,8 @@ typedef struct gi_fj_task_error {
     char message[512];
 } gi_fj_task_error;
 
-/* A worker's standing with one job (gi_farm_sched.c, Exclusions): in
- * memory only, like the blocklist. */
+/* A worker's standing with one job (gi_farm_sched.c, Exclusions), kept
+ * across restarts with the blocklist (gi_farm_standing.c). */
 typedef struct gi_fj_exclusion {
     struct gi_farm_host *host;
     uint32_t streak;       /* its failures of this job's tasks since its last result of them */
@@ -331,6 +332,11 @@ struct gi_farm {
     uint64_t next_conn_id;
     gi_farm_host **hosts;
     size_t host_count, host_cap;
+    /* The hosts' standing changed since <state>/standing was written, and
+     * when it may be written next (monotonic; gi_farm_standing.c). */
+    int standing_dirty;
+    double standing_next;
+    int standing_unsaved; /* the last write failed (said once until one works) */
     /* Refusals of peers not authenticated (worker handshakes, API tokens):
      * a line per peer and 10 s at most. */
     gi_refusal_log refusals;
@@ -508,6 +514,8 @@ void gi_farm_sched_job_over(gi_farm *f, uint64_t id);
 void gi_farm_sched_welcome(gi_farm *f, gi_farm_conn *c);
 gi_farm_host *gi_farm_host_get(gi_farm *f, const char *name);
 int gi_farm_host_blocked(const gi_farm_host *h, double now);
+/* j's entry for h (made if it has none): its standing with the job. */
+gi_fj_exclusion *gi_farm_job_exclusion(gi_farm_job *j, gi_farm_host *h);
 /* Is h excluded from job j now (gi_farm_sched.c, Exclusions)? */
 int gi_farm_job_excludes(const gi_farm_job *j, const gi_farm_host *h, double now);
 /* Can some connected worker take j's tasks now, slots or not (active, not
@@ -519,6 +527,13 @@ void gi_farm_sched_join(gi_farm *f, gi_farm_job *j);
  * (written atomically; a hint: failures are logged, never fatal). */
 void gi_farm_affinity_save(const gi_farm_job *j, const char *path);
 void gi_farm_affinity_load(gi_farm *f, gi_farm_job *j, const char *path);
+
+/* gi_farm_standing.c: the hosts' standing in <state>/standing. Changes
+ * set f->standing_dirty; the tick writes them at most once a second, save
+ * at once (gi-farmd stopping); load once the journal is replayed. */
+void gi_farm_standing_tick(gi_farm *f);
+void gi_farm_standing_save(gi_farm *f);
+void gi_farm_standing_load(gi_farm *f);
 
 /* gi_farm_api.c */
 int gi_farm_api_start(gi_farm *f, gi_error *err);

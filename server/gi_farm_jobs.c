@@ -510,6 +510,7 @@ static void reopen(gi_farm *f, gi_farm_job *j)
     j->host_disk_errors = j->task_timeouts = 0;
     j->excl_count = 0; /* a retried job gives every worker a new chance */
     j->suspect_count = 0;
+    f->standing_dirty = 1;
     j->merge_s = j->finish_s = 0.0;
     j->outputs_retry_at = 0;
     j->disk_measured = 0;

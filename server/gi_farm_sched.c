@@ -126,9 +126,10 @@
  * lists the exclusions and until when). What counts is what counts for
  * blocklisting (Blame), judged or not: the pair's streak needs no verdict,
  * for excluding a host from one job costs the farm little. The host's disk
- * errors count towards its blocklisting only. As the blocklist, exclusions
- * and unjudged failures live in memory: a restarted coordinator starts
- * them afresh, and so does a retried job. */
+ * errors count towards its blocklisting only. The blocklist, the hosts'
+ * counts and streaks and the exclusions outlive a coordinator restart
+ * (gi_farm_standing.c); failures not yet judged do not. A retried job
+ * starts its exclusions afresh. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -175,6 +176,22 @@ static gi_fj_exclusion *exclusion_find(const gi_farm_job *j, const gi_farm_host 
         if (j->excl[i].host == h)
             return &j->excl[i];
     return NULL;
+}
+
+gi_fj_exclusion *gi_farm_job_exclusion(gi_farm_job *j, gi_farm_host *h)
+{
+    gi_fj_exclusion *x = exclusion_find(j, h);
+    if (x)
+        return x;
+    if (j->excl_count == j->excl_cap) {
+        j->excl_cap = j->excl_cap ? 2 * j->excl_cap : 4;
+        j->excl = gi_xrealloc(j->excl, j->excl_cap * sizeof *j->excl);
+    }
+    x = &j->excl[j->excl_count++];
+    memset(x, 0, sizeof *x);
+    x->host = h;
+    x->results_at_failure = h->results;
+    return x;
 }
 
 int gi_farm_job_excludes(const gi_farm_job *j, const gi_farm_host *h, double now)
@@ -534,17 +551,8 @@ static void host_block(gi_farm *f, gi_farm_host *h, uint32_t count, uint32_t bou
  * (see the header: Exclusions). */
 static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_error *e)
 {
-    gi_fj_exclusion *x = exclusion_find(j, h);
-    if (!x) {
-        if (j->excl_count == j->excl_cap) {
-            j->excl_cap = j->excl_cap ? 2 * j->excl_cap : 4;
-            j->excl = gi_xrealloc(j->excl, j->excl_cap * sizeof *j->excl);
-        }
-        x = &j->excl[j->excl_count++];
-        memset(x, 0, sizeof *x);
-        x->host = h;
-        x->results_at_failure = h->results;
-    }
+    gi_fj_exclusion *x = gi_farm_job_exclusion(j, h);
+    f->standing_dirty = 1;
     x->streak++;
     snprintf(x->last_error, sizeof x->last_error, "%.250s", e->msg);
     double now = gi_now();
@@ -574,6 +582,7 @@ static void streak_add(gi_farm *f, gi_farm_host *h, uint64_t job, int disk, cons
         h->streak_wide = 1;
     }
     h->consecutive_failures++;
+    f->standing_dirty = 1;
     if (h->streak_wide)
         host_block(f, h, h->consecutive_failures, f->cfg.blocklist_failures,
                    "task failures of its own (tasks of more than one job that other hosts "
@@ -635,6 +644,7 @@ static void host_failure(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_f
     if (!h || e->code == GI_EINVAL)
         return;
     h->failures++;
+    f->standing_dirty = 1;
     snprintf(h->last_error, sizeof h->last_error, "%.500s", e->msg);
     if (e->code == GI_EHOST) { /* its disk: the host's fault whatever the job */
         h->own_failures++;
@@ -655,6 +665,7 @@ static void host_lost(gi_farm *f, gi_farm_conn *c, double now, const char *why)
     if (!h || (c->lost_at > 0 && now - c->lost_at < f->cfg.lease_s))
         return;
     c->lost_at = now;
+    f->standing_dirty = 1;
     h->losses++;
     h->consecutive_losses++;
     f->m.host_losses++;
@@ -778,10 +789,12 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         return;
     }
     if (c->host) {
+        gi_fj_exclusion *x = exclusion_find(j, c->host);
+        if (c->host->consecutive_failures || c->host->consecutive_losses || (x && x->streak))
+            f->standing_dirty = 1;
         c->host->consecutive_failures = 0;
         c->host->consecutive_losses = 0;
         c->host->results++;
-        gi_fj_exclusion *x = exclusion_find(j, c->host);
         if (x)
             x->streak = 0;
         judge(f, j, l.task_id, c->host);

@@ -11,7 +11,9 @@
  * read, written again, read back the same; the published entries written
  * again are the lines read, less the skipped ones; an owner record writes
  * back to its own bytes, and one that does not parse is refused with a
- * one-line GI_EINVAL message. */
+ * one-line GI_EINVAL message; the workers' standing file (read back when
+ * gi-farmd restarts) gives entries that, written again, read back the
+ * same. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +25,7 @@
 #include "gi_http_client.h"
 #include "gi_journal.h"
 #include "gi_log.h"
+#include "gi_standing.h"
 
 typedef struct replay {
     const uint8_t *data;
@@ -218,11 +221,78 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     return 0;
 }
 
+typedef struct standing {
+    gi_standing_host *hosts;
+    gi_standing_excl *excl;
+    size_t host_count, excl_count;
+} standing;
+
+static void standing_host(void *ctx, const gi_standing_host *h)
+{
+    standing *s = ctx;
+    s->hosts = gi_xrealloc(s->hosts, (s->host_count + 1) * sizeof *s->hosts);
+    s->hosts[s->host_count++] = *h;
+}
+
+static void standing_excl(void *ctx, const gi_standing_excl *x)
+{
+    standing *s = ctx;
+    s->excl = gi_xrealloc(s->excl, (s->excl_count + 1) * sizeof *s->excl);
+    s->excl[s->excl_count++] = *x;
+}
+
+static int same_host(const gi_standing_host *a, const gi_standing_host *b)
+{
+    return !strcmp(a->name, b->name) && a->failures == b->failures &&
+           a->own_failures == b->own_failures && a->losses == b->losses &&
+           a->streak_job == b->streak_job && a->consecutive_failures == b->consecutive_failures &&
+           a->consecutive_losses == b->consecutive_losses && a->streak_wide == b->streak_wide &&
+           a->blocked_until == b->blocked_until && !strcmp(a->last_error, b->last_error);
+}
+
+static int same_excl(const gi_standing_excl *a, const gi_standing_excl *b)
+{
+    return a->job_id == b->job_id && !strcmp(a->host, b->host) && a->streak == b->streak &&
+           a->times == b->times && a->until == b->until && !strcmp(a->last_error, b->last_error);
+}
+
+/* What the standing file gives (all, or what comes before its damage),
+ * written again, reads back the same, whole. */
+static void standing_file(const uint8_t *data, size_t size)
+{
+    standing a = {0}, b = {0};
+    gi_standing_sink sa = {standing_host, standing_excl, &a};
+    gi_standing_sink sb = {standing_host, standing_excl, &b};
+    gi_error err;
+    int rc = gi_standing_decode(data, size, "standing", &sa, &err);
+    if (rc != 0 && (!err.msg[0] || strchr(err.msg, '\n')))
+        abort();
+    if (rc < 0 && (a.host_count || a.excl_count))
+        abort(); /* not a standing file: nothing may have been read */
+    gi_buf out;
+    gi_buf_init(&out);
+    gi_standing_encode(a.hosts, a.host_count, a.excl, a.excl_count, &out);
+    if (gi_standing_decode(out.data, out.len, "written", &sb, &err) != 0 ||
+        b.host_count != a.host_count || b.excl_count != a.excl_count)
+        abort();
+    for (size_t i = 0; i < a.host_count; i++)
+        if (!same_host(&a.hosts[i], &b.hosts[i]))
+            abort();
+    for (size_t i = 0; i < a.excl_count; i++)
+        if (!same_excl(&a.excl[i], &b.excl[i]))
+            abort();
+    gi_buf_free(&out);
+    free(a.hosts);
+    free(a.excl);
+    free(b.hosts);
+    free(b.excl);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1)
         return 0;
-    switch (data[0] % 6) {
+    switch (data[0] % 7) {
     case 0:
         journal(data + 1, size - 1);
         break;
@@ -238,8 +308,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     case 4:
         published(data + 1, size - 1);
         break;
-    default:
+    case 5:
         batch_root_owner(data + 1, size - 1);
+        break;
+    default:
+        standing_file(data + 1, size - 1);
         break;
     }
     return 0;
