@@ -43,13 +43,14 @@ wait_state "$g" done 60
 cmp "$TMP/ref-good/img.exr" "$TMP/out-g/img.exr" || fail "G's image differs"
 wait_state "$a1" failed 90
 wait_state "$a2" failed 90
-# Both broken jobs failed on every worker, each worker failed both.
-for j in $a1 $a2; do
-    for w in w1 w2 w3; do
-        grep -q "job $j: task 1[0-5] (attempt [0-9]*) failed on $w" "$LOG" ||
-            fail "job $j's tasks did not fail on $w: nothing tested"
-    done
+# Workers failed the tasks of both broken jobs (what blocklisted them
+# before: a streak of two jobs' failures); which ones is up to timing.
+both=0
+for w in w1 w2 w3; do
+    grep -q "job $a1: task 1[0-5] (attempt [0-9]*) failed on $w" "$LOG" &&
+        grep -q "job $a2: task 1[0-5] (attempt [0-9]*) failed on $w" "$LOG" && both=$((both + 1))
 done
+[ $both -ge 2 ] || fail "$both workers failed the tasks of both broken jobs: nothing tested"
 ! grep -q "blocklisted for" "$LOG" || { grep "blocklisted for" "$LOG"; fail "(a): blocklisted"; }
 [ "$(metric 'gi_farm_workers{state="blocklisted"}')" = 0 ] || fail "(a): blocklisted workers"
 [ "$(metric gi_farm_task_failures_host_total)" = 0 ] ||
