@@ -211,6 +211,10 @@ typedef struct detp_worker {
 } detp_worker;
 
 detp_worker *detp_worker_state(gi_worker_ctx *ctx);
+/* The radiance published for image tiles (nv x RGB floats), read and
+ * checked (gi_published.h): malloc'ed, or NULL with GI_EPROTO naming the
+ * blob and what is wrong. Exposed for fuzz_published. */
+float *detp_radiance_decode(const gi_buf *blob, const char *hash, uint32_t nv, gi_error *err);
 int detp_worker_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err);
 int detp_worker_index(gi_worker_ctx *ctx, detp_worker *w, gi_error *err);
 /* The job's estimator over w->segs into w->acc. */

@@ -10,6 +10,7 @@
 #include "detp_method.h"
 #include "gi_clock.h"
 #include "gi_light.h"
+#include "gi_published.h"
 #include "gi_rng.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
@@ -278,6 +279,12 @@ static gi_vec3 shade(void *user, const gi_hit *h, gi_vec3 p, gi_vec3 wo)
     return gi_add(L, gi_light_emitted(m, c->scene->tri_normal[h->tri], wo));
 }
 
+float *detp_radiance_decode(const gi_buf *blob, const char *hash, uint32_t nv, gi_error *err)
+{
+    gi_published_layout l = {"detp: published radiance", "vertex", "vertices", nv, 3};
+    return gi_published_floats(blob, hash, &l, err);
+}
+
 static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_job *job = &ctx->job;
@@ -291,15 +298,9 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
         const gi_buf *blob;
         if (gi_worker_blob(ctx, hash, &blob, err))
             return -1;
-        if (blob->len != (size_t)job->scene.vertex_count * 12)
-            return gi_fail(err, GI_EPROTO, "detp: published radiance has %zu bytes for %u "
-                                           "vertices", blob->len, job->scene.vertex_count);
-        float *rad = gi_try_malloc(blob->len + 4, err, "published radiance");
+        float *rad = detp_radiance_decode(blob, hash, job->scene.vertex_count, err);
         if (!rad)
             return -1;
-        gi_reader br;
-        gi_reader_init(&br, blob->data, blob->len, "published radiance");
-        gi_get_f32s(&br, rad, blob->len / 4);
         free(w->radiance);
         w->radiance = rad;
         memcpy(w->hash, hash, GI_HASH_HEX);

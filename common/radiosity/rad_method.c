@@ -14,6 +14,7 @@
 #include "gi_job.h"
 #include "gi_clock.h"
 #include "gi_log.h"
+#include "gi_published.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
 #include "rad.h"
@@ -869,6 +870,14 @@ static void worker_free(void *p)
     free(w);
 }
 
+float *gi_rad_corners_decode(const gi_buf *blob, const char *hash, uint32_t elements,
+                             gi_error *err)
+{
+    gi_published_layout l = {"radiosity: published image data", "element", "elements",
+                             elements, 9};
+    return gi_published_floats(blob, hash, &l, err);
+}
+
 static const float *worker_corners(gi_worker_ctx *ctx, rad_worker *w, const char *hash,
                                    gi_error *err)
 {
@@ -877,19 +886,10 @@ static const float *worker_corners(gi_worker_ctx *ctx, rad_worker *w, const char
     const gi_buf *blob;
     if (gi_worker_blob(ctx, hash, &blob, err))
         return NULL;
-    size_t values = 9 * (size_t)w->mesh.element_count;
-    if (blob->len != 4 * values) {
-        gi_fail(err, GI_EPROTO, "radiosity tile: image data for %zu elements, the mesh has %u",
-                blob->len / 36, w->mesh.element_count);
-        return NULL;
-    }
     free(w->corner);
-    w->corner = gi_try_malloc(values * sizeof *w->corner, err, "radiosity image data");
+    w->corner = gi_rad_corners_decode(blob, hash, w->mesh.element_count, err);
     if (!w->corner)
         return NULL;
-    gi_reader r;
-    gi_reader_init(&r, blob->data, blob->len, "radiosity image data");
-    gi_get_f32s(&r, w->corner, values);
     memcpy(w->hash, hash, GI_HASH_HEX);
     return w->corner;
 }

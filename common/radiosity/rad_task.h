@@ -31,4 +31,10 @@ int gi_rad_task_block_decode(const gi_task *t, uint32_t n, uint32_t *e0, uint32_
 int gi_rad_task_tile_decode(const gi_job *job, const gi_task *t, uint32_t emissions,
                             gi_rad_tile_task *tt, gi_error *err);
 
+/* The image data a TILE task's hash names: per element, its 3 corners' RGB
+ * radiosities (9 floats), read and checked (gi_published.h): malloc'ed, or
+ * NULL with GI_EPROTO naming the blob and what is wrong. */
+float *gi_rad_corners_decode(const gi_buf *blob, const char *hash, uint32_t elements,
+                             gi_error *err);
+
 #endif
