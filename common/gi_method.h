@@ -9,6 +9,7 @@
 #ifndef GI_METHOD_H
 #define GI_METHOD_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include <cjson/cJSON.h>
@@ -36,6 +37,22 @@ typedef struct gi_job_progress {
      * ETA counts the frames after it, until frames are timed. */
     double first_frame_cost, later_frame_cost;
 } gi_job_progress;
+
+/* A value a result adds into an f64 sum is at most this in magnitude, so
+ * that no number of results (fewer than 2^64) can overflow the sum. Real
+ * ones, sums of float radiance over fewer than 2^64 samples, stay below
+ * 2^64 x FLT_MAX (6.3e57). A check_result refuses what goes beyond. */
+#define GI_RESULT_SUM_MAX 1e280
+static inline int gi_result_summable(double v)
+{
+    return isfinite(v) && fabs(v) <= GI_RESULT_SUM_MAX;
+}
+
+/* How damage_result damages a result (tests only). */
+typedef enum gi_damage {
+    GI_DAMAGE_NAN = 1,  /* a NaN in place of a floating-point value */
+    GI_DAMAGE_HUGE = 2, /* a value that would overflow the sums it goes into */
+} gi_damage;
 
 typedef struct gi_method {
     const char *name;
@@ -80,6 +97,15 @@ typedef struct gi_method {
     void (*progress)(const gi_job *job, gi_job_progress *out);
     /* Frees job->params and job->state. */
     void (*release)(gi_job *job);
+    /* Optional, for tests only (GI_FAULT_BAD_RESULT_KIND, worker/
+     * gi_child_faults.h): damages the first value of a result that run()
+     * made (in a worker: job->state is NULL) the way `how` says, as bad
+     * memory could, for check_result to refuse. 1 if the result holds no
+     * value such damage applies to (it is left as it is): a NaN needs a
+     * floating-point value, a huge value one that is summed (a tile's
+     * pixels are placed, detp's f32 energies go into f64 sums). */
+    int (*damage_result)(const gi_job *job, const gi_task *task, gi_buf *result,
+                         gi_damage how);
 } gi_method;
 
 /* The registry (gi_methods.c). */

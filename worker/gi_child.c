@@ -190,11 +190,8 @@ static int handle_task(child *c, const gi_buf *payload, gi_error *err)
         kill(getpid(), SIGKILL);
     }
     if (rc == 0 && result.len > 0 &&
-        gi_fault_hits(&c->faults.bad_result, m.task.id, m.task.attempt)) {
-        gi_warn("fault injection: task %llu's result is sent one byte short",
-                (unsigned long long)m.task.id);
-        result.len--;
-    }
+        gi_fault_hits(&c->faults.bad_result, m.task.id, m.task.attempt))
+        gi_fault_damage(&c->faults, &c->ctx.job, &m.task, &result);
     gi_buf out;
     gi_buf_init(&out);
     if (rc == 0)

@@ -126,7 +126,12 @@ static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *resu
     gi_reader head = r;
     if (detp_anim_header_get(&head, h, 1) == 0 && (h->frame != frame || h->batch != batch))
         return gi_fail(err, GI_EPROTO, "result of frame %u batch %u", h->frame, h->batch);
-    if (detp_decode_anim(&r, st->nv, h, a->sum, a->hits, apply, err))
+    /* Frame 0's totals start at zero: B batches each within INT64_MAX / B
+     * cannot overflow them. */
+    const gi_detp_params *p = job->params;
+    uint64_t batches = (p->photon_count + (uint64_t)p->batch - 1) / (uint64_t)p->batch;
+    int64_t max = INT64_MAX / (int64_t)(batches ? batches : 1);
+    if (detp_decode_anim(&r, st->nv, max, h, a->sum, a->hits, apply, err))
         return gi_error_prefix(err, "frame %u, batch %u", frame, batch);
     return 0;
 }

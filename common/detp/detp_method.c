@@ -189,7 +189,7 @@ static int range_result(const gi_job *job, const gi_task *t, const gi_buf *resul
             double v = reference ? gi_get_f64(&r) : gi_get_f32(&r);
             if (r.failed) /* cut short: gi_reader_finish says so */
                 break;
-            if (!isfinite(v) || (!reference && !(v >= 0.0 && v <= 1.0)))
+            if (!gi_result_summable(v) || (!reference && !(v >= 0.0 && v <= 1.0)))
                 return gi_fail(err, GI_EPROTO, "detp: value %u of the result out of range",
                                i - a);
             if (vis)
@@ -389,6 +389,29 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
     if (tile_result(job, t, result, &tile, &seconds, &rays, &px, err))
         return -1;
     return gi_tile_check_result(&tile, px.data, px.len, err);
+}
+
+/* Tests only (gi_method.h). Tiles', visibility's and reference values come
+ * after the timing (f64 seconds, u64 rays); only reference values and
+ * animation sums are summed. */
+static int detp_damage_result(const gi_job *job, const gi_task *t, gi_buf *result,
+                              gi_damage how)
+{
+    (void)job;
+    if (t->kind == DETP_TASK_BATCH)
+        return how == GI_DAMAGE_NAN ? detp_batch_damage(result) : 1;
+    if (t->kind == DETP_TASK_ANIM_BATCH || t->kind == DETP_TASK_ANIM_UPDATE)
+        return how == GI_DAMAGE_HUGE ? detp_anim_damage(result) : 1;
+    if (t->kind == DETP_TASK_REFERENCE && result->len >= 24) {
+        double v = how == GI_DAMAGE_NAN ? NAN : 1e300;
+        memcpy(result->data + 16, &v, 8);
+        return 0;
+    }
+    if (how == GI_DAMAGE_HUGE || result->len < 20)
+        return 1;
+    float v = NAN;
+    memcpy(result->data + 16, &v, 4);
+    return 0;
 }
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
@@ -651,6 +674,7 @@ const gi_method gi_method_detp = {
     .plan = detp_plan,
     .run = detp_run,
     .check_result = detp_check_result,
+    .damage_result = detp_damage_result,
     .merge = detp_merge,
     .finish = detp_finish,
     .save = detp_save,

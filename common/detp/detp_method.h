@@ -66,6 +66,11 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
  * with irr and hits NULL, only checks the result. */
 int detp_decode_batch(gi_reader *r, uint32_t vertex_count, detp_batch_result *h, double *irr,
                       uint64_t *hits, gi_error *err);
+/* Tests only (gi_method.h, damage_result): a NaN for the first energy of a
+ * batch's result; an INT64_MAX for the first sum of an animation batch's.
+ * 1 if it has no entry. */
+int detp_batch_damage(gi_buf *result);
+int detp_anim_damage(gi_buf *result);
 
 /* An animation frame's batch result: what the worker did, then per vertex
  * exact integer sums (fixed point, detp_anim.h): for frame 0 every vertex's
@@ -97,14 +102,16 @@ void detp_anim_header_put(const detp_anim_result *h, gi_buf *out);
 int detp_anim_header_get(gi_reader *r, detp_anim_result *h, int with_from_mobile);
 void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64_t *hits,
                       uint32_t nv, gi_buf *out);
-/* Reads an animation batch's result into h; fails on a malformed one.
+/* Reads an animation batch's result into h; fails on a malformed one, and
+ * on a value beyond +-max (naming the vertex: the frame's batches, each
+ * within INT64_MAX / batches, cannot overflow totals that start at zero).
  * sum (3 per vertex) and hits: the running totals it goes into (NULL: the
  * result's form alone is checked); it also fails, naming the vertex, if
  * adding it would overflow one of them. apply: adds it (else they are only
  * read); one that fails leaves them as they were. Each vertex comes at most
  * once in a result, so a pass without apply says exactly whether one with
  * it succeeds. */
-int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
+int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h, int64_t *sum,
                      int64_t *hits, int apply, gi_error *err);
 
 /* The vertex of reference sample j (of m, over n vertices): evenly spread. */

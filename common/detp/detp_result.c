@@ -97,13 +97,15 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
 }
 
 /* Adds one vertex's values (three floats, then its hit count); irr NULL:
- * only checks them. */
+ * only checks them. -1: cut short; 1: an energy is not finite. */
 static int add_vertex(gi_reader *r, uint64_t i, int sparse, double *irr, uint64_t *hits)
 {
     float e[3] = {gi_get_f32(r), gi_get_f32(r), gi_get_f32(r)};
     uint64_t h = sparse ? get_varint(r) : gi_get_u32(r);
-    if (r->failed || !isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2]))
+    if (r->failed)
         return -1;
+    if (!isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2]))
+        return 1;
     if (!irr)
         return 0;
     for (int c = 0; c < 3; c++)
@@ -112,12 +114,12 @@ static int add_vertex(gi_reader *r, uint64_t i, int sparse, double *irr, uint64_
     return 0;
 }
 
-int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *irr,
-                      uint64_t *hits, gi_error *err)
+/* The fixed part, up to the vertex count and the form; -1: not a batch's. */
+static int batch_header_get(gi_reader *r, detp_batch_result *h, uint32_t *count, uint8_t *form)
 {
     memset(h, 0, sizeof *h);
     if (gi_get_u32(r) != BATCH_MAGIC)
-        return gi_fail(err, GI_EPROTO, "%s: not a detp batch result", r->what);
+        return -1;
     h->photons = gi_get_u64(r);
     h->segments = gi_get_u64(r);
     h->rays = gi_get_u64(r);
@@ -125,27 +127,58 @@ int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *i
     h->build_seconds = gi_get_f64(r);
     h->estimate_seconds = gi_get_f64(r);
     gi_detp_stats_decode(r, &h->stats);
-    uint32_t count = gi_get_u32(r);
-    uint8_t form = gi_get_u8(r);
+    *count = gi_get_u32(r);
+    *form = gi_get_u8(r);
+    return 0;
+}
+
+int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *irr,
+                      uint64_t *hits, gi_error *err)
+{
+    uint32_t count;
+    uint8_t form;
+    if (batch_header_get(r, h, &count, &form))
+        return gi_fail(err, GI_EPROTO, "%s: not a detp batch result", r->what);
     if (r->failed || count != nv || form > FORM_SPARSE)
         return gi_fail(err, GI_EPROTO, "%s: %u vertices (expected %u), form %u", r->what, count,
                        nv, form);
-    if (form == FORM_DENSE) {
-        for (uint32_t i = 0; i < nv; i++)
-            if (add_vertex(r, i, 0, irr, hits))
-                return gi_fail(err, GI_EPROTO, "%s: bad entry for vertex %u", r->what, i);
-    } else {
-        uint32_t nnz = gi_get_u32(r);
-        uint64_t i = 0;
-        if (nnz > nv)
-            return gi_fail(err, GI_EPROTO, "%s: %u entries for %u vertices", r->what, nnz, nv);
-        for (uint32_t k = 0; k < nnz; k++) {
+    uint32_t entries = nv;
+    if (form == FORM_SPARSE && (entries = gi_get_u32(r)) > nv)
+        return gi_fail(err, GI_EPROTO, "%s: %u entries for %u vertices", r->what, entries, nv);
+    uint64_t i = 0;
+    for (uint32_t k = 0; k < entries; k++) {
+        if (form == FORM_SPARSE)
             i += get_varint(r);
-            if (i >= nv || add_vertex(r, i, 1, irr, hits))
-                return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
-        }
+        else
+            i = k;
+        int bad = i < nv ? add_vertex(r, i, form == FORM_SPARSE, irr, hits) : -1;
+        if (bad > 0)
+            return gi_fail(err, GI_EPROTO, "%s: vertex %llu's energy is not finite", r->what,
+                           (unsigned long long)i);
+        if (bad && form == FORM_DENSE)
+            return gi_fail(err, GI_EPROTO, "%s: bad entry for vertex %u", r->what, k);
+        if (bad)
+            return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
     }
     return gi_reader_finish(r, err);
+}
+
+int detp_batch_damage(gi_buf *result)
+{
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp result");
+    detp_batch_result h;
+    uint32_t count;
+    uint8_t form;
+    if (batch_header_get(&r, &h, &count, &form) || (form == FORM_SPARSE && gi_get_u32(&r) == 0))
+        return 1;
+    if (form == FORM_SPARSE)
+        get_varint(&r);
+    if (r.failed || r.left < 4)
+        return 1;
+    float nan = NAN;
+    memcpy((uint8_t *)r.p, &nan, 4);
+    return 0;
 }
 
 /* ---- Animation frames: exact integer sums ---------------------------- */
@@ -247,7 +280,7 @@ static void anim_undo(gi_reader from, uint32_t k, int c, int64_t *sum, int64_t *
     }
 }
 
-int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *sum,
+int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h, int64_t *sum,
                      int64_t *hits, int apply, gi_error *err)
 {
     static const char *const what[4] = {"red sum", "green sum", "blue sum", "hit count"};
@@ -269,6 +302,14 @@ int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *su
                 int64_t v = unzigzag(get_varint(r)), out;
                 if (r->failed)
                     break;
+                if (v > max || v < -max) {
+                    gi_fail(err, GI_EPROTO, "%s: vertex %llu's %s is %lld, beyond +-%lld",
+                            r->what, (unsigned long long)i, what[c], (long long)v,
+                            (long long)max);
+                    if (undo)
+                        anim_undo(entries, k, c, sum, hits);
+                    return -1;
+                }
                 if (!sum)
                     continue;
                 int64_t *total = c < 3 ? &sum[3 * i + c] : &hits[i];
@@ -294,4 +335,26 @@ int detp_decode_anim(gi_reader *r, uint32_t nv, detp_anim_result *h, int64_t *su
     if (r->left && undo) /* trailing bytes, which gi_reader_finish refuses */
         anim_undo(entries, nnz, 0, sum, hits);
     return gi_reader_finish(r, err);
+}
+
+int detp_anim_damage(gi_buf *result)
+{
+    gi_reader r;
+    gi_reader_init(&r, result->data, result->len, "detp animation result");
+    detp_anim_result h;
+    if (detp_anim_header_get(&r, &h, 1) || (gi_get_u32(&r), gi_get_u32(&r) == 0))
+        return 1;
+    get_varint(&r); /* the first entry's vertex */
+    size_t at = result->len - r.left;
+    get_varint(&r); /* its red sum, replaced */
+    if (r.failed)
+        return 1;
+    gi_buf out;
+    gi_buf_init(&out);
+    gi_buf_put(&out, result->data, at);
+    put_varint(&out, zigzag(INT64_MAX));
+    gi_buf_put(&out, r.p, r.left);
+    gi_buf_free(result);
+    *result = out;
+    return 0;
 }

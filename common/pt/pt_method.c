@@ -1,6 +1,7 @@
 /* pt_method: the path tracer as a farm method. A task is an image tile and
  * a range of samples; its result is the tile's per-pixel sums; merge adds
  * them; finish divides by the sample count and writes the image. */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -203,15 +204,38 @@ static int pt_check_result(const gi_job *job, const gi_task *t, const gi_buf *re
     size_t want = (size_t)w * (tl.tile.y1 - tl.tile.y0) * PT_VALUES_PER_PIXEL * 8;
     if (result->len != want) /* pt_merge takes nothing else */
         return gi_fail(err, GI_EPROTO, "result has %zu bytes, expected %zu", result->len, want);
+    /* A sample's radiance is a float vector: ns of them sum to at most ns x
+     * FLT_MAX a channel, and their squared luminances to ns x FLT_MAX^2;
+     * the image's sums over all passes then stay finite, and so does their
+     * mean as a float. */
+    uint32_t ns = tl.s1 - tl.s0;
+    double max = (double)ns * FLT_MAX, max2 = max * FLT_MAX;
     for (size_t i = 0; i + 8 <= result->len; i += 8) {
         double v;
         memcpy(&v, result->data + i, 8); /* little-endian hosts only (gi_buf.h) */
-        if (!isfinite(v)) {
-            size_t pix = i / (8 * PT_VALUES_PER_PIXEL);
-            return gi_fail(err, GI_EPROTO, "pixel (%u, %u) is not finite (%g)",
-                           tl.tile.x0 + (uint32_t)(pix % w), tl.tile.y0 + (uint32_t)(pix / w), v);
-        }
+        static const char *const what[PT_VALUES_PER_PIXEL] = {
+            "red sum", "green sum", "blue sum", "sum of squared luminances"};
+        size_t pix = i / (8 * PT_VALUES_PER_PIXEL), c = i / 8 % PT_VALUES_PER_PIXEL;
+        if (isfinite(v) && (c == 3 ? v >= 0 && v <= max2 : fabs(v) <= max))
+            continue;
+        uint32_t x = tl.tile.x0 + (uint32_t)(pix % w), y = tl.tile.y0 + (uint32_t)(pix / w);
+        if (!isfinite(v))
+            return gi_fail(err, GI_EPROTO, "pixel (%u, %u) is not finite (%g)", x, y, v);
+        return gi_fail(err, GI_EPROTO, "pixel (%u, %u)'s %s is %g, out of range for %u samples",
+                       x, y, what[c], v, ns);
     }
+    return 0;
+}
+
+/* A NaN or an impossibly large sum in the first pixel's red channel. */
+static int pt_damage_result(const gi_job *job, const gi_task *t, gi_buf *result, gi_damage how)
+{
+    (void)job;
+    (void)t;
+    if (result->len < 8)
+        return 1;
+    double v = how == GI_DAMAGE_NAN ? NAN : 1e300;
+    memcpy(result->data, &v, 8);
     return 0;
 }
 
@@ -321,6 +345,7 @@ const gi_method gi_method_pt = {
     .plan = pt_plan,
     .run = pt_run,
     .check_result = pt_check_result,
+    .damage_result = pt_damage_result,
     .merge = pt_merge,
     .finish = pt_finish,
     .save = pt_save,

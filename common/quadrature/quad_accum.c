@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_method.h"
+
 int gi_quad_accum_init(gi_quad_accum *a, int width, int height, int channels, gi_error *err)
 {
     memset(a, 0, sizeof *a);
@@ -81,9 +83,12 @@ int gi_quad_accum_check(const gi_reader *delta, int width, int height, int chann
         if (p >= npix || (int64_t)p <= prev)
             return gi_fail(err, GI_EPROTO, "%s: bad pixel index", delta->what);
         prev = p;
-        for (int c = 0; c < channels; c++)
-            if (!isfinite(gi_get_f64(&check)))
-                return gi_fail(err, GI_EPROTO, "%s: pixel %u is not finite", delta->what, p);
+        for (int c = 0; c < channels; c++) {
+            double v = gi_get_f64(&check);
+            if (!gi_result_summable(v)) /* added into the image */
+                return gi_fail(err, GI_EPROTO, "%s: pixel %u's value is %g, not within +-%g",
+                               delta->what, p, v, GI_RESULT_SUM_MAX);
+        }
     }
     return 0;
 }

@@ -55,6 +55,8 @@ void gi_quad_task_in_free(gi_quad_task_in *t);
 int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
                           gi_error *err);
 void gi_quad_result_free(gi_quad_result *r);
+int gi_quad_damage_result(const gi_job *job, const gi_task *task, gi_buf *result,
+                          gi_damage how);
 
 /* The coordinator side (quad_coord.c). */
 int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err);

@@ -23,6 +23,7 @@ const gi_method gi_method_quadrature = {
     .plan = gi_quad_plan,
     .run = gi_quad_run,
     .check_result = gi_quad_check_result,
+    .damage_result = gi_quad_damage_result,
     .merge = gi_quad_merge,
     .finish = gi_quad_finish,
     .save = gi_quad_save,

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_method.h"
 #include "gi_rng.h"
 #include "quad_splat.h"
 
@@ -215,14 +216,16 @@ int gi_quad_summary_get(gi_reader *r, const gi_quad_rule *rule, gi_quad_summary 
     s->interp.channels = nc;
     if (r->failed)
         return gi_fail(err, GI_EPROTO, "%s: truncated region", r->what);
-    int ok = s->axis >= -1 && s->axis < n && isfinite(s->err_raw) && s->err_raw >= 0 &&
-             isfinite(s->err) && s->err >= 0;
+    /* Estimates and errors are summed (splats, totals): within the bound
+     * that keeps the sums finite (gi_method.h). */
+    int ok = s->axis >= -1 && s->axis < n && gi_result_summable(s->err_raw) &&
+             s->err_raw >= 0 && gi_result_summable(s->err) && s->err >= 0;
     for (int d = 0; d < n && ok; d++)
         ok = s->lo[d] >= 0.0 && s->hi[d] <= 1.0 && s->lo[d] < s->hi[d];
     for (int c = 0; c < nc && ok; c++)
-        ok = isfinite(s->est[c]);
+        ok = gi_result_summable(s->est[c]);
     for (size_t i = 0; i < nv && ok; i++)
-        ok = isfinite(s->interp.v[i]);
+        ok = gi_result_summable(s->interp.v[i]);
     if (!ok || s->id != gi_quad_box_id(s->lo, s->hi, n))
         return gi_fail(err, GI_EPROTO, "%s: invalid region", r->what);
     return 0;

@@ -113,6 +113,13 @@ int gi_rad_ff_decode(const uint8_t *data, size_t len, uint32_t e0, uint32_t e1, 
             return gi_fail(err, GI_EPROTO,
                            "radiosity: row of element %u accounts for %llu rays, not %u", e,
                            (unsigned long long)total, rays);
+        /* |h_even - h_odd| <= h for every node: a larger d2 is not one, and
+         * could overflow the job's sum of them. */
+        if (d2 > h2)
+            return gi_fail(err, GI_EPROTO,
+                           "radiosity: row of element %u has d2 %llu, above its sum of "
+                           "squared hits %llu", e, (unsigned long long)d2,
+                           (unsigned long long)h2);
         stats->escaped += escaped;
         stats->backface += backface;
         stats->d2 += d2;

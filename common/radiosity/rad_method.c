@@ -595,6 +595,25 @@ static int rad_check_result(const gi_job *job, const gi_task *t, const gi_buf *r
     return gi_tile_check_result(&tt.tile, result->data, result->len, err);
 }
 
+/* Tests only (gi_method.h): form-factor rows hold counts, summed (the
+ * first row's d2, after u32 nnz, escaped and backface); tiles, pixels. */
+static int rad_damage_result(const gi_job *job, const gi_task *t, gi_buf *result,
+                             gi_damage how)
+{
+    (void)job;
+    if (t->kind == RAD_TASK_FF) {
+        if (how != GI_DAMAGE_HUGE || result->len < 20)
+            return 1;
+        gi_le_put_u64(result->data + 12, UINT64_MAX);
+        return 0;
+    }
+    if (how != GI_DAMAGE_NAN || result->len < 4)
+        return 1;
+    float v = NAN;
+    memcpy(result->data, &v, 4);
+    return 0;
+}
+
 static int rad_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
                      gi_error *err)
 {
@@ -980,6 +999,7 @@ const gi_method gi_method_radiosity = {
     .plan = rad_plan,
     .run = rad_run,
     .check_result = rad_check_result,
+    .damage_result = rad_damage_result,
     .merge = rad_merge,
     .finish = rad_finish,
     .save = rad_save,

@@ -1,6 +1,8 @@
 /* fuzz_detp_result: libFuzzer target for what detp decodes from workers:
  * photon batch results (dense and sparse forms) and animation frame results
- * (exact integer sums). The first byte picks the decoder. Any input must
+ * (exact integer sums). The first byte picks the decoder (bit 1), and for
+ * animation results the bound on a value (bit 2: INT64_MAX / 3, as a frame
+ * of 3 batches has, else none). Any input must
  * decode or fail with GI_EPROTO; never crash, leak or hang. The check-only
  * decode (NULL sums: the result's form alone) must agree with the real
  * decode into zeroed sums (each vertex comes once, so one result alone never
@@ -28,10 +30,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_error check_err;
     int rc, check_rc;
     if (data[0] & 2) {
+        int64_t max = data[0] & 4 ? INT64_MAX / 3 : INT64_MAX;
         int64_t sum[3 * VERTICES] = {0}, hits[VERTICES] = {0};
         detp_anim_result h;
-        rc = detp_decode_anim(&r, VERTICES, &h, sum, hits, 1, &err);
-        check_rc = detp_decode_anim(&check, VERTICES, &h, NULL, NULL, 0, &check_err);
+        rc = detp_decode_anim(&r, VERTICES, max, &h, sum, hits, 1, &err);
+        check_rc = detp_decode_anim(&check, VERTICES, max, &h, NULL, NULL, 0, &check_err);
         for (size_t i = 0; rc && i < VERTICES; i++)
             if (sum[3 * i] || sum[3 * i + 1] || sum[3 * i + 2] || hits[i])
                 abort(); /* a refused add leaves the totals as they were */
@@ -48,10 +51,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         int64_t kept[3 * VERTICES], kept_hits[VERTICES];
         memcpy(kept, near, sizeof kept);
         memcpy(kept_hits, near_hits, sizeof kept_hits);
-        int only_read = detp_decode_anim(&a, VERTICES, &h, near, near_hits, 0, &check_err);
+        int only_read =
+            detp_decode_anim(&a, VERTICES, max, &h, near, near_hits, 0, &check_err);
         if (memcmp(kept, near, sizeof kept) || memcmp(kept_hits, near_hits, sizeof kept_hits))
             abort(); /* only read */
-        int added = detp_decode_anim(&b, VERTICES, &h, near, near_hits, 1, &check_err);
+        int added = detp_decode_anim(&b, VERTICES, max, &h, near, near_hits, 1, &check_err);
         if ((only_read == 0) != (added == 0))
             abort();
         /* A refused add leaves the totals as they were. */

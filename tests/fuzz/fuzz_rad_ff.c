@@ -7,8 +7,9 @@
  * Any input must decode or fail with GI_EPROTO and a one-line message;
  * decoded rows must be what the format promises: every hit on a node
  * below the count, in increasing node order within a row, nonzero and at
- * most the ray count, and each row's hits, escaped and back-face rays
- * adding up to the rays cast. */
+ * most the ray count, each row's hits, escaped and back-face rays adding
+ * up to the rays cast, and its d2 at most its sum of squared hits (so the
+ * block's sums cannot overflow). */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -63,7 +64,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             abort();
         hits += s.row_hits[e];
     }
-    if (hits + st.escaped + st.backface != (uint64_t)s.rays * (s.e1 - s.e0))
+    if (hits + st.escaped + st.backface != (uint64_t)s.rays * (s.e1 - s.e0) || st.d2 > st.h2)
         abort();
     return 0;
 }

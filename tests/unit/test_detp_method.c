@@ -417,7 +417,7 @@ static int set_red_sum(const gi_buf *in, uint32_t nv, uint32_t v, int64_t red, g
     detp_anim_result h;
     gi_reader r;
     gi_reader_init(&r, in->data, in->len, "test result");
-    int rc = detp_decode_anim(&r, nv, &h, sum, hits, 1, err);
+    int rc = detp_decode_anim(&r, nv, INT64_MAX, &h, sum, hits, 1, err);
     if (rc == 0) {
         sum[3 * (size_t)v] = red;
         gi_buf_init(out);
@@ -441,19 +441,22 @@ static int run_with_red_sum(gi_worker_ctx *ctx, const gi_job *job, const gi_task
     return rc;
 }
 
-/* Sums that are each in range but overflow the frame's running total: one
- * that overflows the total merged so far is refused as it arrives, naming
- * the frame, batch, vertex and why, and the task runs again; one that only
- * overflows with a result that arrived before it but merges before it
- * (merges go in task order) is found by the merge, which fails the job
- * saying the same. */
+/* An animation batch's sum beyond INT64_MAX / (the frame's batches) is
+ * refused as it arrives, naming the frame, batch, vertex and bound: frame
+ * 0's batches within it cannot overflow its totals, which start at zero,
+ * whatever order they merge in. A later frame's changes go into the totals
+ * it carries, which they can still overflow: one that overflows the total
+ * merged so far is refused as it arrives, naming the frame, batch, vertex
+ * and why, and the task runs again; one that only overflows with a result
+ * that arrived before it but merges before it (merges go in task order) is
+ * found by the merge, which fails the job saying the same. */
 GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
 {
     char *path = write_anim_job("overflow-anim.json", 2);
     GI_REQUIRE(path != NULL);
     gi_error err;
     const uint32_t v = 7;
-    const int64_t half = INT64_MAX / 2 + 1; /* twice that overflows */
+    const int64_t max = INT64_MAX / 2; /* 2 batches a frame */
     for (int at_merge = 0; at_merge < 2; at_merge++) {
         gi_job job;
         gi_worker_ctx ctx;
@@ -466,34 +469,57 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         const gi_task *t0 = gi_jobrun_lease(&jr), *t1 = gi_jobrun_lease(&jr);
         GI_REQUIRE(t0 && t1 && t0->id == 0 && t1->id == 1);
         gi_buf r0, r1;
-        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t0, v, half, &r0, &err));
-        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t1, v, half, &r1, &err));
-        gi_task_stats stats = {0};
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t0, v, max + 1, &r0, &err));
         char want[256];
+        snprintf(want, sizeof want,
+                 "task 0's result: frame 0, batch 0: detp animation result: vertex %u's red "
+                 "sum is %lld, beyond +-%lld",
+                 v, (long long)max + 1, (long long)max);
+        GI_CHECK_OK(gi_test_refuse(&jr, t0, &r0, want, &err));
+        gi_buf_free(&r0);
+        /* Frame 0's totals at INT64_MAX - 11 for vertex v: max, max - 10. */
+        t0 = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t0 && t0->id == 0);
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t0, v, max, &r0, &err));
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t1, v, max - 10, &r1, &err));
+        gi_task_stats stats = {0};
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
+        GI_CHECK_OK(gi_jobrun_complete(&jr, 0, 1, &r0, &stats)); /* its second run */
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, 1, &r1, &err));
+        GI_CHECK_OK(gi_jobrun_complete(&jr, 1, 0, &r1, &stats));
+        gi_buf_free(&r0);
+        gi_buf_free(&r1);
+        GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, 4, &err)); /* frame 0's tiles */
+        /* Frame 1's changes: +6 each, which only together overflow. */
+        const gi_task *t6 = gi_jobrun_lease(&jr), *t7 = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t6 && t7 && t6->id == 6 && t7->id == 7);
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t6, v, 6, &r0, &err));
+        GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t7, v, 6, &r1, &err));
+        long long before = (long long)(2 * max - 10);
         if (!at_merge) {
             /* Batch 0 merged first: batch 1's sum overflows its total. */
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
-            GI_CHECK_OK(gi_jobrun_complete(&jr, 0, 0, &r0, &stats));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, &r0, &err));
+            GI_CHECK_OK(gi_jobrun_complete(&jr, 6, 0, &r0, &stats));
             snprintf(want, sizeof want,
-                     "task 1's result: frame 0, batch 1: detp animation result: vertex %u's "
-                     "red sum overflows: %lld + %lld is out of range",
-                     v, (long long)half, (long long)half);
-            /* (The merge of task 0 may have moved the tasks: t1 is stale.) */
-            GI_CHECK_OK(gi_test_refuse(&jr, &gi_jobrun_task_at(&jr, 1)->task, &r1, want, &err));
-            GI_CHECK(jr.retries == 1);
+                     "task 7's result: frame 1, batch 1: detp animation result: vertex %u's "
+                     "red sum overflows: %lld + 6 is out of range",
+                     v, before + 6);
+            /* (The merge of task 6 may have moved the tasks: t7 is stale.) */
+            GI_CHECK_OK(gi_test_refuse(&jr, &gi_jobrun_task_at(&jr, 7)->task, &r1, want, &err));
+            GI_CHECK(jr.retries == 2);
             GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
             GI_CHECK_MSG(jr.finished && !jr.failed, "%s", jr.error.msg);
         } else {
             /* Batch 1 arrives first and waits for batch 0: each passes its
-             * check against the empty totals, their merges overflow. */
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 1, &r1, &err));
-            GI_CHECK_OK(gi_jobrun_complete(&jr, 1, 0, &r1, &stats));
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
-            GI_CHECK(gi_jobrun_complete(&jr, 0, 0, &r0, &stats) != 0);
+             * check against the frame's totals, their merges overflow. */
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 7, &r1, &err));
+            GI_CHECK_OK(gi_jobrun_complete(&jr, 7, 0, &r1, &stats));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, &r0, &err));
+            GI_CHECK(gi_jobrun_complete(&jr, 6, 0, &r0, &stats) != 0);
             snprintf(want, sizeof want,
-                     "detp task 1: frame 0, batch 1: detp animation result: vertex %u's "
-                     "red sum overflows: %lld + %lld is out of range",
-                     v, (long long)half, (long long)half);
+                     "detp task 7: frame 1, batch 1: detp animation result: vertex %u's "
+                     "red sum overflows: %lld + 6 is out of range",
+                     v, before + 6);
             GI_CHECK(jr.failed && jr.error.code == GI_EPROTO);
             GI_CHECK_MSG(strcmp(jr.error.msg, want) == 0, "%s", jr.error.msg);
         }
