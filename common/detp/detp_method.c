@@ -288,20 +288,30 @@ void detp_vertex_data_free(detp_vertex_data *v)
     memset(v, 0, sizeof *v);
 }
 
-/* The reflected radiance per vertex, as the tiles read it. */
-/* The frame's radiance for its tiles; the frame before's is dropped (its
- * tiles are all merged by now). */
-static void publish_radiance(gi_job *job, detp_state *st, const detp_vertex_data *v)
+/* The frame's reflected radiance per vertex for its tiles; the frame
+ * before's is dropped (its tiles are all merged by now). What the workers
+ * would refuse (detp_radiance_decode: a vertex's radiance beyond what the
+ * shader can interpolate) fails the job here, naming the vertex, instead of
+ * failing every tile on every attempt. */
+static int publish_radiance(gi_job *job, detp_state *st, const detp_vertex_data *v,
+                            gi_error *err)
 {
-    char before[GI_HASH_HEX];
+    char before[GI_HASH_HEX], hash[GI_HASH_HEX];
     memcpy(before, st->hash, sizeof before);
     gi_buf b;
     gi_buf_init(&b);
     gi_buf_put_f32s(&b, v->reflected, (size_t)st->nv * 3);
-    gi_job_publish(job, b.data, b.len, st->hash);
+    gi_hash_hex(b.data, b.len, hash);
+    float *checked = detp_radiance_decode(&b, hash, st->nv, err);
+    if (checked)
+        gi_job_publish(job, b.data, b.len, st->hash);
     gi_buf_free(&b);
+    if (!checked)
+        return gi_error_prefix(err, "%s", job->file);
+    free(checked);
     if (before[0] && strcmp(before, st->hash) != 0)
         gi_job_unpublish(job, before);
+    return 0;
 }
 
 static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)
@@ -437,8 +447,9 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
             static const char *const names[] = {"R", "G", "B"};
             gi_image_free(&st->img);
             rc = gi_image_init(&st->img, job->width, job->height, 3, names, err);
+            if (rc == 0)
+                rc = publish_radiance(job, st, &v, err);
             if (rc == 0) {
-                publish_radiance(job, st, &v);
                 plan_tiles(job, st, fq);
                 st->phase = DETP_PHASE_IMAGE;
                 st->wall_start = gi_now();
@@ -643,9 +654,9 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
         detp_vertex_data v;
         rc = detp_vertex_data_compute(job, st, &v, err);
         if (rc == 0) {
-            publish_radiance(job, st, &v);
+            rc = publish_radiance(job, st, &v, err);
             detp_vertex_data_free(&v);
-            if (strcmp(st->hash, hash) != 0)
+            if (rc == 0 && strcmp(st->hash, hash) != 0)
                 rc = gi_fail(err, GI_EPROTO, "%s: detp checkpoint does not match its radiance",
                              job->file);
         }

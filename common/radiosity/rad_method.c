@@ -444,7 +444,15 @@ static int publish(gi_job *job, rad_state *st, gi_error *err)
         gi_buf b;
         gi_buf_init(&b);
         gi_buf_put_f32s(&b, corner, 3 * n3);
-        gi_job_publish(job, b.data, b.len, st->blob[i]);
+        /* What the workers would refuse fails the job here, naming it. */
+        char hash[GI_HASH_HEX];
+        gi_hash_hex(b.data, b.len, hash);
+        float *checked = gi_rad_corners_decode(&b, hash, md->n, err);
+        if (checked)
+            gi_job_publish(job, b.data, b.len, st->blob[i]);
+        else
+            rc = gi_error_prefix(err, "%s: emission set %u", job->file, i);
+        free(checked);
         gi_buf_free(&b);
     }
     free(vv);

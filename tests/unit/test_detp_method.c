@@ -2,6 +2,7 @@
  * by an in-process worker, ordered merge, finish, outputs): every DETP
  * estimator gives the same bytes, a checkpoint taken anywhere resumes to
  * the same bytes, and batch results survive their encoding. */
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -530,4 +531,69 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         gi_job_free(&job);
     }
     free(path);
+}
+
+/* The batch result `in` (of a job with nv vertices) with vertex v's red
+ * energy set to red, into out. */
+static int set_red_energy(const gi_buf *in, uint32_t nv, uint32_t v, double red, gi_buf *out,
+                          gi_error *err)
+{
+    double *irr = gi_xcalloc((size_t)nv * 3, sizeof *irr);
+    uint64_t *hits = gi_xcalloc(nv, sizeof *hits);
+    uint32_t *hits32 = gi_xcalloc(nv, sizeof *hits32);
+    detp_batch_result h;
+    gi_reader r;
+    gi_reader_init(&r, in->data, in->len, "test result");
+    int rc = detp_decode_batch(&r, nv, &h, irr, hits, err);
+    if (rc == 0) {
+        irr[3 * (size_t)v] = red;
+        for (uint32_t i = 0; i < nv; i++)
+            hits32[i] = (uint32_t)hits[i];
+        gi_detp_accum acc = {.count = nv, .energy = irr, .hits = hits32};
+        gi_buf_init(out);
+        detp_encode_batch(&h, &acc, 1.0, out);
+    }
+    free(irr);
+    free(hits);
+    free(hits32);
+    return rc;
+}
+
+/* Batches whose energies are each finite (so each passes its check) but
+ * whose sum makes a vertex's radiance overflow a float: the coordinator
+ * does not publish what its workers would refuse, it fails the job naming
+ * the vertex (instead of every image tile failing on every attempt). */
+GI_TEST(test_detp_radiance_workers_would_refuse_fails_the_job)
+{
+    gi_error err;
+    char *path = write_job("overflow-radiance.json", "basic", "");
+    GI_REQUIRE(path != NULL);
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    GI_REQUIRE_OK(load(path, "out-overflow-radiance", &job, &ctx, &err));
+    free(path);
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    const uint32_t v = 7;
+    gi_task_stats stats = {0};
+    while (!jr.failed) { /* until the last batch's merge finishes the bake */
+        const gi_task *t = gi_jobrun_lease(&jr);
+        GI_REQUIRE(t != NULL && t->kind == DETP_TASK_BATCH);
+        uint64_t id = t->id;
+        gi_buf plain, res;
+        gi_buf_init(&plain);
+        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &plain, &err));
+        GI_REQUIRE_OK(set_red_energy(&plain, job.scene.vertex_count, v, FLT_MAX, &res, &err));
+        gi_buf_free(&plain);
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, id, &res, &err));
+        gi_jobrun_complete(&jr, id, 0, &res, &stats);
+        gi_buf_free(&res);
+    }
+    GI_CHECK(jr.failed && jr.error.code == GI_EPROTO);
+    GI_CHECK_MSG(strstr(jr.error.msg, "detp: published radiance ") &&
+                     strstr(jr.error.msg, ": vertex 7's value 0 is not finite (inf)"),
+                 "%s", jr.error.msg);
+    gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
 }
