@@ -10,7 +10,8 @@
  * untimed), and times, in this thread's CPU time, the check and the merge
  * (gi_jobrun_complete) of every result; the merge of the task that ends the
  * job (it runs the finish: the outputs) is left out. Prints one line: tasks,
- * result bytes a task, check and merge microseconds a task, check / merge. */
+ * result bytes a task, check and merge microseconds a task, check / merge;
+ * then the same for each kind of task the job has (a method's numbering). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -56,6 +57,11 @@ int main(int argc, char **argv)
         return fail(&err);
     double check_s = 0, merge_s = 0;
     size_t tasks = 0, bytes = 0;
+    enum { KINDS = 16 };
+    struct {
+        double check_s, merge_s;
+        size_t tasks, bytes;
+    } kind[KINDS] = {{0}};
     while (!gi_jobrun_done(&jr)) {
         const gi_task *t = gi_jobrun_lease(&jr);
         if (!t) {
@@ -63,13 +69,14 @@ int main(int argc, char **argv)
             return 1;
         }
         uint64_t id = t->id;
+        uint32_t k = t->kind < KINDS ? t->kind : KINDS - 1;
         gi_buf res;
         gi_buf_init(&res);
         if (gi_worker_run_task(&ctx, t, &res, &err))
             return fail(&err);
         size_t len = res.len;
         double t0 = cpu_now();
-        if (gi_jobrun_check_result(&jr, id, &res, &err))
+        if (gi_jobrun_check_result(&jr, id, t->attempt, &res, &err))
             return fail(&err);
         double t1 = cpu_now();
         gi_jobrun_complete(&jr, id, t->attempt, &res, &ctx.stats);
@@ -83,6 +90,10 @@ int main(int argc, char **argv)
         merge_s += t2 - t1;
         bytes += len;
         tasks++;
+        kind[k].check_s += t1 - t0;
+        kind[k].merge_s += t2 - t1;
+        kind[k].bytes += len;
+        kind[k].tasks++;
     }
     if (!tasks) {
         fprintf(stderr, "result_check: the job has one task; nothing to time\n");
@@ -92,6 +103,12 @@ int main(int argc, char **argv)
            "check/merge %.3f\n",
            job.method->name, tasks, (double)bytes / (double)tasks / 1024.0,
            1e6 * check_s / (double)tasks, 1e6 * merge_s / (double)tasks, check_s / merge_s);
+    for (int k = 0; k < KINDS; k++)
+        if (kind[k].tasks)
+            printf("  kind %d: %zu tasks, %.1f KB a result, check %.1f us, merge %.1f us a task\n",
+                   k, kind[k].tasks, (double)kind[k].bytes / (double)kind[k].tasks / 1024.0,
+                   1e6 * kind[k].check_s / (double)kind[k].tasks,
+                   1e6 * kind[k].merge_s / (double)kind[k].tasks);
     gi_jobrun_free(&jr);
     gi_worker_ctx_free(&ctx);
     gi_job_free(&job);

@@ -74,11 +74,20 @@ typedef struct gi_method {
     /* Optional: refuses a result as it arrives (a non-finite value from a
      * worker with bad memory, say), before it waits for its turn to merge:
      * the task then fails and runs again, elsewhere on a farm, instead of
-     * the value reaching the outputs or failing the job. */
+     * the value reaching the outputs or failing the job. decoded (NULL
+     * unless the method has merge_decoded): where the check may leave what
+     * it decoded, in a form of the method's own that merge_decoded adds
+     * without reading the worker's bytes again (checking decodes them
+     * anyway, on the coordinator's one loop); left empty, merge reads the
+     * result. The form is in-process only: never sent, never checkpointed. */
     int (*check_result)(const gi_job *job, const gi_task *task, const gi_buf *result,
-                        gi_error *err);
+                        gi_buf *decoded, gi_error *err);
     int (*merge)(gi_job *job, const gi_task *task, const gi_buf *result,
                  gi_task_queue *followups, gi_error *err);
+    /* Optional: merges what check_result left in decoded, exactly as merge
+     * would the result it came from (same outputs, same refusals). */
+    int (*merge_decoded)(gi_job *job, const gi_task *task, const gi_buf *decoded,
+                         gi_task_queue *followups, gi_error *err);
     int (*finish)(gi_job *job, gi_task_queue *followups, gi_error *err);
     /* Checkpoints: save writes job->state as it stands after the merges so
      * far (everything merge and finish need later, explicitly serialized);

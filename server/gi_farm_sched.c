@@ -783,7 +783,7 @@ void gi_farm_sched_result(gi_farm *f, gi_farm_conn *c, const gi_buf *payload)
         gi_buf_free(&r.data);
         return;
     }
-    if (gi_jobrun_check_result(&j->jr, l.task_id, &r.data, &err)) {
+    if (gi_jobrun_check_result(&j->jr, l.task_id, l.attempt, &r.data, &err)) {
         gi_buf_free(&r.data); /* a wrong answer: as if the worker had failed it */
         answer_failed(f, c, j, &l, &err);
         return;

@@ -244,6 +244,15 @@ static int finish_end(gi_jobrun *jr, gi_task_queue *q, int rc, gi_error *err, do
     return 1;
 }
 
+/* What a task holds to merge: after its merge, or, while it is leased,
+ * what a check decoded for a run that ended otherwise (or that a second
+ * result for the same run replaces). */
+static void drop_decoded(gi_jobrun_task *jt)
+{
+    gi_buf_free(&jt->result);
+    jt->decoded = 0;
+}
+
 /* Merges every result whose turn has come; calls finish when all is merged
  * (or starts it on its thread). */
 static int advance(gi_jobrun *jr)
@@ -258,9 +267,11 @@ static int advance(gi_jobrun *jr)
             gi_task_queue q;
             gi_task_queue_init(&q, jr->task_count);
             double t0 = gi_now();
-            int rc = job->method->merge(job, &jt->task, &jt->result, &q, &err);
+            const gi_method *m = job->method;
+            int rc = jt->decoded ? m->merge_decoded(job, &jt->task, &jt->result, &q, &err)
+                                 : m->merge(job, &jt->task, &jt->result, &q, &err);
             jr->merge_seconds += gi_now() - t0;
-            jr->merged_bytes += jt->result.len;
+            jr->merged_bytes += jt->result_len;
             if (rc == 0)
                 rc = absorb(jr, &q, &err);
             gi_task_queue_free(&q);
@@ -269,7 +280,7 @@ static int advance(gi_jobrun *jr)
                 return job_fail(jr, &err);
             jr->held--;
             jr->held_results_bytes -= jt->result.len;
-            gi_buf_free(&jt->result);
+            drop_decoded(jt);
             gi_task_free(&jt->task);
             free(jt->lost_on);
             jt->lost_on = NULL;
@@ -387,14 +398,20 @@ int gi_jobrun_finish_again(gi_jobrun *jr)
     return advance(jr);
 }
 
-int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
-                           gi_error *err)
+int gi_jobrun_check_result(gi_jobrun *jr, uint64_t task_id, uint32_t attempt,
+                           const gi_buf *result, gi_error *err)
 {
-    const gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
+    gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
     const gi_method *m = jr->job->method;
-    if (!jt || jt->state != GI_TASK_LEASED || !m->check_result ||
-        m->check_result(jr->job, &jt->task, result, err) == 0)
+    if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt || !m->check_result)
         return 0;
+    drop_decoded(jt);
+    if (m->check_result(jr->job, &jt->task, result, m->merge_decoded ? &jt->result : NULL,
+                        err) == 0) {
+        jt->decoded = jt->result.len > 0;
+        return 0;
+    }
+    drop_decoded(jt); /* whatever a refusing check left */
     return gi_error_prefix(err, "task %llu's result", (unsigned long long)task_id);
 }
 
@@ -409,7 +426,11 @@ int gi_jobrun_complete(gi_jobrun *jr, uint64_t task_id, uint32_t attempt, gi_buf
                  (unsigned long long)task_id, attempt);
         return 0;
     }
-    gi_buf_move(&jt->result, result);
+    jt->result_len = result->len;
+    if (jt->decoded)
+        gi_buf_free(result); /* its check kept what merges */
+    else
+        gi_buf_move(&jt->result, result);
     jt->state = GI_TASK_DONE;
     jr->leased--;
     jr->held++;
@@ -431,6 +452,7 @@ static gi_jobrun_task *end_run(gi_jobrun *jr, uint64_t task_id, uint32_t attempt
     gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
     if (!jt || jt->state != GI_TASK_LEASED || jt->task.attempt != attempt)
         return NULL;
+    drop_decoded(jt);
     jr->leased--;
     jt->task.attempt++;
     jt->state = GI_TASK_PENDING;
@@ -524,6 +546,7 @@ void gi_jobrun_requeue(gi_jobrun *jr, uint64_t task_id)
     gi_jobrun_task *jt = gi_jobrun_task_at(jr, task_id);
     if (!jt || jt->state != GI_TASK_LEASED)
         return;
+    drop_decoded(jt);
     jt->state = GI_TASK_PENDING;
     jr->leased--;
     pending_push(jr, task_id, 1);

@@ -25,7 +25,11 @@ typedef enum {
 typedef struct gi_jobrun_task {
     gi_task task; /* task.attempt numbers its runs: +1 on every failure or loss */
     gi_task_state state;
+    /* While leased: what a check decoded (decoded set), else empty; once
+     * done: what merges, the worker's result or what its check decoded. */
     gi_buf result;
+    int decoded;
+    size_t result_len; /* the worker's result's bytes (merged_bytes) */
     uint32_t failures; /* runs that failed (counted against max_attempts) */
     uint32_t losses;   /* runs lost with their host (against max_losses) */
     char *lost_on;     /* the hosts of those losses, ", "-separated (NULL: none) */
@@ -73,6 +77,8 @@ typedef struct gi_jobrun {
     gi_task_stats stats; /* summed over merged tasks */
     uint64_t retries;
     uint64_t losses; /* runs lost with their host and requeued (not retries) */
+    /* Results done, not merged yet: what they hold (a decoded form, when
+     * their check kept one). */
     uint64_t held_results_bytes, held_results_peak;
     /* Coordinator time in method->merge (with the bytes merged) and in
      * method->finish, for throughput figures. */
@@ -110,11 +116,15 @@ const gi_task *gi_jobrun_lease(gi_jobrun *jr);
  * caller can tell "nothing for you" (> 0) from "nothing at all" (0). */
 const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const gi_task *t),
                                   void *ctx, uint64_t *passed);
-/* The method's check of a result for a leased task (0 if it has none, or
- * the task is not leased: gi_jobrun_complete ignores such a result). On -1
- * the caller fails the task with err (gi_jobrun_fail). */
-int gi_jobrun_check_result(const gi_jobrun *jr, uint64_t task_id, const gi_buf *result,
-                           gi_error *err);
+/* The method's check of a result for run `attempt` of a leased task (0 if
+ * it has none, or that run is not the one leased: gi_jobrun_complete
+ * ignores such a result). On -1 the caller fails the task with err
+ * (gi_jobrun_fail). A method with merge_decoded may keep what its check
+ * decoded with the task, which the run's gi_jobrun_complete then merges
+ * instead of the result (so the caller gives it the same result); the run
+ * ending otherwise drops it. */
+int gi_jobrun_check_result(gi_jobrun *jr, uint64_t task_id, uint32_t attempt,
+                           const gi_buf *result, gi_error *err);
 /* A result for a leased task: taken over (result is left empty). Stale or
  * duplicate results are ignored. Returns -1 if the job failed (merge or
  * finish error): see jr->error. */

@@ -65,7 +65,7 @@ static void on_result(void *user, int child, gi_msg_result *r)
 {
     local_run *lr = user;
     gi_error e;
-    if (gi_jobrun_check_result(&lr->jr, r->task_id, &r->data, &e))
+    if (gi_jobrun_check_result(&lr->jr, r->task_id, r->attempt, &r->data, &e))
         gi_jobrun_fail(&lr->jr, r->task_id, r->attempt, &e);
     else
         gi_jobrun_complete(&lr->jr, r->task_id, r->attempt, &r->data, &r->stats);

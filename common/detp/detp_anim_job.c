@@ -22,6 +22,9 @@ typedef struct detp_anim_state {
     uint32_t frame;   /* the frame being computed */
     int64_t *sum;     /* 3 per vertex: exact sums in fixed-point units */
     int64_t *hits;    /* crossings per vertex */
+    /* No sum or hit count has a larger magnitude (detp_anim_decode): kept
+     * by the merges, reset from the totals when a checkpoint is loaded. */
+    uint64_t bound;
     detp_anim_result tot; /* this frame's batches, summed */
     gi_vec3 *base_pos, *base_nrm; /* the mobile as loaded: the PLY shows it posed */
     /* Segments from the mobile over all segments, in the first batch of
@@ -107,9 +110,9 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
 }
 
 /* Decodes a batch's result into h, checked against the frame's running
- * totals (detp_decode_anim) and, with apply, added into them. */
-static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *result, int apply,
-                         detp_anim_result *h, gi_error *err)
+ * totals (detp_anim_decode), its entries appended to entries (or NULL). */
+static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *result,
+                         detp_anim_result *h, gi_buf *entries, gi_error *err)
 {
     const detp_state *st = job->state;
     const detp_anim_state *a = st->anim;
@@ -131,7 +134,7 @@ static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *resu
     const gi_detp_params *p = job->params;
     uint64_t batches = (p->photon_count + (uint64_t)p->batch - 1) / (uint64_t)p->batch;
     int64_t max = INT64_MAX / (int64_t)(batches ? batches : 1);
-    if (detp_decode_anim(&r, st->nv, max, h, a->sum, a->hits, apply, err))
+    if (detp_anim_decode(&r, st->nv, max, h, a->sum, a->hits, a->bound, entries, err))
         return gi_error_prefix(err, "frame %u, batch %u", frame, batch);
     return 0;
 }
@@ -139,23 +142,56 @@ static int decode_result(const gi_job *job, const gi_task *t, const gi_buf *resu
 /* The totals it reads are written only by merges, which run on the thread
  * that checks, and by the frame's finish (on a thread of its own in
  * gi-farmd), which starts once all the frame's tasks are merged: none is
- * leased then, so none is checked. */
+ * leased then, so none is checked. decoded: the header, then the entries
+ * (detp_anim_entry; the header's size keeps them aligned). */
 int detp_anim_check(const gi_job *job, const gi_task *t, const gi_buf *result,
-                    gi_error *err)
+                    gi_buf *decoded, gi_error *err)
 {
     detp_anim_result h;
-    return decode_result(job, t, result, 0, &h, err);
+    if (!decoded)
+        return decode_result(job, t, result, &h, NULL, err);
+    _Static_assert(sizeof h % _Alignof(detp_anim_entry) == 0, "entries after the header");
+    gi_buf_reset(decoded);
+    gi_buf_grow(decoded, sizeof h);
+    if (decode_result(job, t, result, &h, decoded, err))
+        return -1;
+    memcpy(decoded->data, &h, sizeof h);
+    return 0;
 }
 
 int detp_anim_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_error *err)
 {
+    gi_buf d;
+    gi_buf_init(&d);
+    int rc = detp_anim_check(job, t, result, &d, err);
+    if (rc)
+        gi_error_prefix(err, "detp task %llu", (unsigned long long)t->id);
+    else
+        rc = detp_anim_merge_decoded(job, t, &d, err);
+    gi_buf_free(&d);
+    return rc;
+}
+
+int detp_anim_merge_decoded(gi_job *job, const gi_task *t, const gi_buf *decoded,
+                            gi_error *err)
+{
     detp_state *st = job->state;
     detp_anim_state *a = st->anim;
     detp_anim_result h;
+    if (decoded->len < sizeof h || (decoded->len - sizeof h) % sizeof(detp_anim_entry))
+        return gi_fail(err, GI_EINTERNAL, "detp task %llu: decoded result of %zu bytes",
+                       (unsigned long long)t->id, decoded->len);
+    memcpy(&h, decoded->data, sizeof h);
+    if (h.frame != a->frame) /* checked for this frame; merged before it ends */
+        return gi_fail(err, GI_EINTERNAL, "detp task %llu: result of frame %u at frame %u",
+                       (unsigned long long)t->id, h.frame, a->frame);
     /* Against the totals as they now stand: results merged since its
-     * arrival's check may have brought them close to the limit. */
-    if (decode_result(job, t, result, 1, &h, err))
-        return gi_error_prefix(err, "detp task %llu", (unsigned long long)t->id);
+     * check may have brought them close to the limit. */
+    const detp_anim_entry *e = (const detp_anim_entry *)(decoded->data + sizeof h);
+    if (detp_anim_add(e, (decoded->len - sizeof h) / sizeof *e, a->sum, a->hits, &a->bound,
+                      "detp animation result", err))
+        return gi_error_prefix(err, "detp task %llu: frame %u, batch %u",
+                               (unsigned long long)t->id, h.frame, h.batch);
     uint32_t frame = h.frame;
     detp_anim_result *s = &a->tot;
     s->photons += h.photons;
@@ -311,6 +347,7 @@ int detp_anim_load(gi_job *job, detp_state *st, gi_reader *in, uint32_t version,
         a->hits[i] = (int64_t)gi_get_u64(in);
     if (in->failed)
         return gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
+    a->bound = detp_anim_bound(a->sum, a->hits, st->nv);
     a->wall_frame = gi_now();
     return 0;
 }

@@ -371,7 +371,7 @@ static int write_earlier_frame(gi_job *job, detp_state *st, gi_error *err)
  * arrives: its run then fails and the task runs again, instead of the job
  * failing at merge. Image tiles also need finite pixels. */
 static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
-                             gi_error *err)
+                             gi_buf *decoded, gi_error *err)
 {
     const detp_state *st = job->state;
     gi_reader r;
@@ -390,7 +390,7 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
         return range_result(job, t, result, st->nref, 1, NULL, NULL, &seconds, &rays, err);
     case DETP_TASK_ANIM_BATCH:
     case DETP_TASK_ANIM_UPDATE:
-        return st->anim ? detp_anim_check(job, t, result, err) : 0;
+        return st->anim ? detp_anim_check(job, t, result, decoded, err) : 0;
     }
     if (t->kind != DETP_TASK_TILE && t->kind != DETP_TASK_ANIM_TILE)
         return 0;
@@ -422,6 +422,21 @@ static int detp_damage_result(const gi_job *job, const gi_task *t, gi_buf *resul
     float v = NAN;
     memcpy(result->data + 16, &v, 4);
     return 0;
+}
+
+/* What detp_check_result decoded: animation batches' entries. (A still's
+ * photon batches are merged from the worker's bytes: their results are
+ * mostly dense floats, cheap to read twice, and a decoded copy of them
+ * cost the check more than it saved the merge: see bench/BENCHMARKS.md.) */
+static int detp_merge_decoded(gi_job *job, const gi_task *t, const gi_buf *decoded,
+                              gi_task_queue *fq, gi_error *err)
+{
+    (void)fq;
+    const detp_state *st = job->state;
+    if ((t->kind == DETP_TASK_ANIM_BATCH || t->kind == DETP_TASK_ANIM_UPDATE) && st->anim)
+        return detp_anim_merge_decoded(job, t, decoded, err);
+    return gi_fail(err, GI_EINTERNAL, "detp task %llu: no decoded form for its kind %u",
+                   (unsigned long long)t->id, t->kind);
 }
 
 static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
@@ -686,6 +701,7 @@ const gi_method gi_method_detp = {
     .run = detp_run,
     .check_result = detp_check_result,
     .damage_result = detp_damage_result,
+    .merge_decoded = detp_merge_decoded,
     .merge = detp_merge,
     .finish = detp_finish,
     .save = detp_save,

@@ -113,6 +113,28 @@ void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64
  * it succeeds. */
 int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h, int64_t *sum,
                      int64_t *hits, int apply, gi_error *err);
+/* One vertex's entry of an animation batch's result, decoded: its red,
+ * green and blue sums, then its hit count. */
+typedef struct detp_anim_entry {
+    uint64_t vertex;
+    int64_t v[4];
+} detp_anim_entry;
+/* The reading half of detp_decode_anim (without apply), which also appends
+ * the result's entries to entries (NULL: not kept) for detp_anim_add: the
+ * coordinator's check reads a result once, its merge adds what it read.
+ * bound: no total's magnitude is above it (INT64_MAX: not known); a value
+ * that cannot take such a total out of range is not checked against its
+ * total, which then is not read (the same refusals, fewer cache misses). */
+int detp_anim_decode(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h,
+                     const int64_t *sum, const int64_t *hits, uint64_t bound, gi_buf *entries,
+                     gi_error *err);
+/* Adds n entries into the totals; if one would overflow, fails naming it
+ * (after `what`) and leaves the totals as they were. *bound (bound NULL:
+ * none kept) is raised to the largest magnitude of a total it wrote. */
+int detp_anim_add(const detp_anim_entry *e, size_t n, int64_t *sum, int64_t *hits,
+                  uint64_t *bound, const char *what, gi_error *err);
+/* The largest magnitude of the nv vertices' totals: their bound. */
+uint64_t detp_anim_bound(const int64_t *sum, const int64_t *hits, uint32_t nv);
 
 /* The vertex of reference sample j (of m, over n vertices): evenly spread. */
 static inline uint32_t detp_reference_vertex(uint32_t j, uint32_t m, uint32_t n)
@@ -175,13 +197,18 @@ int detp_anim_plan(gi_job *job, detp_state *st, gi_task_queue *q, gi_error *err)
  * would bring back down could refuse it wrongly; it runs again, and fails
  * the job only if refused on every attempt. Real sums stay many powers of
  * two below the limit: a vertex gets a small share of a job's photons, each
- * worth about 2^32 units.) */
+ * worth about 2^32 units.) decoded (or NULL): where it leaves the result
+ * decoded, for detp_anim_merge_decoded. */
 int detp_anim_check(const gi_job *job, const gi_task *t, const gi_buf *result,
-                    gi_error *err);
+                    gi_buf *decoded, gi_error *err);
 /* Adds a batch's result; a malformed one, or one whose sums overflow the
  * totals, fails the job (EPROTO: its message names the task, frame, batch,
  * vertex and why) and leaves the totals as they were. */
 int detp_anim_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_error *err);
+/* The same for what detp_anim_check left in decoded (it keeps the
+ * result's entries there, decoded: see detp_anim_decode). */
+int detp_anim_merge_decoded(gi_job *job, const gi_task *t, const gi_buf *decoded,
+                            gi_error *err);
 /* Before a frame's outputs: irr and hits from the exact sums, and the
  * coordinator's scene posed for the frame. */
 int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err);

@@ -23,7 +23,7 @@ static void put_varint(gi_buf *b, uint64_t v)
     gi_buf_put(b, tmp, n);
 }
 
-static uint64_t get_varint(gi_reader *r)
+static uint64_t get_varint_slow(gi_reader *r)
 {
     uint64_t v = 0;
     for (size_t k = 0; k < 10 && k < r->left && !r->failed; k++) {
@@ -36,6 +36,31 @@ static uint64_t get_varint(gi_reader *r)
         }
     }
     r->failed = 1; /* cut short, or more than 10 bytes: not a varint we wrote */
+    return 0;
+}
+
+/* Most values of a result fit a byte or two, and all but the last few
+ * varints have 10 bytes after them: those go without a check per byte. */
+static inline uint64_t get_varint(gi_reader *r)
+{
+    if (r->left < 10 || r->failed)
+        return get_varint_slow(r);
+    const uint8_t *p = r->p;
+    if (p[0] < 0x80) {
+        r->p++;
+        r->left--;
+        return p[0];
+    }
+    uint64_t v = p[0] & 0x7F;
+    for (size_t k = 1; k < 10; k++) {
+        v |= (uint64_t)(p[k] & 0x7F) << (7 * k);
+        if (p[k] < 0x80) {
+            r->p += k + 1;
+            r->left -= k + 1;
+            return v;
+        }
+    }
+    r->failed = 1;
     return 0;
 }
 
@@ -267,22 +292,15 @@ void detp_encode_anim(const detp_anim_result *h, const int64_t *sum, const int64
     }
 }
 
-/* Takes back, when an add fails, what it added: the entries before entry
- * k and entry k's channels before c, read again from `from` (where they
- * start). */
-static void anim_undo(gi_reader from, uint32_t k, int c, int64_t *sum, int64_t *hits)
-{
-    uint64_t i = 0;
-    for (uint32_t e = 0; e <= k; e++) {
-        i += get_varint(&from);
-        for (int ch = 0; ch < 4 && (e < k || ch < c); ch++)
-            *(ch < 3 ? &sum[3 * i + ch] : &hits[i]) -= unzigzag(get_varint(&from));
-    }
-}
+/* |v|, which for INT64_MIN only a uint64_t holds. */
+static uint64_t magnitude(int64_t v) { return v < 0 ? -(uint64_t)v : (uint64_t)v; }
 
-int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h, int64_t *sum,
-                     int64_t *hits, int apply, gi_error *err)
+int detp_anim_decode(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h,
+                     const int64_t *sum, const int64_t *hits, uint64_t bound, gi_buf *entries,
+                     gi_error *err)
 {
+    /* A value this small cannot take a total within the bound out of range. */
+    uint64_t safe = bound < (uint64_t)INT64_MAX ? (uint64_t)INT64_MAX - bound : 0;
     static const char *const what[4] = {"red sum", "green sum", "blue sum", "hit count"};
     if (detp_anim_header_get(r, h, 1))
         return gi_fail(err, GI_EPROTO, "%s: not a detp animation result", r->what);
@@ -290,50 +308,46 @@ int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h
     if (r->failed || count != nv || nnz > nv)
         return gi_fail(err, GI_EPROTO, "%s: %u vertices (expected %u), %u entries", r->what,
                        count, nv, nnz);
-    const gi_reader entries = *r;
-    int undo = sum && apply;
+    detp_anim_entry *out = NULL;
+    if (entries) {
+        /* An entry takes 5 bytes at least: a short result cannot make the
+         * coordinator reserve for nv. */
+        size_t most = r->left / 5 < nnz ? r->left / 5 : nnz;
+        gi_buf_reserve(entries, most * sizeof *out);
+    }
     uint64_t i = 0;
     for (uint32_t k = 0; k < nnz; k++) {
         uint64_t step = get_varint(r);
         i += step;
         int c = 0;
+        int64_t v[4];
         if (!r->failed && i < nv && (k == 0 || step > 0)) {
             for (; c < 4; c++) {
-                int64_t v = unzigzag(get_varint(r)), out;
+                v[c] = unzigzag(get_varint(r));
                 if (r->failed)
                     break;
-                if (v > max || v < -max) {
-                    gi_fail(err, GI_EPROTO, "%s: vertex %llu's %s is %lld, beyond +-%lld",
-                            r->what, (unsigned long long)i, what[c], (long long)v,
-                            (long long)max);
-                    if (undo)
-                        anim_undo(entries, k, c, sum, hits);
-                    return -1;
-                }
-                if (!sum)
-                    continue;
-                int64_t *total = c < 3 ? &sum[3 * i + c] : &hits[i];
-                if (__builtin_add_overflow(*total, v, &out)) {
-                    gi_fail(err, GI_EPROTO,
-                            "%s: vertex %llu's %s overflows: %lld + %lld is out of range",
-                            r->what, (unsigned long long)i, what[c], (long long)*total,
-                            (long long)v);
-                    if (undo)
-                        anim_undo(entries, k, c, sum, hits);
-                    return -1;
-                }
-                if (apply)
-                    *total = out;
+                if (v[c] > max || v[c] < -max)
+                    return gi_fail(err, GI_EPROTO, "%s: vertex %llu's %s is %lld, beyond +-%lld",
+                                   r->what, (unsigned long long)i, what[c], (long long)v[c],
+                                   (long long)max);
+                if (!sum || magnitude(v[c]) <= safe)
+                    continue; /* (the totals, cold in cache, are not read) */
+                int64_t total = c < 3 ? sum[3 * i + c] : hits[i], out_of_range;
+                if (__builtin_add_overflow(total, v[c], &out_of_range))
+                    return gi_fail(err, GI_EPROTO,
+                                   "%s: vertex %llu's %s overflows: %lld + %lld is out of range",
+                                   r->what, (unsigned long long)i, what[c], (long long)total,
+                                   (long long)v[c]);
             }
         }
-        if (c < 4) {
-            if (undo)
-                anim_undo(entries, k, c, sum, hits);
+        if (c < 4)
             return gi_fail(err, GI_EPROTO, "%s: bad entry %u", r->what, k);
+        if (entries) {
+            out = (detp_anim_entry *)gi_buf_grow(entries, sizeof *out);
+            out->vertex = i;
+            memcpy(out->v, v, sizeof v);
         }
     }
-    if (r->left && undo) /* trailing bytes, which gi_reader_finish refuses */
-        anim_undo(entries, nnz, 0, sum, hits);
     return gi_reader_finish(r, err);
 }
 
@@ -357,4 +371,65 @@ int detp_anim_damage(gi_buf *result)
     gi_buf_free(result);
     *result = out;
     return 0;
+}
+
+int detp_anim_add(const detp_anim_entry *e, size_t n, int64_t *sum, int64_t *hits,
+                  uint64_t *bound, const char *what, gi_error *err)
+{
+    uint64_t most = 0;
+    static const char *const names[4] = {"red sum", "green sum", "blue sum", "hit count"};
+    for (size_t k = 0; k < n; k++) {
+        int64_t *t[4] = {&sum[3 * e[k].vertex], &sum[3 * e[k].vertex + 1],
+                         &sum[3 * e[k].vertex + 2], &hits[e[k].vertex]};
+        for (int c = 0; c < 4; c++) {
+            int64_t out;
+            if (!__builtin_add_overflow(*t[c], e[k].v[c], &out)) {
+                *t[c] = out;
+                most = magnitude(out) > most ? magnitude(out) : most;
+                continue;
+            }
+            gi_fail(err, GI_EPROTO, "%s: vertex %llu's %s overflows: %lld + %lld is out of range",
+                    what, (unsigned long long)e[k].vertex, names[c], (long long)*t[c],
+                    (long long)e[k].v[c]);
+            /* Taken back: this entry's channels before c, the entries before it. */
+            while (c-- > 0)
+                *t[c] -= e[k].v[c];
+            while (k-- > 0) {
+                sum[3 * e[k].vertex] -= e[k].v[0];
+                sum[3 * e[k].vertex + 1] -= e[k].v[1];
+                sum[3 * e[k].vertex + 2] -= e[k].v[2];
+                hits[e[k].vertex] -= e[k].v[3];
+            }
+            return -1;
+        }
+    }
+    if (bound && most > *bound)
+        *bound = most;
+    return 0;
+}
+
+uint64_t detp_anim_bound(const int64_t *sum, const int64_t *hits, uint32_t nv)
+{
+    uint64_t most = 0;
+    for (size_t i = 0; i < (size_t)nv * 3; i++)
+        most = magnitude(sum[i]) > most ? magnitude(sum[i]) : most;
+    for (uint32_t i = 0; i < nv; i++)
+        most = magnitude(hits[i]) > most ? magnitude(hits[i]) : most;
+    return most;
+}
+
+int detp_decode_anim(gi_reader *r, uint32_t nv, int64_t max, detp_anim_result *h, int64_t *sum,
+                     int64_t *hits, int apply, gi_error *err)
+{
+    if (!apply || !sum)
+        return detp_anim_decode(r, nv, max, h, sum, hits, INT64_MAX, NULL, err);
+    gi_buf e;
+    gi_buf_init(&e);
+    const char *what = r->what;
+    int rc = detp_anim_decode(r, nv, max, h, sum, hits, INT64_MAX, &e, err);
+    if (rc == 0)
+        rc = detp_anim_add((const detp_anim_entry *)e.data, e.len / sizeof(detp_anim_entry),
+                           sum, hits, NULL, what, err);
+    gi_buf_free(&e);
+    return rc;
 }

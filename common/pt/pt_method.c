@@ -195,8 +195,9 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
 }
 
 static int pt_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
-                           gi_error *err)
+                           gi_buf *decoded, gi_error *err)
 {
+    (void)decoded; /* no merge_decoded */
     gi_pt_task tl;
     if (gi_pt_task_decode(job, t, &tl, err))
         return -1;

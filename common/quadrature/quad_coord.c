@@ -244,8 +244,9 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
  * its run then fails and the task runs again, instead of the job failing
  * at merge. */
 int gi_quad_check_result(const gi_job *job, const gi_task *task, const gi_buf *result,
-                         gi_error *err)
+                         gi_buf *decoded, gi_error *err)
 {
+    (void)decoded; /* no merge_decoded yet */
     const quad_state *st = job->state;
     gi_quad_result r;
     if (gi_quad_result_decode(result, &st->rule, &r, err))

@@ -61,7 +61,7 @@ int gi_quad_damage_result(const gi_job *job, const gi_task *task, gi_buf *result
 /* The coordinator side (quad_coord.c). */
 int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err);
 int gi_quad_check_result(const gi_job *job, const gi_task *task, const gi_buf *result,
-                         gi_error *err);
+                         gi_buf *decoded, gi_error *err);
 int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
                   gi_error *err);
 int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err);

@@ -583,8 +583,9 @@ static void ignore_hits(void *user, uint32_t e, uint32_t node, uint32_t hits)
  * instead of failing the whole job at merge (and merge never stops half way
  * through a block's rows). */
 static int rad_check_result(const gi_job *job, const gi_task *t, const gi_buf *result,
-                            gi_error *err)
+                            gi_buf *decoded, gi_error *err)
 {
+    (void)decoded; /* no merge_decoded */
     const gi_rad_params *p = job->params;
     const rad_state *st = job->state;
     if (t->kind == RAD_TASK_FF && st->counts) {

@@ -7,9 +7,9 @@
  * decode (NULL sums: the result's form alone) must agree with the real
  * decode into zeroed sums (each vertex comes once, so one result alone never
  * overflows them); against totals near the limits, the decode that only
- * reads them (the coordinator's check as a result arrives) must agree with
- * the one that adds, and an add that fails must leave the totals as they
- * were. */
+ * reads them (the coordinator's check as a result arrives), with or without
+ * a bound on them, must agree with the one that adds, and an add that fails
+ * must leave the totals as they were. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,6 +55,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             detp_decode_anim(&a, VERTICES, max, &h, near, near_hits, 0, &check_err);
         if (memcmp(kept, near, sizeof kept) || memcmp(kept_hits, near_hits, sizeof kept_hits))
             abort(); /* only read */
+        /* The coordinator's check reads the totals only for values that
+         * could take one beyond their bound out of range: the same answer,
+         * against these totals and against ones of a middling bound. */
+        int64_t mid[3 * VERTICES] = {0}, mid_hits[VERTICES] = {0};
+        for (size_t i = 0; i < 3 * VERTICES; i += 5)
+            mid[i] = i & 2 ? -((int64_t)1 << 62) - (int64_t)i : ((int64_t)1 << 62) + (int64_t)i;
+        mid_hits[3] = (int64_t)1 << 61;
+        for (int k = 0; k < 2; k++) {
+            int64_t *s = k ? mid : near, *hs = k ? mid_hits : near_hits;
+            gi_reader c, d;
+            gi_reader_init(&c, data + 1, size - 1, "fuzz");
+            d = c;
+            uint64_t bound = detp_anim_bound(s, hs, VERTICES);
+            if ((detp_anim_decode(&c, VERTICES, max, &h, s, hs, bound, NULL, &check_err) == 0) !=
+                (detp_anim_decode(&d, VERTICES, max, &h, s, hs, INT64_MAX, NULL, &check_err) == 0))
+                abort();
+        }
         int added = detp_decode_anim(&b, VERTICES, max, &h, near, near_hits, 1, &check_err);
         if ((only_read == 0) != (added == 0))
             abort();

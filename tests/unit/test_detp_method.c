@@ -319,6 +319,82 @@ GI_TEST(test_detp_animation_keeps_only_recent_published_radiance)
     gi_job_free(&job);
 }
 
+/* Runs the job at path into out dir `out`, its results checked as they
+ * arrive and merged from what the check decoded (checked), or merged as the
+ * worker sent them. */
+static int run_checked_or_not(const char *path, const char *out, int checked, gi_error *err)
+{
+    gi_job job;
+    gi_worker_ctx ctx;
+    gi_jobrun jr;
+    if (load(path, out, &job, &ctx, err))
+        return -1;
+    ctx.batch_dir = gi_path_join(job.out_dir, "batches");
+    int rc = gi_jobrun_start(&jr, &job, err);
+    if (rc == 0)
+        rc = checked ? gi_test_drive_checked(&jr, &ctx, 3, err)
+                     : gi_test_drive(&jr, &ctx, UINT64_MAX, err);
+    if (rc == 0 && !jr.finished)
+        rc = gi_fail(err, GI_EINTERNAL, "%s: not finished", out);
+    if (rc == 0)
+        gi_jobrun_free(&jr);
+    gi_worker_ctx_free(&ctx);
+    gi_job_free(&job);
+    return rc;
+}
+
+static int same_outputs(const char *a, const char *b, const char *name, gi_error *err)
+{
+    char *pa = gi_path_join(a, name), *pb = gi_path_join(b, name);
+    gi_buf x, y;
+    gi_buf_init(&x);
+    gi_buf_init(&y);
+    int rc = gi_read_file(pa, 1 << 28, &x, err) || gi_read_file(pb, 1 << 28, &y, err) ? -1 : 0;
+    if (rc == 0 && (x.len != y.len || memcmp(x.data, y.data, x.len) != 0))
+        rc = gi_fail(err, GI_EINTERNAL, "%s differs from %s", pa, pb);
+    gi_buf_free(&x);
+    gi_buf_free(&y);
+    free(pa);
+    free(pb);
+    return rc;
+}
+
+/* The coordinator merges a checked result from what its check decoded
+ * (gi_method.merge_decoded): a still's and an animation's outputs are
+ * bit-identical to those merged from the worker's bytes, results arriving
+ * out of order included. */
+GI_TEST(test_detp_outputs_are_the_same_merged_from_the_checks_decoding)
+{
+    gi_error err;
+    char *still = write_job("decoded-still.json", "impact_count", "");
+    char *anim = write_anim_job("decoded-anim.json", 3);
+    GI_REQUIRE(still && anim);
+    const char *out[2][2] = {{"out-decoded-still-raw", "out-decoded-still-checked"},
+                             {"out-decoded-anim-raw", "out-decoded-anim-checked"}};
+    for (int k = 0; k < 2; k++)
+        for (int checked = 0; checked < 2; checked++)
+            GI_CHECK_OK(run_checked_or_not(k ? anim : still, out[k][checked], checked, &err));
+    char *a[2], *b[2];
+    for (int k = 0; k < 2; k++) {
+        a[k] = gi_path_join(gi_test_tmpdir(), out[k][0]);
+        b[k] = gi_path_join(gi_test_tmpdir(), out[k][1]);
+    }
+    const char *still_files[] = {"img.exr", "v.ply", "v.bin"};
+    for (int i = 0; i < 3; i++)
+        GI_CHECK_OK(same_outputs(a[0], b[0], still_files[i], &err));
+    for (unsigned f = 0; f < 3; f++) {
+        char name[32];
+        snprintf(name, sizeof name, "a.%04u.exr", f);
+        GI_CHECK_OK(same_outputs(a[1], b[1], name, &err));
+    }
+    for (int k = 0; k < 2; k++) {
+        free(a[k]);
+        free(b[k]);
+    }
+    free(still);
+    free(anim);
+}
+
 /* Spoils the result of leased task t in the way `spoil` says and gives it
  * to jr as a worker's answer: it must be refused naming the task, and the
  * task retried, the job not failed. */
@@ -332,7 +408,7 @@ static int refuse_spoiled(gi_jobrun *jr, gi_worker_ctx *ctx, int spoil, const ch
     gi_buf res;
     gi_buf_init(&res);
     int rc = gi_worker_run_task(ctx, t, &res, err);
-    if (rc == 0 && gi_jobrun_check_result(jr, t->id, &res, err))
+    if (rc == 0 && gi_jobrun_check_result(jr, t->id, t->attempt, &res, err))
         rc = gi_error_prefix(err, "the result as sent");
     if (rc == 0 && res.len < 16)
         rc = gi_fail(err, GI_EINTERNAL, "a result of %zu bytes", res.len);
@@ -484,9 +560,9 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t0, v, max, &r0, &err));
         GI_REQUIRE_OK(run_with_red_sum(&ctx, &job, t1, v, max - 10, &r1, &err));
         gi_task_stats stats = {0};
-        GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, &r0, &err));
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, 0, 1, &r0, &err));
         GI_CHECK_OK(gi_jobrun_complete(&jr, 0, 1, &r0, &stats)); /* its second run */
-        GI_CHECK_OK(gi_jobrun_check_result(&jr, 1, &r1, &err));
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, 1, 0, &r1, &err));
         GI_CHECK_OK(gi_jobrun_complete(&jr, 1, 0, &r1, &stats));
         gi_buf_free(&r0);
         gi_buf_free(&r1);
@@ -499,7 +575,7 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         long long before = (long long)(2 * max - 10);
         if (!at_merge) {
             /* Batch 0 merged first: batch 1's sum overflows its total. */
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, &r0, &err));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, 0, &r0, &err));
             GI_CHECK_OK(gi_jobrun_complete(&jr, 6, 0, &r0, &stats));
             snprintf(want, sizeof want,
                      "task 7's result: frame 1, batch 1: detp animation result: vertex %u's "
@@ -513,9 +589,9 @@ GI_TEST(test_detp_animation_sums_overflowing_the_total_are_refused)
         } else {
             /* Batch 1 arrives first and waits for batch 0: each passes its
              * check against the frame's totals, their merges overflow. */
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 7, &r1, &err));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 7, 0, &r1, &err));
             GI_CHECK_OK(gi_jobrun_complete(&jr, 7, 0, &r1, &stats));
-            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, &r0, &err));
+            GI_CHECK_OK(gi_jobrun_check_result(&jr, 6, 0, &r0, &err));
             GI_CHECK(gi_jobrun_complete(&jr, 6, 0, &r0, &stats) != 0);
             snprintf(want, sizeof want,
                      "detp task 7: frame 1, batch 1: detp animation result: vertex %u's "
@@ -585,7 +661,7 @@ GI_TEST(test_detp_radiance_workers_would_refuse_fails_the_job)
         GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &plain, &err));
         GI_REQUIRE_OK(set_red_energy(&plain, job.scene.vertex_count, v, FLT_MAX, &res, &err));
         gi_buf_free(&plain);
-        GI_CHECK_OK(gi_jobrun_check_result(&jr, id, &res, &err));
+        GI_CHECK_OK(gi_jobrun_check_result(&jr, id, 0, &res, &err));
         gi_jobrun_complete(&jr, id, 0, &res, &stats);
         gi_buf_free(&res);
     }

@@ -25,12 +25,48 @@ int gi_test_drive(gi_jobrun *jr, gi_worker_ctx *ctx, uint64_t stop, gi_error *er
     return 0;
 }
 
+int gi_test_drive_checked(gi_jobrun *jr, gi_worker_ctx *ctx, unsigned ahead, gi_error *err)
+{
+    enum { MOST = 8 };
+    uint64_t id[MOST];
+    uint32_t at[MOST];
+    gi_buf res[MOST];
+    ahead = ahead < 1 ? 1 : ahead > MOST ? MOST : ahead;
+    while (!gi_jobrun_done(jr)) {
+        unsigned n = 0;
+        int rc = 0;
+        const gi_task *t;
+        while (n < ahead && (t = gi_jobrun_lease(jr))) {
+            id[n] = t->id;
+            at[n] = t->attempt;
+            gi_buf_init(&res[n]);
+            if (rc == 0)
+                rc = gi_worker_run_task(ctx, t, &res[n], err);
+            n++;
+        }
+        if (n == 0)
+            return gi_fail(err, GI_EINTERNAL, "nothing to lease before the job is done");
+        while (n-- > 0) {
+            if (rc == 0 && gi_jobrun_check_result(jr, id[n], at[n], &res[n], err))
+                rc = gi_error_prefix(err, "refused");
+            if (rc == 0)
+                gi_jobrun_complete(jr, id[n], at[n], &res[n], &ctx->stats);
+            gi_buf_free(&res[n]);
+        }
+        if (rc)
+            return rc;
+        if (jr->failed)
+            return gi_fail(err, jr->error.code, "%s", jr->error.msg);
+    }
+    return 0;
+}
+
 int gi_test_refuse(gi_jobrun *jr, const gi_task *t, const gi_buf *bad, const char *want,
                    gi_error *err)
 {
     uint64_t id = t->id;
     uint32_t attempt = t->attempt;
-    if (gi_jobrun_check_result(jr, id, bad, err) == 0)
+    if (gi_jobrun_check_result(jr, id, attempt, bad, err) == 0)
         return gi_fail(err, GI_EINTERNAL, "task %llu: a bad result was accepted",
                        (unsigned long long)id);
     gi_error why = *err;

@@ -378,6 +378,128 @@ GI_TEST(test_jobrun_losses_are_not_attempts)
     gi_job_free(&job);
 }
 
+/* A method whose check keeps what it decoded (gi_method.merge_decoded): the
+ * value and a tag saying it came from the check; NaN is refused. */
+static int decoded_merges, raw_merges;
+
+static int dec_check(const gi_job *job, const gi_task *t, const gi_buf *r, gi_buf *decoded,
+                     gi_error *err)
+{
+    double v;
+    if (r->len != sizeof v)
+        return gi_fail(err, GI_EPROTO, "%zu bytes", r->len);
+    memcpy(&v, r->data, sizeof v);
+    if (isnan(v))
+        return gi_fail(err, GI_EPROTO, "not a number");
+    gi_buf_put_u32(decoded, 0xDEC0DEDu);
+    gi_buf_put_f64(decoded, v);
+    return 0;
+}
+
+static int dec_merge(gi_job *job, const gi_task *t, const gi_buf *r, gi_task_queue *fq,
+                     gi_error *err)
+{
+    raw_merges++;
+    return fake_merge(job, t, r, fq, err);
+}
+
+static int dec_merge_decoded(gi_job *job, const gi_task *t, const gi_buf *d, gi_task_queue *fq,
+                             gi_error *err)
+{
+    if (d->len != 12 || gi_le_get_u32(d->data) != 0xDEC0DEDu)
+        return gi_fail(err, GI_EINTERNAL, "task %llu: not a decoded form",
+                       (unsigned long long)t->id);
+    decoded_merges++;
+    gi_buf v;
+    gi_buf_init(&v);
+    gi_buf_put(&v, d->data + 4, 8);
+    int rc = fake_merge(job, t, &v, fq, err);
+    gi_buf_free(&v);
+    return rc;
+}
+
+/* The value of task id as a worker's result, checked by jr for run `at`. */
+static int check_value(gi_jobrun *jr, uint64_t id, uint32_t at, double v, gi_error *err)
+{
+    gi_buf r;
+    gi_buf_init(&r);
+    gi_buf_put(&r, &v, sizeof v);
+    int rc = gi_jobrun_check_result(jr, id, at, &r, err);
+    gi_buf_free(&r);
+    return rc;
+}
+
+/* What a check decoded merges instead of the result, once, from the run it
+ * was checked for: a run that ends otherwise (failed, lost, requeued), a
+ * refusal, or a check of another run leaves nothing behind, and that run's
+ * result (checked or not) merges as if there had been no check before. The
+ * merged sum is bit-identical to the plain method's. */
+GI_TEST(test_jobrun_merges_what_the_check_decoded)
+{
+    fake_state ref;
+    double want = run_shuffled(0, &ref);
+    gi_method m = fake_method;
+    m.check_result = dec_check;
+    m.merge = dec_merge;
+    m.merge_decoded = dec_merge_decoded;
+    decoded_merges = raw_merges = 0;
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err, crash;
+    gi_fail(&crash, GI_ECRASH, "boom");
+    GI_REQUIRE_OK(start(&m, &job, &jr, &err));
+    const gi_task *t0 = gi_jobrun_lease(&jr), *t1 = gi_jobrun_lease(&jr);
+    GI_REQUIRE(t0 && t1 && t0->id == 0 && t1->id == 1);
+    /* Task 1 arrives first: checked, held in its decoded form. */
+    GI_CHECK_OK(check_value(&jr, 1, 0, task_value(1), &err));
+    const gi_jobrun_task *jt1 = gi_jobrun_task_at(&jr, 1);
+    GI_CHECK(jt1->decoded && jt1->result.len == 12);
+    complete(&jr, 1, 0);
+    GI_CHECK(jr.held == 1 && jr.held_results_bytes == 12 && decoded_merges == 0);
+    /* Task 0: a refusal keeps nothing; a check of a run not leased is not
+     * made; a good check, then the run fails: dropped. */
+    GI_CHECK(check_value(&jr, 0, 0, NAN, &err) == -1 && err.code == GI_EPROTO);
+    GI_CHECK_MSG(strcmp(err.msg, "task 0's result: not a number") == 0, "%s", err.msg);
+    GI_CHECK(!gi_jobrun_task_at(&jr, 0)->decoded && gi_jobrun_task_at(&jr, 0)->result.len == 0);
+    GI_CHECK_OK(check_value(&jr, 0, 7, NAN, &err));
+    GI_CHECK(!gi_jobrun_task_at(&jr, 0)->decoded);
+    GI_CHECK_OK(check_value(&jr, 0, 0, 1e300, &err));
+    GI_CHECK(gi_jobrun_task_at(&jr, 0)->decoded);
+    GI_CHECK(gi_jobrun_fail(&jr, 0, 0, &crash) == 0);
+    GI_CHECK(!gi_jobrun_task_at(&jr, 0)->decoded && gi_jobrun_task_at(&jr, 0)->result.len == 0);
+    /* Leased again: checked, then requeued, then lost: each drops it. */
+    GI_REQUIRE(gi_jobrun_lease(&jr)->attempt == 1);
+    GI_CHECK_OK(check_value(&jr, 0, 1, 1e300, &err));
+    gi_jobrun_requeue(&jr, 0);
+    GI_CHECK(!gi_jobrun_task_at(&jr, 0)->decoded);
+    GI_REQUIRE(gi_jobrun_lease(&jr)->attempt == 1);
+    GI_CHECK_OK(check_value(&jr, 0, 1, 1e300, &err));
+    GI_CHECK(gi_jobrun_lost(&jr, 0, 1, "h1", &crash) == 0);
+    GI_CHECK(!gi_jobrun_task_at(&jr, 0)->decoded);
+    /* The run leased now gives its result unchecked: the plain merge, then
+     * task 1's decoded form. */
+    GI_REQUIRE(gi_jobrun_lease(&jr)->attempt == 2);
+    complete(&jr, 0, 2);
+    GI_CHECK(jr.merge_next == 2 && raw_merges == 1 && decoded_merges == 1);
+    GI_CHECK(jr.held == 0 && jr.held_results_bytes == 0);
+    /* The rest, each checked first. */
+    const gi_task *t;
+    while (!gi_jobrun_done(&jr) && (t = gi_jobrun_lease(&jr))) {
+        uint64_t id = t->id;
+        uint32_t at = t->attempt;
+        GI_CHECK_OK(check_value(&jr, id, at, task_value(id), &err));
+        complete(&jr, id, at);
+    }
+    GI_CHECK_MSG(jr.finished, "%s", jr.error.msg);
+    GI_REQUIRE(jr.finished);
+    fake_state *st = job.state;
+    GI_CHECK(memcmp(&st->sum, &want, sizeof want) == 0 && st->merged == ref.merged);
+    GI_CHECK(raw_merges == 1 && decoded_merges == ref.merged - 1);
+    GI_CHECK(jr.merged_bytes == (uint64_t)ref.merged * sizeof(double));
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
 /* A task lost with its host max_losses times fails its job, naming it and
  * the hosts: it may be what takes them down. Losses of other tasks, and
  * its failures, do not add up to it. */

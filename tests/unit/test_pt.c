@@ -199,10 +199,10 @@ GI_TEST(test_pt_result_with_nan_is_refused)
     gi_buf_init(&res);
     for (int i = 0; i < 8 * 8 * 4; i++)
         gi_buf_put_f64(&res, 0.25);
-    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) == 0);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &res, &err) == 0);
     double nan = NAN;
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 1), &nan, 8); /* pixel (5, 3), green */
-    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) != 0);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &res, &err) != 0);
     GI_CHECK_MSG(strstr(err.msg, "task 0's result: pixel (5, 3) is not finite") != NULL, "%s",
                  err.msg);
     GI_CHECK(err.code == GI_EPROTO); /* a retry, not bad input */
@@ -229,17 +229,17 @@ GI_TEST(test_pt_result_out_of_range_is_refused)
     double v = -2.0 * FLT_MAX, v2 = 2.0 * FLT_MAX * FLT_MAX; /* the most 2 samples give */
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 2), &v, 8);     /* pixel (5, 3), blue */
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 3), &v2, 8);
-    GI_CHECK_MSG(gi_jobrun_check_result(&jr, t->id, &res, &err) == 0, "%s", err.msg);
+    GI_CHECK_MSG(gi_jobrun_check_result(&jr, t->id, t->attempt, &res, &err) == 0, "%s", err.msg);
     v = nextafter(v, -INFINITY);
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 2), &v, 8);
-    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) != 0);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &res, &err) != 0);
     GI_CHECK_MSG(strstr(err.msg, "task 0's result: pixel (5, 3)'s blue sum is -6.80565e+38, "
                                  "out of range for 2 samples") != NULL, "%s", err.msg);
     v = 0.25;
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 2), &v, 8);
     v2 = -1e-300; /* a sum of squares */
     memcpy(res.data + 8 * (4 * (3 * 8 + 5) + 3), &v2, 8);
-    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &res, &err) != 0);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &res, &err) != 0);
     GI_CHECK_MSG(strstr(err.msg, "pixel (5, 3)'s sum of squared luminances is -1e-300") != NULL,
                  "%s", err.msg);
     GI_CHECK(err.code == GI_EPROTO);

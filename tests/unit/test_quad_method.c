@@ -193,7 +193,7 @@ GI_TEST(test_quad_damaged_results_are_retried)
         gi_buf bad;
         gi_buf_init(&bad);
         GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &bad, &err));
-        GI_CHECK(gi_jobrun_check_result(&jr, t->id, &bad, &err) == 0);
+        GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &bad, &err) == 0);
         /* 13 eight-byte header values, then the delta: u32 count, u32 pixel. */
         GI_REQUIRE(bad.len > 112 && gi_le_get_u32(bad.data + 104) > 0);
         const char *want = "quadrature result";

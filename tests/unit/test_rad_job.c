@@ -180,7 +180,7 @@ GI_TEST(test_rad_job_malformed_form_factor_result_is_retried)
         gi_buf_init(&bad);
         GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &good, &err));
         GI_REQUIRE(good.len > 20);
-        GI_CHECK(gi_jobrun_check_result(&jr, t->id, &good, &err) == 0);
+        GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &good, &err) == 0);
         gi_buf_put(&bad, good.data, good.len);
         if (spoil == 0)
             bad.len -= 3;
@@ -204,7 +204,7 @@ GI_TEST(test_rad_job_malformed_form_factor_result_is_retried)
     gi_buf tile;
     gi_buf_init(&tile);
     GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &tile, &err));
-    GI_CHECK(gi_jobrun_check_result(&jr, t->id, &tile, &err) == 0);
+    GI_CHECK(gi_jobrun_check_result(&jr, t->id, t->attempt, &tile, &err) == 0);
     tile.len -= 12;
     char want[64];
     snprintf(want, sizeof want, "task %llu's result: tile result has", (unsigned long long)t->id);
