@@ -359,10 +359,10 @@ static int same_outputs(const char *a, const char *b, const char *name, gi_error
     return rc;
 }
 
-/* The coordinator merges a checked result from what its check decoded
- * (gi_method.merge_decoded): a still's and an animation's outputs are
+/* The coordinator merges a checked animation batch from what its check
+ * decoded (gi_method.merge_decoded): the animation's outputs are
  * bit-identical to those merged from the worker's bytes, results arriving
- * out of order included. */
+ * out of order included; so are a still's, whose checks keep nothing. */
 GI_TEST(test_detp_outputs_are_the_same_merged_from_the_checks_decoding)
 {
     gi_error err;
