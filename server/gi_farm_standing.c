@@ -165,12 +165,15 @@ void gi_farm_standing_load(gi_farm *f)
     gi_error err;
     loader l = {f, gi_now(), gi_farm_wallnow(), 0, 0};
     gi_standing_sink sink = {host_loaded, excl_loaded, &l};
-    if (gi_read_file(path, (size_t)64 << 20, &b, &err))
+    int rc = gi_read_file(path, (size_t)64 << 20, &b, &err) ? -1
+             : gi_standing_decode(b.data, b.len, path, &sink, &err);
+    if (rc && !l.hosts && !l.excl)
         gi_warn("the workers' standing was not restored: %s", err.msg);
-    else if (gi_standing_decode(b.data, b.len, path, &sink, &err))
-        gi_warn("the workers' standing was %s restored: %s", l.hosts || l.excl ? "partly" : "not",
-                err.msg);
-    gi_info("the workers' standing restored: %zu hosts, %zu exclusions", l.hosts, l.excl);
+    else if (rc)
+        gi_warn("the workers' standing was partly restored (%zu hosts, %zu exclusions): %s",
+                l.hosts, l.excl, err.msg);
+    else
+        gi_info("the workers' standing restored: %zu hosts, %zu exclusions", l.hosts, l.excl);
     gi_buf_free(&b);
     free(path);
 }
