@@ -71,6 +71,10 @@ typedef struct gi_fj_exclusion {
      * exists once it has): more since, and the job fails on a host that
      * works (gi_farm_sched.c, Blame). */
     uint64_t results_at_failure;
+    /* Monotonic: its latest failure of the job's tasks (-INFINITY: before
+     * a restart that did not know it). Only failures this recent count as
+     * the job failing elsewhere (gi_farm_sched.c, Blame). */
+    double last_failed;
     char last_error[256];
 } gi_fj_exclusion;
 
@@ -80,6 +84,7 @@ typedef struct gi_fj_suspect {
     uint64_t task_id;
     struct gi_farm_host *host;
     uint64_t results_at; /* host->results then: more since, its streak has ended */
+    double failed_at;    /* monotonic */
 } gi_fj_suspect;
 
 struct gi_farm_job {

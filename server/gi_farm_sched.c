@@ -70,6 +70,9 @@
  *     unless j's tasks also fail on another host that works (one that
  *     failed one of j's tasks and has returned a result, of any job,
  *     since; g counts): then j is flaky or broken, and the failure is j's.
+ *     Such a failure counts if it came no more than `blocklist_s` before
+ *     h's (or after): a job that failed once somewhere early in a long run
+ *     does not excuse a bad host's failures of it for the rest of the run.
  * A task that never returns a result (a job whose tasks crash everywhere)
  * leaves its failures unjudged: they are dropped when its job ends. So two
  * broken jobs at once, which fail on every host, blocklist no host (before,
@@ -191,6 +194,7 @@ gi_fj_exclusion *gi_farm_job_exclusion(gi_farm_job *j, gi_farm_host *h)
     memset(x, 0, sizeof *x);
     x->host = h;
     x->results_at_failure = h->results;
+    x->last_failed = -INFINITY;
     return x;
 }
 
@@ -549,13 +553,14 @@ static void host_block(gi_farm *f, gi_farm_host *h, uint32_t count, uint32_t bou
 
 /* h failed one more of j's tasks: excluded from j after a streak of them
  * (see the header: Exclusions). */
-static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_error *e)
+static void job_exclude(gi_farm *f, gi_farm_job *j, gi_farm_host *h, const gi_error *e,
+                        double now)
 {
     gi_fj_exclusion *x = gi_farm_job_exclusion(j, h);
     f->standing_dirty = 1;
     x->streak++;
+    x->last_failed = now;
     snprintf(x->last_error, sizeof x->last_error, "%.250s", e->msg);
-    double now = gi_now();
     if (x->streak < f->cfg.blocklist_failures || x->until > now)
         return;
     x->until = now + f->cfg.blocklist_s;
@@ -589,13 +594,15 @@ static void streak_add(gi_farm *f, gi_farm_host *h, uint64_t job, int disk, cons
                    "ran, or its disk's)", last);
 }
 
-/* Some host other than h has failed one of j's tasks and returned a result
- * (of any job) since: j's tasks fail on hosts that work. */
-static int job_fails_elsewhere(const gi_farm_job *j, const gi_farm_host *h)
+/* Some host other than s's has failed one of j's tasks within `window`
+ * seconds before s's failure, or since, and has returned a result (of any
+ * job) since its first: j's tasks fail on hosts that work. */
+static int job_fails_elsewhere(const gi_farm_job *j, const gi_fj_suspect *s, double window)
 {
     for (size_t i = 0; i < j->excl_count; i++) {
         const gi_fj_exclusion *x = &j->excl[i];
-        if (x->host != h && x->host->results > x->results_at_failure)
+        if (x->host != s->host && x->host->results > x->results_at_failure &&
+            x->last_failed >= s->failed_at - window)
             return 1;
     }
     return 0;
@@ -614,7 +621,7 @@ static void judge(gi_farm *f, gi_farm_job *j, uint64_t task_id, const gi_farm_ho
         j->suspects[i] = j->suspects[--j->suspect_count];
         if (s.host == g)
             continue; /* it failed there and then ran there: passing trouble */
-        if (job_fails_elsewhere(j, s.host)) {
+        if (job_fails_elsewhere(j, &s, f->cfg.blocklist_s)) {
             f->m.failures_job++;
             continue;
         }
@@ -627,13 +634,13 @@ static void judge(gi_farm *f, gi_farm_job *j, uint64_t task_id, const gi_farm_ho
     }
 }
 
-static void suspect_add(gi_farm_job *j, uint64_t task_id, gi_farm_host *h)
+static void suspect_add(gi_farm_job *j, uint64_t task_id, gi_farm_host *h, double now)
 {
     if (j->suspect_count == j->suspect_cap) {
         j->suspect_cap = j->suspect_cap ? 2 * j->suspect_cap : 8;
         j->suspects = gi_xrealloc(j->suspects, j->suspect_cap * sizeof *j->suspects);
     }
-    j->suspects[j->suspect_count++] = (gi_fj_suspect){task_id, h, h->results};
+    j->suspects[j->suspect_count++] = (gi_fj_suspect){task_id, h, h->results, now};
 }
 
 /* c's host failed task l of j (see the header: Blame, Exclusions). */
@@ -652,8 +659,9 @@ static void host_failure(gi_farm *f, gi_farm_conn *c, gi_farm_job *j, const gi_f
         streak_add(f, h, j->id, 1, e->msg);
         return;
     }
-    job_exclude(f, j, h, e);
-    suspect_add(j, l->task_id, h);
+    double now = gi_now();
+    job_exclude(f, j, h, e, now);
+    suspect_add(j, l->task_id, h, now);
 }
 
 /* c's host was lost with tasks held (see the header: Blocklisting). Leases

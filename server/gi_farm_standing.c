@@ -9,6 +9,7 @@
  * not kept: a restart judges them nobody's. A file that cannot be written
  * or read is a warning, never fatal: like a job's affinity file, it is a
  * hint, and a farm without it starts its workers afresh, as it did. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +86,8 @@ void gi_farm_standing_save(gi_farm *f)
             o->streak = x->streak;
             o->times = x->times;
             o->until = to_wall(x->until, now, wall);
+            /* Any monotonic time, even one before this boot, is a date. */
+            o->last_failed = isfinite(x->last_failed) ? wall + (x->last_failed - now) : 0;
             snprintf(o->last_error, sizeof o->last_error, "%s", x->last_error);
         }
     }
@@ -148,6 +151,7 @@ static void excl_loaded(void *ctx, const gi_standing_excl *s)
     x->streak = s->streak;
     x->times = s->times;
     x->until = to_mono(s->until, l->now, l->wall);
+    x->last_failed = s->last_failed > 0 ? l->now + (s->last_failed - l->wall) : -INFINITY;
     snprintf(x->last_error, sizeof x->last_error, "%.250s", s->last_error);
     l->excl++;
 }

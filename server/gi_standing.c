@@ -9,7 +9,7 @@
 #include "gi_journal.h"
 
 #define STANDING_MAGIC 0x54534947u /* "GIST" */
-#define STANDING_VERSION 1u
+#define STANDING_VERSION 2u
 
 void gi_standing_encode(const gi_standing_host *hosts, size_t host_count,
                         const gi_standing_excl *excl, size_t excl_count, gi_buf *out)
@@ -38,6 +38,7 @@ void gi_standing_encode(const gi_standing_host *hosts, size_t host_count,
         gi_buf_put_u32(out, x->streak);
         gi_buf_put_u32(out, x->times);
         gi_buf_put_f64(out, x->until);
+        gi_buf_put_f64(out, x->last_failed);
         gi_buf_put_str(out, x->last_error);
     }
 }
@@ -90,7 +91,7 @@ static int read_host(gi_reader *r, gi_standing_host *h)
     return wide <= 1 && time_ok(h->blocked_until) && h->streak_job <= GI_JOB_ID_MAX ? 0 : 1;
 }
 
-static int read_excl(gi_reader *r, gi_standing_excl *x)
+static int read_excl(gi_reader *r, uint32_t version, gi_standing_excl *x)
 {
     memset(x, 0, sizeof *x);
     x->job_id = gi_get_u64(r);
@@ -99,9 +100,12 @@ static int read_excl(gi_reader *r, gi_standing_excl *x)
     x->streak = gi_get_u32(r);
     x->times = gi_get_u32(r);
     x->until = gi_get_f64(r);
+    if (version >= 2)
+        x->last_failed = gi_get_f64(r);
     if (get_text(r, x->last_error, sizeof x->last_error, 0) || r->failed)
         return -1;
-    return x->job_id >= 1 && x->job_id <= GI_JOB_ID_MAX && time_ok(x->until) ? 0 : 1;
+    return x->job_id >= 1 && x->job_id <= GI_JOB_ID_MAX && time_ok(x->until) &&
+                   time_ok(x->last_failed) ? 0 : 1;
 }
 
 int gi_standing_decode(const void *data, size_t len, const char *what,
@@ -112,7 +116,10 @@ int gi_standing_decode(const void *data, size_t len, const char *what,
     uint32_t magic = gi_get_u32(&r), version = gi_get_u32(&r);
     uint64_t n = gi_get_u64(&r);
     /* A host takes 58 bytes at least: a count beyond that is damage. */
-    if (r.failed || magic != STANDING_MAGIC || version != STANDING_VERSION || n > r.left / 58)
+    if (!r.failed && magic == STANDING_MAGIC && version > STANDING_VERSION)
+        return gi_fail(err, GI_EPROTO, "%s: version %u, newer than this gi-farmd reads (%u)",
+                       what, version, STANDING_VERSION);
+    if (r.failed || magic != STANDING_MAGIC || version < 1 || n > r.left / 58)
         return gi_fail(err, GI_EPROTO, "%s: not a standing file", what);
     gi_standing_host h;
     for (uint64_t i = 0; i < n; i++) {
@@ -128,15 +135,16 @@ int gi_standing_decode(const void *data, size_t len, const char *what,
         sink->host(sink->ctx, &h);
     }
     n = gi_get_u64(&r);
-    /* An exclusion takes 33 bytes at least: a count beyond that is damage. */
-    if (!r.failed && n > r.left / 33) {
+    /* An exclusion takes 33 bytes at least (41 from version 2): a count
+     * beyond that is damage. */
+    if (!r.failed && n > r.left / (version >= 2 ? 41 : 33)) {
         gi_fail(err, GI_EPROTO, "%s: %llu exclusions in %zu bytes", what, (unsigned long long)n,
                 r.left);
         return 1;
     }
     gi_standing_excl x;
     for (uint64_t i = 0; i < n && !r.failed; i++) {
-        int rc = read_excl(&r, &x);
+        int rc = read_excl(&r, version, &x);
         if (rc < 0)
             break;
         if (rc > 0) {

@@ -5,12 +5,13 @@
  * Exclusions). Times are epoch seconds (a restarted process has another
  * monotonic clock); 0: none.
  *
- * Layout (little-endian): u32 "GIST", u32 version 1, u64 host count, then
+ * Layout (little-endian): u32 "GIST", u32 version 2, u64 host count, then
  * per host: string name, u64 failures, u64 own_failures, u32
  * consecutive_failures, u64 streak_job, u8 streak_wide, u64 losses, u32
  * consecutive_losses, f64 blocked_until, string last_error; u64 exclusion
  * count, then per exclusion: u64 job id, string host, u32 streak, u32
- * times, f64 until, string last_error. */
+ * times, f64 until, f64 last_failed (version 2), string last_error.
+ * Version 1 files are read (their exclusions' last_failed is 0). */
 #ifndef GI_STANDING_H
 #define GI_STANDING_H
 
@@ -36,7 +37,8 @@ typedef struct gi_standing_excl {
     uint64_t job_id;
     char host[GI_MSG_MAX_NAME + 1];
     uint32_t streak, times;
-    double until; /* epoch seconds; 0: never excluded */
+    double until;       /* epoch seconds; 0: never excluded */
+    double last_failed; /* epoch seconds of its latest failure; 0: unknown */
     char last_error[GI_STANDING_ERROR_MAX + 1];
 } gi_standing_excl;
 

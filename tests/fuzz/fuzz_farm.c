@@ -253,7 +253,8 @@ static int same_host(const gi_standing_host *a, const gi_standing_host *b)
 static int same_excl(const gi_standing_excl *a, const gi_standing_excl *b)
 {
     return a->job_id == b->job_id && !strcmp(a->host, b->host) && a->streak == b->streak &&
-           a->times == b->times && a->until == b->until && !strcmp(a->last_error, b->last_error);
+           a->times == b->times && a->until == b->until && a->last_failed == b->last_failed &&
+           !strcmp(a->last_error, b->last_error);
 }
 
 /* What the standing file gives (all, or what comes before its damage),

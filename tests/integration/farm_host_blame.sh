@@ -9,6 +9,10 @@
 #     /metrics say so.
 # (c) A worker excluded from a broken job A that then fails a task of a
 #     job B is not blocklisted.
+# (d) A job's failure on another host long ago (more than
+#     --blocklist-seconds before) does not excuse a bad host's failures of
+#     it: the bad host failing that job and another, whose tasks a healthy
+#     host then runs, is blocklisted.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -135,4 +139,40 @@ grep -q "job $b: task [0-3] (attempt 0) failed on x" "$LOG" ||
 "$GI" fetch "$b" --out "$TMP/out-b" >/dev/null || fail "fetch B"
 cmp "$TMP/ref-good/img.exr" "$TMP/out-b/img.exr" || fail "B's image differs"
 stop_farmd "$LOG"
+stop_workers
+
+# (d) Job C fails once on flaky (its task 0's first run), which then
+# returns results; more than the window later, bad fails C and D.
+LOG="$TMP/farmd-d.log"
+start_farmd "$TMP/state-d" "$LOG" -- --heartbeat 0.2 --lease 5 --dead 10 --blocklist-failures 2 \
+    --blocklist-seconds 4 --max-attempts 40
+start_worker "$TMP/flaky.log" env GI_FAULT_CRASH_TASK=0:0 GI_FAULT_SLOW_TASK='*' \
+    GI_FAULT_SLOW_S=0.5 -- --connect "$WADDR" --procs 1 --queue 0 --cache "$TMP/cd-flaky" \
+    --name flaky
+wait_workers 1
+c=$("$GI" submit "$TMP/broken.json" 2>/dev/null) || fail "submit C"
+wait_log "$LOG" "job $c: task 0 (attempt 0) failed on flaky"
+n=0
+until [ "$(jnum "$c" merged)" -ge 1 ]; do
+    n=$((n + 1))
+    [ $n -lt 300 ] || fail "(d): flaky returned no result of C"
+    sleep 0.05
+done
+sleep 4.5
+kill -TERM "$WORKER_PID"
+wait "$WORKER_PID" 2>/dev/null || true
+[ "$(jnum "$c" merged)" -lt 16 ] || fail "(d): C is done before the bad host came"
+start_worker "$TMP/bad-d.log" env "GI_FAULT_CRASH_TASK=*" -- --connect "$WADDR" --procs 1 \
+    --queue 0 --cache "$TMP/cd-bad" --name bad
+wait_log "$LOG" "job $c: worker bad excluded from it"
+d=$("$GI" submit "$TMP/good.json" 2>/dev/null) || fail "submit D"
+wait_log "$LOG" "job $d: worker bad excluded from it"
+start_worker "$TMP/healthy-d.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/cd-healthy" \
+    --name healthy
+wait_state "$c" done 60
+wait_state "$d" done 60
+wait_log "$LOG" "worker bad blocklisted for 4 s after [0-9]* task failures of its own"
+! grep -q "worker \(flaky\|healthy\) blocklisted" "$LOG" || fail "(d): a good host blocklisted"
+stop_farmd "$LOG"
+stop_workers
 echo ok
