@@ -2,6 +2,7 @@
  * File formats live in gi_exr.c and gi_png.c. */
 #include "gi_image.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,4 +76,20 @@ int gi_image_channel(const gi_image *img, const char *name)
         if (strcmp(img->names[i], name) == 0)
             return i;
     return -1;
+}
+
+int gi_image_check_finite(const gi_image *img, const char *what, gi_error *err)
+{
+    size_t n = (size_t)img->width * (size_t)img->height * (size_t)img->channels;
+    for (size_t i = 0; i < n; i++) {
+        if (isfinite(img->pixels[i]))
+            continue;
+        size_t px = i / (size_t)img->channels;
+        return gi_fail(err, GI_EINTERNAL,
+                       "%s: pixel (%zu, %zu)'s %s is %g: an image output is never written "
+                       "with a non-finite value",
+                       what, px % (size_t)img->width, px / (size_t)img->width,
+                       img->names[i % (size_t)img->channels], (double)img->pixels[i]);
+    }
+    return 0;
 }

@@ -42,6 +42,18 @@ void gi_image_free(gi_image *img);
 /* Index of the channel called `name`, or -1. */
 int gi_image_channel(const gi_image *img, const char *name);
 
+/* 0 if every value of img is finite; else fails (GI_EINTERNAL, prefixed
+ * with `what`, an output's path) naming the first pixel and channel that
+ * is not. A job's image outputs are checked with it before anything is
+ * written (gi_outputs.c, radiosity's images): they never hold Inf or NaN.
+ * The methods' checks keep non-finite values out of their sums and bound
+ * them so that none arises (e.g. quad_farm.h's gi_quad_pixel_delta_max),
+ * so one found here is a bug: the job fails naming the file (a frame's,
+ * for an animation) and the pixel, rather than write it clamped, or as
+ * Inf or NaN, which compositing would spread. (The writers themselves
+ * keep what they are given: gi_exr_write stores Inf and NaN as EXR can.) */
+int gi_image_check_finite(const gi_image *img, const char *what, gi_error *err);
+
 /* Pixel (x, y)'s first channel; the other channels follow it. */
 static inline float *gi_image_at(const gi_image *img, int x, int y)
 {

@@ -31,11 +31,14 @@ static gi_image_writer *writer_new(gi_job *job, const gi_image *img)
     return w;
 }
 
-/* Writes the EXR, then the PNG; stops at the first failure. */
+/* Writes the EXR, then the PNG; stops at the first failure. A non-finite
+ * pixel fails before either is started (gi_image_check_finite). */
 static void write_all(gi_image_writer *w)
 {
     w->rc = 0;
-    if (w->exr)
+    if (w->exr || w->png)
+        w->rc = gi_image_check_finite(w->img, w->exr ? w->exr : w->png, &w->err);
+    if (w->rc == 0 && w->exr)
         w->rc = gi_exr_write(w->exr, w->img, &w->err);
     if (w->rc == 0 && w->png)
         w->rc = gi_png_write(w->png, w->img, w->exposure, &w->err);

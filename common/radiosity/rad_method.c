@@ -731,7 +731,9 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
             char *path = output_path(job, st, kinds[k], i);
             if (!path)
                 continue;
-            int rc = k == 0 ? gi_exr_write(path, &st->images[i], err)
+            int rc = gi_image_check_finite(&st->images[i], path, err);
+            if (rc == 0)
+                rc = k == 0 ? gi_exr_write(path, &st->images[i], err)
                             : gi_png_write(path, &st->images[i], job->exposure, err);
             if (rc == 0)
                 gi_job_note_output(job, kinds[k], path);

@@ -1,4 +1,6 @@
 /* Unit tests: PLY and JSON outputs; image outputs written on a thread. */
+#include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -120,6 +122,51 @@ GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
     GI_CHECK(gi_image_writer_finish(&job, &w, NULL, &err) == 0); /* nothing left */
     for (int i = 0; i < job.written_count; i++)
         free(job.written[i]);
+}
+
+/* A non-finite pixel reaching a job's image outputs (the methods' checks
+ * should have made that impossible) fails the write before any file is
+ * made, naming the frame's file, the pixel and the channel; the EXR writer
+ * alone still keeps what it is given. */
+GI_TEST(test_image_outputs_refuse_a_non_finite_pixel)
+{
+    gi_error err;
+    static const char *const names[] = {"R", "G", "B"};
+    char dir[600];
+    snprintf(dir, sizeof dir, "%s/nonfinite", gi_test_tmpdir());
+    GI_REQUIRE_OK(gi_mkdirs(dir, &err));
+    gi_job job;
+    memset(&job, 0, sizeof job);
+    job.outputs[0] = (gi_output_spec){"exr", "f.exr"};
+    job.outputs[1] = (gi_output_spec){"png", "f.png"};
+    job.output_count = 2;
+    job.out_dir = dir;
+    job.in_frame = 1;
+    job.frame = 3;
+    const float bad[] = {INFINITY, -INFINITY, NAN};
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        gi_image img;
+        GI_REQUIRE_OK(gi_image_init(&img, 5, 4, 3, names, &err));
+        for (int i = 0; i < 5 * 4 * 3; i++)
+            img.pixels[i] = 1e38f;
+        gi_image_at(&img, 2, 3)[1] = bad[k];
+        char want[64];
+        snprintf(want, sizeof want, "pixel (2, 3)'s G is %g", (double)bad[k]);
+        GI_CHECK(gi_write_image_outputs(&job, &img, &err) == -1 && err.code == GI_EINTERNAL);
+        GI_CHECK_MSG(strstr(err.msg, "f.0003.exr: ") && strstr(err.msg, want), "%s", err.msg);
+        gi_image_writer *w = gi_image_writer_start(&job, &img);
+        GI_CHECK(gi_image_writer_finish(&job, &w, NULL, &err) == -1);
+        GI_CHECK_MSG(strstr(err.msg, want) != NULL, "%s", err.msg);
+        gi_image_free(&img);
+    }
+    GI_CHECK(job.written_count == 0);
+    DIR *d = opendir(dir);
+    GI_REQUIRE(d != NULL);
+    int files = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        files += e->d_name[0] != '.';
+    closedir(d);
+    GI_CHECK_MSG(files == 0, "%d files written", files);
 }
 
 /* An animation's output names: the frame before the extension, padded to
