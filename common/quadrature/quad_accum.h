@@ -43,12 +43,13 @@ double gi_quad_accum_take_l1(gi_quad_accum *a);
 void gi_quad_accum_emit(gi_quad_accum *a, gi_buf *out);
 
 /* A serialized delta fits a width x height image: a pixel count the bytes
- * hold, indices in range and increasing, finite values (delta unmoved). */
+ * hold, indices in range and increasing, finite values of magnitude at most
+ * bound (delta unmoved). */
 int gi_quad_accum_check(const gi_reader *delta, int width, int height, int channels,
-                        gi_error *err);
+                        double bound, gi_error *err);
 /* Adds a serialized delta to a dense image of width * height * channels
- * (coordinator side) after gi_quad_accum_check. */
-int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double *image,
-                        gi_error *err);
+ * (coordinator side) after gi_quad_accum_check with the same bound. */
+int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double bound,
+                        double *image, gi_error *err);
 
 #endif

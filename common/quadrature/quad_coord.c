@@ -240,48 +240,121 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
     return added;
 }
 
+/* What a check decoded (gi_method.h, check_result's decoded): this head,
+ * then the delta's pixels as the worker sent them (count x (u32 index, C
+ * f64), checked), then the open regions' summaries, decoded, at a multiple
+ * of 8 bytes. One buffer, offsets and no pointers: gi_jobrun owns and
+ * frees it as any gi_buf, and may move it. */
+typedef struct quad_decoded {
+    uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
+    double closed_err;
+    double dtotal[GI_QUAD_CHANNELS];
+    double mc_total[GI_QUAD_CHANNELS];
+    uint32_t pixels, open_count;
+} quad_decoded;
+
+#define DELTA_PIXEL_BYTES (4 + 8 * GI_QUAD_CHANNELS)
+
+/* Where the open summaries of a decoded result of that many pixels start. */
+static size_t open_at(uint32_t pixels)
+{
+    return (sizeof(quad_decoded) + (size_t)pixels * DELTA_PIXEL_BYTES + 7) & ~(size_t)7;
+}
+
+/* Decodes and checks a result (task's bound on its delta) into out (reset
+ * first): what the merge adds, without the worker's bytes. The summaries
+ * are decoded straight into out, the delta's bytes copied as they are. */
+static int quad_decode(const gi_job *job, const gi_task *task, const gi_buf *result,
+                       gi_buf *out, gi_error *err)
+{
+    const quad_state *st = job->state;
+    gi_quad_result r;
+    gi_reader rest;
+    if (gi_quad_result_decode_head(result, &st->rule, &r, &rest, err) ||
+        gi_quad_accum_check(&r.delta, job->width, job->height, GI_QUAD_CHANNELS,
+                            gi_quad_pixel_delta_max(task->id), err))
+        return -1;
+    uint32_t pixels = gi_get_u32(&r.delta); /* checked: the bytes hold them */
+    quad_decoded h = {.evals = r.evals, .reevals = r.reevals, .splits = r.splits,
+                      .closed = r.closed, .mc_samples = r.mc_samples,
+                      .nonfinite = r.nonfinite, .closed_err = r.closed_err,
+                      .pixels = pixels, .open_count = r.open_count};
+    memcpy(h.dtotal, r.dtotal, sizeof h.dtotal);
+    memcpy(h.mc_total, r.mc_total, sizeof h.mc_total);
+    gi_buf_reset(out);
+    uint8_t *d = gi_buf_grow(out, open_at(pixels) + (size_t)r.open_count * sizeof *r.open);
+    memcpy(d, &h, sizeof h);
+    memcpy(d + sizeof h, r.delta.p, (size_t)pixels * DELTA_PIXEL_BYTES);
+    return gi_quad_result_decode_open(&rest, &st->rule, r.open_count,
+                                      (gi_quad_summary *)(d + open_at(pixels)), err);
+}
+
 /* Whatever gi_quad_merge would refuse is refused as the result arrives:
  * its run then fails and the task runs again, instead of the job failing
- * at merge. */
+ * at merge. What it decoded goes to decoded, for gi_quad_merge_decoded. */
 int gi_quad_check_result(const gi_job *job, const gi_task *task, const gi_buf *result,
                          gi_buf *decoded, gi_error *err)
 {
-    (void)decoded; /* no merge_decoded yet */
-    const quad_state *st = job->state;
-    gi_quad_result r;
-    if (gi_quad_result_decode(result, &st->rule, &r, err))
-        return -1;
-    int rc = gi_quad_accum_check(&r.delta, job->width, job->height, GI_QUAD_CHANNELS, err);
-    gi_quad_result_free(&r);
+    gi_buf scratch;
+    gi_buf_init(&scratch);
+    int rc = quad_decode(job, task, result, decoded ? decoded : &scratch, err);
+    gi_buf_free(&scratch);
+    if (rc && decoded)
+        gi_buf_free(decoded);
     return rc;
 }
 
 int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
                   gi_error *err)
 {
+    gi_buf d;
+    gi_buf_init(&d);
+    int rc = quad_decode(job, task, result, &d, err);
+    if (rc)
+        rc = gi_error_prefix(err, "task %llu", (unsigned long long)task->id);
+    else
+        rc = gi_quad_merge_decoded(job, task, &d, fq, err);
+    gi_buf_free(&d);
+    return rc;
+}
+
+/* Nothing in a decoded result is refused once its size is right (its check
+ * refused what the merge would), so nothing added is ever taken back. */
+int gi_quad_merge_decoded(gi_job *job, const gi_task *task, const gi_buf *decoded,
+                          gi_task_queue *fq, gi_error *err)
+{
+    (void)fq;
     quad_state *st = job->state;
-    gi_quad_result r;
-    if (gi_quad_result_decode(result, &st->rule, &r, err))
-        return gi_error_prefix(err, "task %llu", (unsigned long long)task->id);
-    if (gi_quad_accum_apply(&r.delta, job->width, job->height, GI_QUAD_CHANNELS, st->image,
-                            err)) {
-        gi_quad_result_free(&r);
-        return gi_error_prefix(err, "task %llu", (unsigned long long)task->id);
+    quad_decoded h;
+    if (decoded->len < sizeof h)
+        return gi_fail(err, GI_EINTERNAL, "quadrature task %llu: no decoded result",
+                       (unsigned long long)task->id);
+    memcpy(&h, decoded->data, sizeof h);
+    if (decoded->len != open_at(h.pixels) + (size_t)h.open_count * sizeof(gi_quad_summary))
+        return gi_fail(err, GI_EINTERNAL, "quadrature task %llu: decoded result of %zu bytes",
+                       (unsigned long long)task->id, decoded->len);
+    gi_reader delta;
+    gi_reader_init(&delta, decoded->data + sizeof h, (size_t)h.pixels * DELTA_PIXEL_BYTES,
+                   "quadrature result");
+    for (uint32_t i = 0; i < h.pixels; i++) {
+        double *dst = st->image + (size_t)gi_get_u32(&delta) * GI_QUAD_CHANNELS;
+        for (int c = 0; c < GI_QUAD_CHANNELS; c++)
+            dst[c] += gi_get_f64(&delta);
     }
-    st->evals += r.evals;
-    st->reevals += r.reevals;
-    st->splits += r.splits;
-    st->closed += r.closed;
-    st->mc_samples += r.mc_samples;
-    st->nonfinite += r.nonfinite;
-    st->closed_err += r.closed_err;
+    st->evals += h.evals;
+    st->reevals += h.reevals;
+    st->splits += h.splits;
+    st->closed += h.closed;
+    st->mc_samples += h.mc_samples;
+    st->nonfinite += h.nonfinite;
+    st->closed_err += h.closed_err;
     for (int c = 0; c < GI_QUAD_CHANNELS; c++) {
-        st->total[c] += r.dtotal[c];
-        st->mc_total[c] += r.mc_total[c];
+        st->total[c] += h.dtotal[c];
+        st->mc_total[c] += h.mc_total[c];
     }
-    for (uint32_t i = 0; i < r.open_count; i++)
-        add_leaf(st, &r.open[i]);
-    gi_quad_result_free(&r);
+    const gi_quad_summary *open = (const gi_quad_summary *)(decoded->data + open_at(h.pixels));
+    for (uint32_t i = 0; i < h.open_count; i++)
+        add_leaf(st, &open[i]);
     return 0;
 }
 

@@ -15,6 +15,8 @@
 #ifndef GI_QUAD_FARM_H
 #define GI_QUAD_FARM_H
 
+#include <float.h>
+
 #include "gi_method.h"
 #include "gi_task.h"
 #include "quad_region.h"
@@ -50,10 +52,36 @@ int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task
                         gi_error *err);
 void gi_quad_task_in_free(gi_quad_task_in *t);
 
+/* The most a value of task `id`'s image delta may be in magnitude. The
+ * coordinator's image is the sum of the deltas of every task merged (in
+ * f64, never divided), and it is written as floats (EXR FLOAT, the PNG from
+ * the same floats): a pixel beyond FLT_MAX would be written as Inf. Task
+ * ids are unique within a job, so with FLT_MAX / (2 (i + 1) (i + 2)) for
+ * task i the deltas of all tasks, however many rounds plan, add up to at
+ * most FLT_MAX / 2 in magnitude (sum over i >= 0 of 1 / ((i + 1) (i + 2))
+ * is 1), and the f64 rounding of fewer than 2^51 additions (70 years of
+ * tasks at one a microsecond), each at most 2^-53 of a sum below FLT_MAX,
+ * adds less than FLT_MAX / 4: no set of
+ * results a check accepts can make a pixel non-finite. Early tasks (round
+ * 0's, which put the image in) may carry up to 1.7e38; task 10,000 up to
+ * 1.7e30, task 1,000,000 1.7e26: far above what a scene's radiance (its
+ * emission at most 1e30) puts in a late task's corrections. */
+static inline double gi_quad_pixel_delta_max(uint64_t id)
+{
+    return FLT_MAX / (2.0 * ((double)id + 1.0) * ((double)id + 2.0));
+}
+
 /* Results: the fixed fields and open summaries are checked; the delta is
  * left for gi_quad_accum_apply. */
 int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
                           gi_error *err);
+/* The same in two steps, for a caller that puts the open summaries where
+ * it likes: the fixed fields and counts (out->open left NULL; rest at the
+ * summaries), then the count summaries into open and the end checked. */
+int gi_quad_result_decode_head(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
+                               gi_reader *rest, gi_error *err);
+int gi_quad_result_decode_open(gi_reader *rest, const gi_quad_rule *rule, uint32_t count,
+                               gi_quad_summary *open, gi_error *err);
 void gi_quad_result_free(gi_quad_result *r);
 int gi_quad_damage_result(const gi_job *job, const gi_task *task, gi_buf *result,
                           gi_damage how);
@@ -64,6 +92,8 @@ int gi_quad_check_result(const gi_job *job, const gi_task *task, const gi_buf *r
                          gi_buf *decoded, gi_error *err);
 int gi_quad_merge(gi_job *job, const gi_task *task, const gi_buf *result, gi_task_queue *fq,
                   gi_error *err);
+int gi_quad_merge_decoded(gi_job *job, const gi_task *task, const gi_buf *decoded,
+                          gi_task_queue *fq, gi_error *err);
 int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err);
 int gi_quad_can_finish_again(const gi_job *job);
 void gi_quad_progress(const gi_job *job, gi_job_progress *out);

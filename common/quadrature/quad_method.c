@@ -25,6 +25,7 @@ const gi_method gi_method_quadrature = {
     .check_result = gi_quad_check_result,
     .damage_result = gi_quad_damage_result,
     .merge = gi_quad_merge,
+    .merge_decoded = gi_quad_merge_decoded,
     .finish = gi_quad_finish,
     .save = gi_quad_save,
     .load = gi_quad_load,

@@ -88,8 +88,8 @@ void gi_quad_result_free(gi_quad_result *r)
     r->open = NULL;
 }
 
-int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
-                          gi_error *err)
+int gi_quad_result_decode_head(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
+                               gi_reader *rest, gi_error *err)
 {
     memset(out, 0, sizeof *out);
     gi_reader r;
@@ -128,16 +128,30 @@ int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_res
     out->open_count = gi_get_u32(&r);
     if (r.failed || (uint64_t)out->open_count * gi_quad_summary_bytes(rule) > r.left)
         return gi_fail(err, GI_EPROTO, "quadrature result: bad region count");
+    *rest = r;
+    return 0;
+}
+
+int gi_quad_result_decode_open(gi_reader *rest, const gi_quad_rule *rule, uint32_t count,
+                               gi_quad_summary *open, gi_error *err)
+{
+    for (uint32_t i = 0; i < count; i++)
+        if (gi_quad_summary_get(rest, rule, &open[i], err))
+            return -1;
+    return gi_reader_finish(rest, err);
+}
+
+int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
+                          gi_error *err)
+{
+    gi_reader rest;
+    if (gi_quad_result_decode_head(b, rule, out, &rest, err))
+        return -1;
     out->open = gi_try_calloc(out->open_count ? out->open_count : 1, sizeof *out->open, err,
                               "quadrature result regions");
     if (!out->open)
         return -1;
-    for (uint32_t i = 0; i < out->open_count; i++)
-        if (gi_quad_summary_get(&r, rule, &out->open[i], err)) {
-            gi_quad_result_free(out);
-            return -1;
-        }
-    if (gi_reader_finish(&r, err)) {
+    if (gi_quad_result_decode_open(&rest, rule, out->open_count, out->open, err)) {
         gi_quad_result_free(out);
         return -1;
     }
@@ -364,16 +378,25 @@ int gi_quad_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_erro
     return rc;
 }
 
-/* Tests only (gi_method.h): the red estimate change, after six u64 counts
- * and the closed error, is summed into the job's total. */
+/* Tests only (gi_method.h). A NaN: the red estimate change, after six u64
+ * counts and the closed error (13 eight-byte values in all). Huge: the
+ * first pixel's red value of the image delta (after its u32 count and u32
+ * index), 1e100: finite in f64 and far within GI_RESULT_SUM_MAX, but beyond
+ * FLT_MAX, the float the image is written in; a result without pixels gets
+ * 1e300 as its red estimate change instead. */
 int gi_quad_damage_result(const gi_job *job, const gi_task *task, gi_buf *result,
                           gi_damage how)
 {
     (void)job;
     (void)task;
-    if (result->len < 64)
+    if (result->len < 108)
         return 1;
     double v = how == GI_DAMAGE_NAN ? NAN : 1e300;
-    memcpy(result->data + 56, &v, 8);
+    size_t at = 56;
+    if (how == GI_DAMAGE_HUGE && gi_le_get_u32(result->data + 104) > 0 && result->len >= 120) {
+        v = 1e100;
+        at = 112;
+    }
+    memcpy(result->data + at, &v, 8);
     return 0;
 }

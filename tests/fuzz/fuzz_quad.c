@@ -1,5 +1,6 @@
 /* fuzz_quad: libFuzzer target for the quadrature method's decoders: task
- * payloads, worker results (with the image delta), and checkpoints. The
+ * payloads, worker results (with the image delta; the coordinator's check
+ * and the merge of what it decoded), and checkpoints. The
  * first byte picks the decoder and the rule; the rest is the input. Any
  * input must decode or fail with a message; a task that decodes must encode
  * back to the same bytes. */
@@ -52,9 +53,34 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         gi_quad_result r;
         if (gi_quad_result_decode(&b, &rule, &r, &err) == 0) {
             double img[6 * 5 * 3] = {0};
-            gi_quad_accum_apply(&r.delta, 6, 5, 3, img, &err);
+            gi_quad_accum_apply(&r.delta, 6, 5, 3, gi_quad_pixel_delta_max(n), img, &err);
             gi_quad_result_free(&r);
         }
+        /* The coordinator's check, and the merge of what it decoded: a
+         * result the check accepts merges (task id from the length). */
+        gi_job job;
+        memset(&job, 0, sizeof job);
+        job.method = &gi_method_quadrature;
+        job.width = 6;
+        job.height = 5;
+        p.initial[0] = p.initial[1] = p.initial_path = 1;
+        job.params = gi_xcalloc(1, sizeof p);
+        memcpy(job.params, &p, sizeof p);
+        gi_task_queue q;
+        gi_task_queue_init(&q, 16);
+        gi_task t;
+        memset(&t, 0, sizeof t);
+        t.id = n % 7;
+        gi_buf dec;
+        gi_buf_init(&dec);
+        if (gi_quad_plan(&job, &q, &err))
+            abort();
+        if (gi_quad_check_result(&job, &t, &b, &dec, &err) == 0 &&
+            gi_quad_merge_decoded(&job, &t, &dec, &q, &err) != 0)
+            abort();
+        gi_buf_free(&dec);
+        gi_task_queue_free(&q);
+        gi_quad_release(&job);
         gi_buf_free(&b);
         break;
     }

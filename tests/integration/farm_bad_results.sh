@@ -93,9 +93,9 @@ huge:detp:7:-
 huge:anim:0:frame 0, batch 0: detp animation result: vertex 
 huge:anim:3:-
 huge:anim:7:frame 1, batch 1: detp animation result: vertex 
-huge:quad:0:quadrature result: the red estimate change is 1e+300, not within +-1e+280
-huge:quad:3:quadrature result: the red estimate change is 1e+300, not within +-1e+280
-huge:quad:7:quadrature result: the red estimate change is 1e+300, not within +-1e+280
+huge:quad:0:quadrature result: pixel 
+huge:quad:3:quadrature result: pixel 
+huge:quad:7:quadrature result: pixel 
 huge:rad:0:radiosity: row of element 0 has d2 18446744073709551615, above its sum of
 huge:rad:3:-
 huge:rad:7:-"

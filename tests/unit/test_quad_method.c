@@ -2,12 +2,15 @@
  * process (coordinator and a worker context side by side): checkpoints
  * taken between rounds resume to the same bits, damaged results and tasks
  * are refused, and the parameter block is validated. */
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gi_fs.h"
+#include "gi_image.h"
 #include "gi_jobrun.h"
 #include "gi_test.h"
 #include "gi_worker_ctx.h"
@@ -220,6 +223,117 @@ GI_TEST(test_quad_damaged_results_are_retried)
     gi_jobrun_free(&jr);
     gi_job_free(&job);
     gi_worker_ctx_free(&ctx);
+}
+
+/* Sets every value of a result's image delta (13 eight-byte header values,
+ * then u32 count, then per pixel u32 index and three f64s) to v, or only
+ * the first if `first`; returns the pixel count. */
+static uint32_t set_delta(gi_buf *res, double v, int first)
+{
+    uint32_t n = gi_le_get_u32(res->data + 104);
+    for (uint32_t i = 0; i < n; i++)
+        for (int c = 0; c < 3 && (!first || (i == 0 && c == 0)); c++)
+            memcpy(res->data + 108 + (size_t)i * 28 + 4 + 8 * (size_t)c, &v, 8);
+    return n;
+}
+
+/* The image is the sum of every task's delta, written as floats: a delta
+ * value beyond what task i may add (gi_quad_pixel_delta_max(i); beyond
+ * FLT_MAX, or just beyond the bound) is refused and retried, while a job
+ * whose every result adds exactly its bound to every pixel it touches is
+ * accepted whole, and its image is finite, some pixels beyond FLT_MAX / 4. */
+GI_TEST(test_quad_pixel_values_beyond_what_a_float_holds_are_refused)
+{
+    gi_error err;
+    gi_job job;
+    GI_REQUIRE_OK(load_job(&job, 1, "bounded", &err));
+    gi_worker_ctx ctx;
+    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
+                                     job.assets, &err));
+    gi_jobrun jr;
+    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    uint64_t refused = 0, tasks = 0;
+    const gi_task *t;
+    while (!gi_jobrun_done(&jr) && (t = gi_jobrun_lease(&jr)) != NULL) {
+        uint64_t id = t->id;
+        uint32_t attempt = t->attempt;
+        double bound = gi_quad_pixel_delta_max(id);
+        gi_buf res;
+        gi_buf_init(&res);
+        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &res, &err));
+        /* Twice beyond: 1e39 (past FLT_MAX, far within 1e280) for task 0,
+         * the next double past the bound for the others. */
+        double over = id == 0 ? 1e39 : nextafter(bound, INFINITY);
+        if (attempt == 0 && set_delta(&res, over, 1) > 0) {
+            char want[160];
+            snprintf(want, sizeof want, "task %llu's result: quadrature result: pixel ",
+                     (unsigned long long)id);
+            GI_CHECK_MSG(gi_test_refuse(&jr, t, &res, want, &err) == 0, "task %llu: %s",
+                         (unsigned long long)id, err.msg);
+            GI_CHECK_MSG(strstr(err.msg, "not within +-") != NULL, "%s", err.msg);
+            refused++;
+            gi_buf_free(&res);
+            continue;
+        }
+        set_delta(&res, bound, 0);
+        GI_CHECK_MSG(gi_jobrun_check_result(&jr, id, attempt, &res, &err) == 0, "task %llu: %s",
+                     (unsigned long long)id, err.msg);
+        gi_task_stats stats;
+        memset(&stats, 0, sizeof stats);
+        gi_jobrun_complete(&jr, id, attempt, &res, &stats);
+        gi_buf_free(&res);
+        tasks++;
+    }
+    GI_CHECK_MSG(jr.finished && !jr.failed, "%s", jr.error.msg);
+    GI_CHECK(refused > 10 && jr.retries == refused && tasks == jr.task_count);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bounded/img.exr", gi_test_tmpdir());
+    gi_image img;
+    GI_REQUIRE_OK(gi_exr_read(path, &img, &err));
+    size_t big = 0;
+    for (size_t i = 0; i < (size_t)img.width * img.height * 3; i++) {
+        GI_REQUIRE(isfinite(img.pixels[i]));
+        big += img.pixels[i] > FLT_MAX / 4;
+    }
+    GI_CHECK(big > 0);
+    gi_image_free(&img);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+    gi_worker_ctx_free(&ctx);
+}
+
+/* What a check decoded and kept (merged by merge_decoded, results given
+ * out of order) makes the same image and report as merging the worker's
+ * bytes. */
+GI_TEST(test_quad_outputs_are_the_same_merged_from_the_checks_decoding)
+{
+    for (int hybrid = 0; hybrid < 2; hybrid++) {
+        gi_buf img[2];
+        for (int checked = 0; checked < 2; checked++) {
+            gi_error err;
+            gi_job job;
+            char out[32];
+            snprintf(out, sizeof out, "decoded%d-%d", hybrid, checked);
+            GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
+            gi_worker_ctx ctx;
+            GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL,
+                                             NULL, job.assets, &err));
+            gi_jobrun jr;
+            GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+            GI_REQUIRE_OK(checked ? gi_test_drive_checked(&jr, &ctx, 5, &err)
+                                  : gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
+            GI_CHECK(jr.finished && !jr.failed);
+            gi_jobrun_free(&jr);
+            gi_job_free(&job);
+            gi_worker_ctx_free(&ctx);
+            gi_buf_init(&img[checked]);
+            GI_REQUIRE(read_file(out, &img[checked]) == 0);
+        }
+        GI_CHECK_MSG(img[0].len == img[1].len && memcmp(img[0].data, img[1].data, img[0].len) == 0,
+                     "hybrid %d: the images differ", hybrid);
+        gi_buf_free(&img[0]);
+        gi_buf_free(&img[1]);
+    }
 }
 
 static int parse_block(const char *block, gi_error *err)

@@ -172,9 +172,15 @@ GI_TEST(test_quad_accum_serializes_touched_pixels_in_order)
     double img[8 * 4 * 3] = {0};
     gi_reader r;
     gi_reader_init(&r, b.data, b.len, "delta");
-    GI_REQUIRE_OK(gi_quad_accum_apply(&r, 8, 4, 3, img, &err));
+    GI_REQUIRE_OK(gi_quad_accum_apply(&r, 8, 4, 3, 6.0, img, &err));
     GI_CHECK(r.left == 0);
     GI_CHECK(img[3 * 3] == 2.0 && img[3 * 3 + 2] == 6.0 && img[17 * 3] == 0.0);
+    /* A value beyond the bound (6 is at it) is refused and changes nothing. */
+    gi_reader_init(&r, b.data, b.len, "delta");
+    GI_CHECK(gi_quad_accum_apply(&r, 8, 4, 3, 5.5, img, &err) == -1 && err.code == GI_EPROTO);
+    GI_CHECK_MSG(strstr(err.msg, "pixel 3's value is 6, not within +-5.5") != NULL, "%s",
+                 err.msg);
+    GI_CHECK(img[3 * 3] == 2.0 && img[3 * 3 + 2] == 6.0);
     /* Out-of-range or unordered indices are refused and change nothing. */
     gi_buf_reset(&b);
     gi_buf_put_u32(&b, 2);
@@ -183,7 +189,7 @@ GI_TEST(test_quad_accum_serializes_touched_pixels_in_order)
     gi_buf_put_u32(&b, 4);
     gi_buf_put_f64s(&b, v, 3);
     gi_reader_init(&r, b.data, b.len, "delta");
-    GI_CHECK(gi_quad_accum_apply(&r, 8, 4, 3, img, &err) == -1 && err.code == GI_EPROTO);
+    GI_CHECK(gi_quad_accum_apply(&r, 8, 4, 3, 1e30, img, &err) == -1 && err.code == GI_EPROTO);
     GI_CHECK(img[5 * 3] == 0.0);
     gi_buf_free(&b);
     gi_quad_accum_free(&acc);
