@@ -41,7 +41,10 @@ typedef struct gi_job_progress {
 /* A value a result adds into an f64 sum is at most this in magnitude, so
  * that no number of results (fewer than 2^64) can overflow the sum. Real
  * ones, sums of float radiance over fewer than 2^64 samples, stay below
- * 2^64 x FLT_MAX (6.3e57). A check_result refuses what goes beyond. */
+ * 2^64 x FLT_MAX (6.3e57). A check_result refuses what goes beyond. A sum
+ * that ends in a float (an image, published radiance) needs a tighter
+ * bound of its method's own (gi_quad_pixel_delta_max, detp's
+ * batch_energy_max). */
 #define GI_RESULT_SUM_MAX 1e280
 static inline int gi_result_summable(double v)
 {
@@ -112,7 +115,8 @@ typedef struct gi_method {
      * memory could, for check_result to refuse. 1 if the result holds no
      * value such damage applies to (it is left as it is): a NaN needs a
      * floating-point value, a huge value one that is summed (a tile's
-     * pixels are placed, detp's f32 energies go into f64 sums). */
+     * pixels are placed) or bounded by the method (quadrature's image
+     * delta, a detp still's batch energies). */
     int (*damage_result)(const gi_job *job, const gi_task *task, gi_buf *result,
                          gi_damage how);
 } gi_method;

@@ -425,7 +425,9 @@ int gi_detp_photon_map(const gi_detp_discs *d, const gi_detp_segments *s, uint32
  * triangles (zero if none). */
 void gi_detp_inward_dirs(const gi_scene *s, gi_vec3 *out);
 /* The fraction of the disc reachable from its centre without crossing the
- * scene, in [0, 1] (64 shadow rays). */
+ * scene: k / GI_DETP_VIS_RAYS for the k of its shadow rays that are free,
+ * so 0 or at least 1 / GI_DETP_VIS_RAYS (irradiance is divided by it). */
+#define GI_DETP_VIS_RAYS 64
 float gi_detp_visible_fraction(gi_rt *rt, const gi_detp_disc *D, float radius, gi_vec3 inward);
 
 /* ---- Theory (detp_auto.c), thesis 1.13 ------------------------------- */

@@ -9,6 +9,7 @@
  * task order. finish turns irradiance into radiance (L = rho E / pi,
  * eq. 4.2), publishes it and plans image tiles; when those are merged it
  * writes the image, the PLY, the binary float file and the report. */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +18,7 @@
 #include "gi_clock.h"
 #include "gi_log.h"
 #include "gi_outputs.h"
+#include "gi_published.h"
 #include "gi_tiles.h"
 #include "gi_worker_ctx.h"
 #include "pt/pt.h"
@@ -189,7 +191,9 @@ static int range_result(const gi_job *job, const gi_task *t, const gi_buf *resul
             double v = reference ? gi_get_f64(&r) : gi_get_f32(&r);
             if (r.failed) /* cut short: gi_reader_finish says so */
                 break;
-            if (!gi_result_summable(v) || (!reference && !(v >= 0.0 && v <= 1.0)))
+            /* A visible fraction divides irradiance: 0, or at least one ray's. */
+            if (!gi_result_summable(v) ||
+                (!reference && !(v == 0.0 || (v >= 1.0 / GI_DETP_VIS_RAYS && v <= 1.0))))
                 return gi_fail(err, GI_EPROTO, "detp: value %u of the result out of range",
                                i - a);
             if (vis)
@@ -201,6 +205,25 @@ static int range_result(const gi_job *job, const gi_task *t, const gi_buf *resul
     return gi_reader_finish(&r, err);
 }
 
+/* The most a still's photon batch may add to a vertex's energy, in
+ * magnitude. The B batches' energies are summed (f64), divided by the
+ * vertex's visible fraction when rule 2 is on (0, or at least 1 /
+ * GI_DETP_VIS_RAYS: the visibility check refuses others), and written as
+ * float irradiance (PLY, bin) and, times rho / pi (rho <= 1), as the
+ * reflected radiance published for the tiles, which the workers take up to
+ * GI_PUBLISHED_VALUE_MAX (FLT_MAX / 4). Each batch within that bound x the
+ * least visible fraction / B keeps every sum within it (B < 2^20 floats'
+ * f64 rounding is far below the factor rho / pi leaves): a result beyond
+ * it is refused and retried, instead of failing the job at publish. A
+ * detp animation bounds its exact sums the same way (INT64_MAX / B). */
+static double batch_energy_max(const gi_job *job, const detp_state *st)
+{
+    const gi_detp_params *p = job->params;
+    uint64_t b = (p->photon_count + (uint64_t)p->batch - 1) / (uint64_t)p->batch;
+    double f_min = st->visible ? 1.0 / GI_DETP_VIS_RAYS : 1.0;
+    return GI_PUBLISHED_VALUE_MAX * f_min / (double)(b ? b : 1);
+}
+
 static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task_queue *fq,
                       gi_error *err)
 {
@@ -210,7 +233,8 @@ static int detp_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_ta
     switch (t->kind) {
     case DETP_TASK_BATCH: {
         detp_batch_result h;
-        if (detp_decode_batch(&r, st->nv, &h, st->irr, st->hits, err))
+        if (detp_decode_batch(&r, st->nv, batch_energy_max(job, st), &h, st->irr, st->hits,
+                              err))
             return -1;
         st->batches++;
         st->photons += h.photons;
@@ -381,7 +405,7 @@ static int detp_check_result(const gi_job *job, const gi_task *t, const gi_buf *
     uint64_t rays = 0;
     switch (t->kind) {
     case DETP_TASK_BATCH:
-        return detp_decode_batch(&r, st->nv, &h, NULL, NULL, err);
+        return detp_decode_batch(&r, st->nv, batch_energy_max(job, st), &h, NULL, NULL, err);
     case DETP_TASK_VISIBILITY:
         return st->visible ? range_result(job, t, result, st->nv, 0, NULL, NULL, &seconds, &rays,
                                           err)
@@ -409,7 +433,7 @@ static int detp_damage_result(const gi_job *job, const gi_task *t, gi_buf *resul
 {
     (void)job;
     if (t->kind == DETP_TASK_BATCH)
-        return how == GI_DAMAGE_NAN ? detp_batch_damage(result) : 1;
+        return detp_batch_damage(result, how == GI_DAMAGE_NAN ? NAN : FLT_MAX);
     if (t->kind == DETP_TASK_ANIM_BATCH || t->kind == DETP_TASK_ANIM_UPDATE)
         return how == GI_DAMAGE_HUGE ? detp_anim_damage(result) : 1;
     if (t->kind == DETP_TASK_REFERENCE && result->len >= 24) {

@@ -63,13 +63,14 @@ typedef struct detp_batch_result {
 void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, double scale,
                        gi_buf *out);
 /* Adds the result's per-vertex values into irr (3 per vertex) and hits;
- * with irr and hits NULL, only checks the result. */
-int detp_decode_batch(gi_reader *r, uint32_t vertex_count, detp_batch_result *h, double *irr,
-                      uint64_t *hits, gi_error *err);
-/* Tests only (gi_method.h, damage_result): a NaN for the first energy of a
+ * with irr and hits NULL, only checks the result. An energy beyond max in
+ * magnitude (or not finite) is refused (detp_batch_energy_max). */
+int detp_decode_batch(gi_reader *r, uint32_t vertex_count, double max, detp_batch_result *h,
+                      double *irr, uint64_t *hits, gi_error *err);
+/* Tests only (gi_method.h, damage_result): value for the first energy of a
  * batch's result; an INT64_MAX for the first sum of an animation batch's.
  * 1 if it has no entry. */
-int detp_batch_damage(gi_buf *result);
+int detp_batch_damage(gi_buf *result, float value);
 int detp_anim_damage(gi_buf *result);
 
 /* An animation frame's batch result: what the worker did, then per vertex

@@ -122,15 +122,20 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
 }
 
 /* Adds one vertex's values (three floats, then its hit count); irr NULL:
- * only checks them. -1: cut short; 1: an energy is not finite. */
-static int add_vertex(gi_reader *r, uint64_t i, int sparse, double *irr, uint64_t *hits)
+ * only checks them. -1: cut short; 1: an energy is not finite or beyond
+ * max in magnitude (*bad: that energy). */
+static int add_vertex(gi_reader *r, uint64_t i, int sparse, double max, double *irr,
+                      uint64_t *hits, double *bad)
 {
     float e[3] = {gi_get_f32(r), gi_get_f32(r), gi_get_f32(r)};
     uint64_t h = sparse ? get_varint(r) : gi_get_u32(r);
     if (r->failed)
         return -1;
-    if (!isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2]))
-        return 1;
+    for (int c = 0; c < 3; c++)
+        if (!(fabsf(e[c]) <= max)) { /* NaN too */
+            *bad = e[c];
+            return 1;
+        }
     if (!irr)
         return 0;
     for (int c = 0; c < 3; c++)
@@ -157,8 +162,8 @@ static int batch_header_get(gi_reader *r, detp_batch_result *h, uint32_t *count,
     return 0;
 }
 
-int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *irr,
-                      uint64_t *hits, gi_error *err)
+int detp_decode_batch(gi_reader *r, uint32_t nv, double max, detp_batch_result *h,
+                      double *irr, uint64_t *hits, gi_error *err)
 {
     uint32_t count;
     uint8_t form;
@@ -171,15 +176,19 @@ int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *i
     if (form == FORM_SPARSE && (entries = gi_get_u32(r)) > nv)
         return gi_fail(err, GI_EPROTO, "%s: %u entries for %u vertices", r->what, entries, nv);
     uint64_t i = 0;
+    double value = 0;
     for (uint32_t k = 0; k < entries; k++) {
         if (form == FORM_SPARSE)
             i += get_varint(r);
         else
             i = k;
-        int bad = i < nv ? add_vertex(r, i, form == FORM_SPARSE, irr, hits) : -1;
-        if (bad > 0)
+        int bad = i < nv ? add_vertex(r, i, form == FORM_SPARSE, max, irr, hits, &value) : -1;
+        if (bad > 0 && !isfinite(value))
             return gi_fail(err, GI_EPROTO, "%s: vertex %llu's energy is not finite", r->what,
                            (unsigned long long)i);
+        if (bad > 0)
+            return gi_fail(err, GI_EPROTO, "%s: vertex %llu's energy is %g, beyond +-%g",
+                           r->what, (unsigned long long)i, value, max);
         if (bad && form == FORM_DENSE)
             return gi_fail(err, GI_EPROTO, "%s: bad entry for vertex %u", r->what, k);
         if (bad)
@@ -188,7 +197,7 @@ int detp_decode_batch(gi_reader *r, uint32_t nv, detp_batch_result *h, double *i
     return gi_reader_finish(r, err);
 }
 
-int detp_batch_damage(gi_buf *result)
+int detp_batch_damage(gi_buf *result, float value)
 {
     gi_reader r;
     gi_reader_init(&r, result->data, result->len, "detp result");
@@ -201,8 +210,7 @@ int detp_batch_damage(gi_buf *result)
         get_varint(&r);
     if (r.failed || r.left < 4)
         return 1;
-    float nan = NAN;
-    memcpy((uint8_t *)r.p, &nan, 4);
+    memcpy((uint8_t *)r.p, &value, 4);
     return 0;
 }
 

@@ -21,6 +21,7 @@
 
 #define VIS_RINGS 4
 #define VIS_SECTORS 16
+_Static_assert(VIS_RINGS * VIS_SECTORS == GI_DETP_VIS_RAYS, "the rays detp.h counts");
 
 void gi_detp_inward_dirs(const gi_scene *s, gi_vec3 *out)
 {

@@ -87,8 +87,8 @@ nan:rad:3:pixel (16, 0) is not finite (nan)
 nan:rad:7:pixel (0, 16) is not finite (nan)
 huge:pt:0:pixel (0, 0)'s red sum is 1e+300, out of range for 8 samples
 huge:pt:3:pixel (16, 16)'s red sum is 1e+300, out of range for 8 samples
-huge:detp:0:-
-huge:detp:3:-
+huge:detp:0:detp result: vertex 
+huge:detp:3:detp result: vertex 
 huge:detp:7:-
 huge:anim:0:frame 0, batch 0: detp animation result: vertex 
 huge:anim:3:-

@@ -3,6 +3,7 @@
  * estimator gives the same bytes, a checkpoint taken anywhere resumes to
  * the same bytes, and batch results survive their encoding. */
 #include <float.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,7 @@
 #include "gi_clock.h"
 #include "gi_fs.h"
 #include "gi_jobrun.h"
+#include "gi_published.h"
 #include "gi_test.h"
 #include "gi_worker_ctx.h"
 #include "test_drive.h"
@@ -190,7 +192,7 @@ GI_TEST(test_detp_batch_results_dense_and_sparse)
         gi_reader r;
         gi_reader_init(&r, b.data, b.len, "batch result");
         detp_batch_result back;
-        GI_REQUIRE_OK(detp_decode_batch(&r, n, &back, irr, hits, &err));
+        GI_REQUIRE_OK(detp_decode_batch(&r, n, FLT_MAX, &back, irr, hits, &err));
         GI_CHECK(back.photons == 123 && back.stats.faults == 9);
         int bad = 0;
         for (uint32_t i = 0; i < n; i++)
@@ -199,9 +201,9 @@ GI_TEST(test_detp_batch_results_dense_and_sparse)
         GI_CHECK(bad == 0);
         /* Wrong vertex count and truncation are refused. */
         gi_reader_init(&r, b.data, b.len, "batch result");
-        GI_CHECK(detp_decode_batch(&r, n + 1, &back, irr, hits, &err) == -1);
+        GI_CHECK(detp_decode_batch(&r, n + 1, FLT_MAX, &back, irr, hits, &err) == -1);
         gi_reader_init(&r, b.data, b.len - 1, "batch result");
-        GI_CHECK(detp_decode_batch(&r, n, &back, irr, hits, &err) == -1);
+        GI_CHECK(detp_decode_batch(&r, n, FLT_MAX, &back, irr, hits, &err) == -1);
         free(irr);
         free(hits);
         gi_buf_free(&b);
@@ -398,7 +400,7 @@ GI_TEST(test_detp_outputs_are_the_same_merged_from_the_checks_decoding)
 /* Spoils the result of leased task t in the way `spoil` says and gives it
  * to jr as a worker's answer: it must be refused naming the task, and the
  * task retried, the job not failed. */
-enum { SPOIL_CUT, SPOIL_TRAILING, SPOIL_MAGIC, SPOIL_ANIM_BATCH };
+enum { SPOIL_CUT, SPOIL_TRAILING, SPOIL_MAGIC, SPOIL_ANIM_BATCH, SPOIL_VISIBLE_SLIVER };
 static int refuse_spoiled(gi_jobrun *jr, gi_worker_ctx *ctx, int spoil, const char *want,
                           gi_error *err)
 {
@@ -419,6 +421,8 @@ static int refuse_spoiled(gi_jobrun *jr, gi_worker_ctx *ctx, int spoil, const ch
             gi_buf_put_u8(&res, 0);
         else if (spoil == SPOIL_MAGIC)
             res.data[0] ^= 1;
+        else if (spoil == SPOIL_VISIBLE_SLIVER) /* less than one ray's fraction */
+            gi_le_put_u32(res.data + 16, 0x3a83126fu); /* 1e-3f, after the timing */
         else
             gi_le_put_u32(res.data + 8, gi_le_get_u32(res.data + 8) + 1);
         char msg[128];
@@ -458,6 +462,10 @@ GI_TEST(test_detp_malformed_batch_results_are_retried)
             GI_REQUIRE_OK(gi_test_drive(&jr, &ctx, 1, &err));
         GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_CUT, "detp result", &err));
         GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_TRAILING, "detp result", &err));
+        /* A visible fraction divides irradiance: above 0, at least 1/64. */
+        if (kinds[k] == DETP_TASK_VISIBILITY)
+            GI_CHECK_OK(refuse_spoiled(&jr, &ctx, SPOIL_VISIBLE_SLIVER,
+                                       "detp: value 0 of the result out of range", &err));
     }
     GI_CHECK_OK(gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
     GI_CHECK(jr.finished && !jr.failed);
@@ -620,7 +628,7 @@ static int set_red_energy(const gi_buf *in, uint32_t nv, uint32_t v, double red,
     detp_batch_result h;
     gi_reader r;
     gi_reader_init(&r, in->data, in->len, "test result");
-    int rc = detp_decode_batch(&r, nv, &h, irr, hits, err);
+    int rc = detp_decode_batch(&r, nv, FLT_MAX, &h, irr, hits, err);
     if (rc == 0) {
         irr[3 * (size_t)v] = red;
         for (uint32_t i = 0; i < nv; i++)
@@ -635,41 +643,78 @@ static int set_red_energy(const gi_buf *in, uint32_t nv, uint32_t v, double red,
     return rc;
 }
 
-/* Batches whose energies are each finite (so each passes its check) but
- * whose sum makes a vertex's radiance overflow a float: the coordinator
- * does not publish what its workers would refuse, it fails the job naming
- * the vertex (instead of every image tile failing on every attempt). */
-GI_TEST(test_detp_radiance_workers_would_refuse_fails_the_job)
+/* A still's photon batches are summed, divided by the visible fraction
+ * (rule 2), and published as float radiance the workers take up to
+ * GI_PUBLISHED_VALUE_MAX. A batch whose energy is finite but beyond its
+ * share of that (FLT_MAX here: five such batches made the job fail at
+ * publish, naming the vertex, before the check bounded them) is refused as
+ * it arrives, naming the vertex and the bound, and retried; batches at the
+ * bound, all five into the same vertex, are accepted and the job ends well,
+ * publishing a finite radiance. */
+GI_TEST(test_detp_still_batch_beyond_its_share_is_refused_and_retried)
 {
-    gi_error err;
-    char *path = write_job("overflow-radiance.json", "basic", "");
-    GI_REQUIRE(path != NULL);
-    gi_job job;
-    gi_worker_ctx ctx;
-    gi_jobrun jr;
-    GI_REQUIRE_OK(load(path, "out-overflow-radiance", &job, &ctx, &err));
-    free(path);
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
-    const uint32_t v = 7;
-    gi_task_stats stats = {0};
-    while (!jr.failed) { /* until the last batch's merge finishes the bake */
-        const gi_task *t = gi_jobrun_lease(&jr);
-        GI_REQUIRE(t != NULL && t->kind == DETP_TASK_BATCH);
-        uint64_t id = t->id;
-        gi_buf plain, res;
-        gi_buf_init(&plain);
-        GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &plain, &err));
-        GI_REQUIRE_OK(set_red_energy(&plain, job.scene.vertex_count, v, FLT_MAX, &res, &err));
-        gi_buf_free(&plain);
-        GI_CHECK_OK(gi_jobrun_check_result(&jr, id, 0, &res, &err));
-        gi_jobrun_complete(&jr, id, 0, &res, &stats);
-        gi_buf_free(&res);
+    for (int visible = 0; visible < 2; visible++) {
+        gi_error err;
+        char *path = write_job("overflow-radiance.json", "basic",
+                               visible ? ", \"artifact_control\": \"visible_area\"" : "");
+        GI_REQUIRE(path != NULL);
+        gi_job job;
+        gi_worker_ctx ctx;
+        gi_jobrun jr;
+        GI_REQUIRE_OK(load(path, visible ? "out-share-vis" : "out-share", &job, &ctx, &err));
+        free(path);
+        GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+        const uint32_t v = 7;
+        gi_task_stats stats = {0};
+        /* 12,000 photons in batches of 2,500: five; rule 2 divides by down
+         * to one visibility ray's fraction. */
+        const double share = GI_PUBLISHED_VALUE_MAX * (visible ? 1.0 / GI_DETP_VIS_RAYS : 1.0) / 5;
+        double bound = 0; /* as the refusals say it */
+        int refused = 0, at_bound = 0;
+        const gi_task *t;
+        while (!gi_jobrun_done(&jr) && (t = gi_jobrun_lease(&jr)) != NULL) {
+            uint64_t id = t->id;
+            uint32_t attempt = t->attempt;
+            gi_buf plain, res;
+            gi_buf_init(&plain);
+            gi_buf_init(&res);
+            GI_REQUIRE_OK(gi_worker_run_task(&ctx, t, &plain, &err));
+            if (t->kind == DETP_TASK_BATCH && attempt == 0) {
+                GI_REQUIRE_OK(set_red_energy(&plain, job.scene.vertex_count, v, FLT_MAX, &res,
+                                             &err));
+                char want[160];
+                snprintf(want, sizeof want,
+                         "task %llu's result: detp result: vertex 7's energy is 3.40282e+38, "
+                         "beyond +-",
+                         (unsigned long long)id);
+                GI_CHECK_MSG(gi_test_refuse(&jr, t, &res, want, &err) == 0, "%s", err.msg);
+                const char *b = strstr(err.msg, "beyond +-");
+                GI_REQUIRE(b != NULL);
+                bound = strtod(b + 9, NULL);
+                refused++;
+            } else {
+                if (t->kind == DETP_TASK_BATCH) {
+                    float red = (float)share; /* at the bound, not above it */
+                    if ((double)red > share)
+                        red = nextafterf(red, 0.0f);
+                    GI_REQUIRE_OK(set_red_energy(&plain, job.scene.vertex_count, v, red, &res,
+                                                 &err));
+                    at_bound++;
+                } else {
+                    gi_buf_move(&res, &plain);
+                }
+                GI_CHECK_MSG(gi_jobrun_check_result(&jr, id, attempt, &res, &err) == 0,
+                             "task %llu: %s", (unsigned long long)id, err.msg);
+                gi_jobrun_complete(&jr, id, attempt, &res, &stats);
+            }
+            gi_buf_free(&plain);
+            gi_buf_free(&res);
+        }
+        GI_CHECK_MSG(fabs(bound - share) <= 1e-5 * share, "bound %g, not %g", bound, share);
+        GI_CHECK(refused == 5 && at_bound == 5 && jr.retries == 5);
+        GI_CHECK_MSG(jr.finished && !jr.failed, "%s", jr.error.msg);
+        gi_jobrun_free(&jr);
+        gi_worker_ctx_free(&ctx);
+        gi_job_free(&job);
     }
-    GI_CHECK(jr.failed && jr.error.code == GI_EPROTO);
-    GI_CHECK_MSG(strstr(jr.error.msg, "detp: published radiance ") &&
-                     strstr(jr.error.msg, ": vertex 7's value 0 is not finite (inf)"),
-                 "%s", jr.error.msg);
-    gi_jobrun_free(&jr);
-    gi_worker_ctx_free(&ctx);
-    gi_job_free(&job);
 }
