@@ -51,6 +51,25 @@ static int load_job(gi_job *job, int hybrid, const char *out, gi_error *err)
     return gi_mkdirs(path, err);
 }
 
+/* load_job, its worker context and its run started. */
+static int start_job(gi_job *job, gi_worker_ctx *ctx, gi_jobrun *jr, int hybrid,
+                     const char *out, gi_error *err)
+{
+    if (load_job(job, hybrid, out, err))
+        return -1;
+    if (gi_worker_ctx_load(ctx, 1, job->file, job->text, &job->manifest, NULL, NULL,
+                           job->assets, err)) {
+        gi_job_free(job);
+        return -1;
+    }
+    if (gi_jobrun_start(jr, job, err)) {
+        gi_worker_ctx_free(ctx);
+        gi_job_free(job);
+        return -1;
+    }
+    return 0;
+}
+
 static int read_file(const char *dir, gi_buf *out)
 {
     char path[1024];
@@ -125,12 +144,9 @@ GI_TEST(test_quad_damaged_results_and_tasks_are_refused)
 {
     gi_error err;
     gi_job job;
-    GI_REQUIRE_OK(load_job(&job, 0, "damaged", &err));
     gi_worker_ctx ctx;
-    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
-                                     job.assets, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start_job(&job, &ctx, &jr, 0, "damaged", &err));
     const gi_task *t = gi_jobrun_lease(&jr);
     GI_REQUIRE(t != NULL);
     gi_buf res;
@@ -181,12 +197,9 @@ GI_TEST(test_quad_damaged_results_are_retried)
 {
     gi_error err;
     gi_job job;
-    GI_REQUIRE_OK(load_job(&job, 0, "retried", &err));
     gi_worker_ctx ctx;
-    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
-                                     job.assets, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start_job(&job, &ctx, &jr, 0, "retried", &err));
     enum { CUT, TRAILING, NAN_HEADER, PIXEL_OUT_OF_RANGE, SPOILS };
     for (int spoil = 0; spoil < SPOILS; spoil++) {
         if (spoil == PIXEL_OUT_OF_RANGE) /* task 0 ran well: one failure short of its last */
@@ -246,12 +259,9 @@ GI_TEST(test_quad_pixel_values_beyond_what_a_float_holds_are_refused)
 {
     gi_error err;
     gi_job job;
-    GI_REQUIRE_OK(load_job(&job, 1, "bounded", &err));
     gi_worker_ctx ctx;
-    GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL, NULL,
-                                     job.assets, &err));
     gi_jobrun jr;
-    GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+    GI_REQUIRE_OK(start_job(&job, &ctx, &jr, 1, "bounded", &err));
     uint64_t refused = 0, tasks = 0;
     const gi_task *t;
     while (!gi_jobrun_done(&jr) && (t = gi_jobrun_lease(&jr)) != NULL) {
@@ -314,12 +324,9 @@ GI_TEST(test_quad_outputs_are_the_same_merged_from_the_checks_decoding)
             gi_job job;
             char out[32];
             snprintf(out, sizeof out, "decoded%d-%d", hybrid, checked);
-            GI_REQUIRE_OK(load_job(&job, hybrid, out, &err));
             gi_worker_ctx ctx;
-            GI_REQUIRE_OK(gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest, NULL,
-                                             NULL, job.assets, &err));
             gi_jobrun jr;
-            GI_REQUIRE_OK(gi_jobrun_start(&jr, &job, &err));
+            GI_REQUIRE_OK(start_job(&job, &ctx, &jr, hybrid, out, &err));
             GI_REQUIRE_OK(checked ? gi_test_drive_checked(&jr, &ctx, 5, &err)
                                   : gi_test_drive(&jr, &ctx, UINT64_MAX, &err));
             GI_CHECK(jr.finished && !jr.failed);
