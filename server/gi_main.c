@@ -152,15 +152,11 @@ static int cmd_render(int argc, char **argv)
         return 2;
     }
     gi_local_opts opts = {0, GI_PROGRESS_AUTO, 30.0, resume, 0.0};
-    if (checkpoint_s) {
-        char *end;
-        double v = strtod(checkpoint_s, &end);
-        if (*end || !(v >= 0 && v <= 86400)) {
-            fprintf(stderr, "gi render: --checkpoint must be seconds in [0, 86400], got \"%s\"\n",
-                    checkpoint_s);
-            return 2;
-        }
-        opts.checkpoint_s = v;
+    /* gi_args (fuzz_args): an empty value is no number, not 0. */
+    if (checkpoint_s && gi_args_number(checkpoint_s, 0, 86400, &opts.checkpoint_s)) {
+        fprintf(stderr, "gi render: --checkpoint must be seconds in [0, 86400], got \"%s\"\n",
+                checkpoint_s);
+        return 2;
     }
     double *limit = &opts.task_timeout_s;
     if (timeout_s && (gi_args_number(timeout_s, 0, GI_JOB_MAX_TASK_TIMEOUT, limit) ||
@@ -170,9 +166,8 @@ static int cmd_render(int argc, char **argv)
         return 2;
     }
     if (workers_s) {
-        char *end;
-        long n = strtol(workers_s, &end, 10);
-        if (*end || n < 1 || n > 1024) {
+        int64_t n;
+        if (gi_args_int(workers_s, 1, 1024, &n)) {
             fprintf(stderr, "gi render: --workers must be an integer in [1, 1024], got \"%s\"\n",
                     workers_s);
             return 2;

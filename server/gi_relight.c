@@ -13,6 +13,7 @@
 
 #include <cblas.h>
 
+#include "gi_args.h"
 #include "gi_cores.h"
 #include "gi_fs.h"
 #include "gi_job.h"
@@ -37,9 +38,8 @@ typedef struct relight_args {
 
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 {
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || v < lo || v > hi) {
+    int64_t v;
+    if (gi_args_int(s, lo, hi, &v)) {
         fprintf(stderr, "gi relight: %s must be an integer in [%d, %d], got \"%s\"\n", opt, lo, hi,
                 s);
         return -1;

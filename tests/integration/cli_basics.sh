@@ -116,6 +116,24 @@ for case in "$TMP/afile|not a directory" "|an empty directory name"; do
     [ $rc -eq 2 ] && grep -q "^gi: --out: .*${case#*|}" "$TMP/out.err" ||
         { cat "$TMP/out.err"; fail "--out '${case%%|*}' exited $rc"; }
 done
+# Option values that are no number in range (an empty one is not 0, blanks
+# and signs are not digits) are refused, naming the option, before anything runs.
+for case in "render|--checkpoint|" "render|--checkpoint|nan" "render|--workers|" \
+    "render|--workers| 2" "render|--workers|+2" "render|--workers|1025" \
+    "relight|--workers| 2" "relight|--threads|0"; do
+    cmd=${case%%|*} rest=${case#*|}
+    opt=${rest%%|*} val=${rest#*|}
+    set +e
+    em="$TMP/em.json"
+    [ "$cmd" = relight ] || em=--resume
+    "$GI" "$cmd" "$TMP/obj.json" "$em" "$opt" "$val" --out "$TMP/badopt" --progress none \
+        >/dev/null 2>"$TMP/opt.err"
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] && grep -q "^gi $cmd: $opt must be .*, got \"$val\"" "$TMP/opt.err" ||
+        { cat "$TMP/opt.err"; fail "gi $cmd $opt '$val' exited $rc"; }
+    [ ! -e "$TMP/badopt" ] || fail "gi $cmd $opt '$val' wrote something"
+done
 
 # SIGINT mid-render: exit 130, no output.
 write_job "$TMP/long.json" <<JOB
