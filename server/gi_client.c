@@ -358,13 +358,17 @@ static int job_failed(uint64_t id, const cJSON *job)
                     again);
 }
 
-static void print_summary(uint64_t id, const cJSON *job)
+/* before: the job had ended when the wait began (it says when). */
+static void print_summary(uint64_t id, const cJSON *job, int before)
 {
     const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
     const cJSON *s = cJSON_GetObjectItemCaseSensitive(job, "stats");
     char a[32], b[32];
-    printf("%s: job %llu (%s) done on the farm\n", str(job, "name"), (unsigned long long)id,
+    printf("%s: job %llu (%s) done on the farm", str(job, "name"), (unsigned long long)id,
            str(job, "method"));
+    if (before)
+        printf(" already%s%s", str(job, "ended")[0] ? ", at " : "", str(job, "ended"));
+    printf("\n");
     printf("  %s%s, ", gi_si(num(s, "samples", 0), a, sizeof a), str(job, "unit"));
     if (strcmp(str(job, "unit"), "rays") != 0) /* radiosity's unit is rays already */
         printf("%srays, ", gi_si(num(s, "rays", 0), b, sizeof b));
@@ -430,15 +434,17 @@ static int wait_job(client *c, uint64_t id, int fetch)
         snprintf(jname, sizeof jname, "%s", str(job, "name"));
         const cJSON *work = cJSON_GetObjectItemCaseSensitive(job, "work");
         const cJSON *stats = cJSON_GetObjectItemCaseSensitive(job, "stats");
-        if (!started && strcmp(state, "checking") != 0) {
+        int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
+                  strcmp(state, "cancelled") == 0;
+        /* A job that had ended before the wait gets no progress line: its
+         * rate over no time would be a meaningless 0. */
+        if (!started && !end && strcmp(state, "checking") != 0) {
             static char name[256], unit[64];
             snprintf(name, sizeof name, "%s", str(job, "name"));
             snprintf(unit, sizeof unit, "%s", str(job, "unit"));
             gi_progress_init(&prog, c->mode, stderr, name, unit);
             started = 1;
         }
-        int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
-                  strcmp(state, "cancelled") == 0;
         if (started) {
             const cJSON *eta = cJSON_GetObjectItemCaseSensitive(job, "eta_seconds");
             gi_progress_at at = {
@@ -459,7 +465,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
             if (strcmp(state, "done") != 0) {
                 rc = job_failed(id, job);
             } else {
-                print_summary(id, job);
+                print_summary(id, job, !started);
                 rc = fetch ? fetch_outputs(c, id, job) : 0;
             }
             if (c->mode == GI_PROGRESS_JSON) {

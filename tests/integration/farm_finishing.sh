@@ -4,7 +4,7 @@
 # 1. Meanwhile the job shows as "finishing" (its view, `gi status`, the
 #    metrics), its outputs are not served yet, and the API answers; then it
 #    is done with the image `gi render` gives, and the loop's longest round
-#    is in the metrics.
+#    is in the metrics; `gi wait` then says it was done already (no rate).
 # 2. An output that cannot be written while the thread writes (a directory
 #    in the way): the job fails with its whole result in a checkpoint, and a
 #    retry once the way is clear writes the outputs without running a task.
@@ -54,6 +54,12 @@ release
 wait_state "$id" done 60
 "$GI" fetch "$id" --out "$TMP/o1" >/dev/null || fail "fetch 1"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/o1/img.exr" || fail "the image differs from gi render"
+# gi wait on a job done before it: the summary, saying so, and no rate (over no time: 0/s).
+"$GI" wait "$id" --out "$TMP/o1w" --progress lines >"$TMP/wait1.out" 2>"$TMP/wait1.err" ||
+    { cat "$TMP/wait1.out" "$TMP/wait1.err"; fail "gi wait of a done job"; }
+grep -q "^[^ ]*: job $id (pt) done on the farm already, at 20" "$TMP/wait1.out" &&
+    ! grep -q "/s" "$TMP/wait1.out" "$TMP/wait1.err" && cmp "$TMP/o1/img.exr" "$TMP/o1w/img.exr" ||
+    { cat "$TMP/wait1.out" "$TMP/wait1.err"; fail "gi wait of a done job: what it says"; }
 [ "$(metric gi_farm_jobs_finishing)" = 0 ] || fail "still a finishing job in the metrics"
 stall=$(metric gi_farm_loop_stall_max_seconds)
 awk -v s="$stall" 'BEGIN {exit !(s > 0)}' || fail "no loop stall metric ($stall)"
