@@ -712,15 +712,17 @@ static int cmd_workers(client *c)
         return rc;
     if (c->json)
         return print_json(doc), cJSON_Delete(doc), 0;
-    printf("%-20s %-22s %-12s %5s %5s %7s %6s %7s %6s %5s %s\n", "NAME", "ADDRESS", "STATE",
-           "PROCS", "CORES", "MEMORY", "LEASED", "DONE", "FAILED", "LOST", "VERSION");
+    /* OWNFAIL: the failures judged its host's own (they count towards its
+     * blocklisting; the rest were its jobs'). */
+    printf("%-20s %-22s %-12s %5s %5s %7s %6s %7s %6s %7s %5s %s\n", "NAME", "ADDRESS", "STATE",
+           "PROCS", "CORES", "MEMORY", "LEASED", "DONE", "FAILED", "OWNFAIL", "LOST", "VERSION");
     const cJSON *ws = cJSON_GetObjectItemCaseSensitive(doc, "workers");
     for (const cJSON *w = ws ? ws->child : NULL; w; w = w->next) {
-        printf("%-20s %-22s %-12s %5.0f %5.0f %5.1fG %6.0f %7.0f %6.0f %5.0f %s\n",
+        printf("%-20s %-22s %-12s %5.0f %5.0f %5.1fG %6.0f %7.0f %6.0f %7.0f %5.0f %s\n",
                str(w, "name"), str(w, "address"), str(w, "state"), num(w, "processes", 0),
                num(w, "cores", 0), num(w, "memory_bytes", 0) / (1 << 30),
                num(w, "tasks_leased", 0), num(w, "tasks_done", 0), num(w, "tasks_failed", 0),
-               num(w, "losses", 0), str(w, "version"));
+               num(w, "own_failures", 0), num(w, "losses", 0), str(w, "version"));
         /* Why a host gets no work, and for how long: what an operator asks first. */
         if (strcmp(str(w, "state"), "blocklisted") == 0)
             printf("    for %.0f s more; last: %s\n", num(w, "blocklisted_seconds", 0),

@@ -5,8 +5,8 @@
 #     worker is blocklisted, and a good job submitted with them is done.
 # (b) A bad host (every run crashes): alone, it is only excluded from each
 #     job (nothing to compare it with); once a healthy host has run the
-#     tasks it failed, of two jobs, it is blocklisted, and gi workers and
-#     /metrics say so.
+#     tasks it failed, of two jobs, it is blocklisted, and gi workers (its
+#     OWNFAIL column: the API's own_failures) and /metrics say so.
 # (c) A worker excluded from a broken job A that then fails a task of a
 #     job B is not blocklisted.
 # (d) A job's failure on another host long ago (more than
@@ -95,6 +95,13 @@ grep -c "blocklisted for" "$LOG" | grep -q '^1$' || fail "(b): not one host bloc
 grep -A1 "^bad .*blocklisted" "$TMP/workers-b.txt" |
     grep -q "^    for [0-9]* s more; last: .*pool child" ||
     { cat "$TMP/workers-b.txt"; fail "gi workers does not show bad blocklisted, how long and why"; }
+# Its OWNFAIL column is the API's own_failures (>= 6: those that blocklisted it).
+own=$(api /api/v1/workers | tr '{' '\n' | grep '"name":"bad"' | grep -o '"own_failures":[0-9]*' |
+    cut -d: -f2)
+col=$(awk 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "OWNFAIL") c = i }
+           $1 == "bad" { print $c }' "$TMP/workers-b.txt")
+[ -n "$own" ] && [ "$own" -ge 6 ] && [ "$col" = "$own" ] ||
+    { cat "$TMP/workers-b.txt"; fail "gi workers: bad's OWNFAIL is \"$col\", own_failures $own"; }
 grep -q "^healthy .* active " "$TMP/workers-b.txt" ||
     { cat "$TMP/workers-b.txt"; fail "the healthy worker is not active"; }
 [ "$(metric gi_farm_task_failures_host_total)" -ge 6 ] ||
