@@ -44,7 +44,9 @@ typedef enum {
 
 const char *gi_fj_state_name(gi_fj_state s);
 /* What a job's views call its state: gi_fj_state_name, except "finishing"
- * for a running job whose method->finish (its outputs) runs on its thread. */
+ * for a running job whose method->finish (its outputs) runs on its thread,
+ * and "cancelling" for one cancelled meanwhile (it ends cancelled once the
+ * finish has returned: it must not look as if it were about to be done). */
 typedef struct gi_farm_job gi_farm_job;
 const char *gi_farm_job_state_name(const gi_farm_job *j);
 
@@ -130,7 +132,7 @@ struct gi_farm_job {
     int outputs_retrying;
     /* Cancelled while its finish ran on its thread: its END (cancelled) is
      * journaled (or end_pending), and the job ends cancelled once the
-     * finish has returned; until then it is still RUNNING ("finishing"). */
+     * finish has returned; until then it is still RUNNING ("cancelling"). */
     int cancelling;
 
     /* Checker. */
@@ -423,7 +425,10 @@ void gi_farm_jobs_free(gi_farm *f);
 double gi_farm_job_purge_at(const gi_farm *f, const gi_farm_job *j);
 /* Output file path of a finished job, or NULL if the job has no such output. */
 char *gi_farm_job_output_path(const gi_farm_job *j, const char *name);
-/* Fraction, ETA (< 0: unknown or not running), frames and work of a job. */
+/* Fraction, ETA (< 0: unknown or not running), frames and work of a job.
+ * The fraction is 1 only once it is done: at most GI_FARM_PROGRESS_NOT_DONE
+ * before (99.9% in the views), its outputs being the last of its work. */
+#define GI_FARM_PROGRESS_NOT_DONE 0.999
 void gi_farm_job_progress(const gi_farm_job *j, gi_progress_at *out);
 
 /* The checker's verdict (NULL: the scene loads): loads and starts the job,

@@ -58,7 +58,7 @@ const char *gi_fj_state_name(gi_fj_state s)
 const char *gi_farm_job_state_name(const gi_farm_job *j)
 {
     if (j->state == GI_FJ_RUNNING && j->loaded && gi_jobrun_finishing(&j->jr))
-        return "finishing";
+        return j->cancelling ? "cancelling" : "finishing";
     return gi_fj_state_name(j->state);
 }
 
@@ -1848,10 +1848,15 @@ void gi_farm_job_progress(const gi_farm_job *j, gi_progress_at *out)
         out->total = 1;
         out->done = j->state == GI_FJ_DONE;
     }
+    /* 1 means done: a job with every task merged that is still writing its
+     * outputs, or that failed or was cancelled doing it, did not get there. */
     if (j->state == GI_FJ_DONE) {
         out->fraction = 1;
         out->eta_s = 0;
-    } else if (j->state != GI_FJ_RUNNING) {
-        out->eta_s = -1;
+    } else {
+        if (out->fraction > GI_FARM_PROGRESS_NOT_DONE)
+            out->fraction = GI_FARM_PROGRESS_NOT_DONE;
+        if (j->state != GI_FJ_RUNNING || j->cancelling)
+            out->eta_s = -1;
     }
 }

@@ -8,8 +8,9 @@
 # 2. An output that cannot be written while the thread writes (a directory
 #    in the way): the job fails with its whole result in a checkpoint, and a
 #    retry once the way is clear writes the outputs without running a task.
-# 3. Cancelled while finishing: the cancel answers at once, the job still
-#    finishing (its log says why), its END journaled then; a second cancel
+# 3. Cancelled while finishing: the cancel answers at once, the job
+#    "cancelling" at 99.9% (not 100%: it will not be done) while its finish
+#    runs (its log says why), its END journaled then; a second cancel
 #    and a purge are refused meanwhile; the loop does not wait for the
 #    finish (its longest round stays under 1.5 s, the finish held longer). Once the
 #    finish has returned the job is cancelled, its outputs not served, with
@@ -91,7 +92,15 @@ e0=$(ends)
 "$GI" cancel "$id" >"$TMP/cancel.out" || fail "gi cancel of a finishing job"
 grep -q "cancelled: it ends once the outputs being written are" "$TMP/cancel.out" ||
     { cat "$TMP/cancel.out"; fail "gi cancel does not say the job ends later"; }
-[ "$(jstate "$id")" = finishing ] || fail "the cancel waited for the finish: $(jstate "$id")"
+[ "$(jstate "$id")" = cancelling ] || fail "the cancel waited for the finish: $(jstate "$id")"
+# Neither about to be done nor done: cancelling, then cancelled, at 99.9%, never 100%.
+jobs_row() {
+    "$GI" jobs >"$TMP/jobs.txt" || fail "gi jobs"
+    grep -Eq "^$id +$1 +[0-9]+ +99\.9% " "$TMP/jobs.txt" ||
+        { cat "$TMP/jobs.txt"; fail "gi jobs does not show job $id $1 at 99.9%"; }
+}
+jobs_row cancelling
+[ "$(metric gi_farm_jobs_finishing)" = 1 ] || fail "the cancelling job's finish is not counted"
 api "/api/v1/jobs/$id" | grep -q "the cancel waits for the outputs being written" ||
     { api "/api/v1/jobs/$id"; fail "the job's log does not say the cancel waits"; }
 [ $(($(ends))) = $((e0 + 1)) ] || fail "the cancel's END is not journaled at once"
@@ -103,6 +112,7 @@ code=$(api "/api/v1/jobs/$id?purge=1" -X DELETE -o "$TMP/purge.json" -w '%{http_
     { cat "$TMP/purge.json"; fail "a purge of the cancelling job was answered $code"; }
 release
 wait_state "$id" cancelled 60
+jobs_row cancelled
 code=$(api "/api/v1/jobs/$id/outputs/img.exr" -o /dev/null -w '%{http_code}')
 [ "$code" = 409 ] || fail "an output of the cancelled job was answered $code"
 [ $(($(ends))) = $((e0 + 1)) ] || fail "the END of the cancelled job is journaled twice"
@@ -123,6 +133,7 @@ wait "$FARMD_PID" 2>/dev/null || true
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$LOG" env GI_FAULT_FINISH_GATE="$GATE" -- $OPTS $PORTS
 [ "$(jstate "$id")" = cancelled ] || fail "job $id is $(jstate "$id") after the restart"
+jobs_row cancelled
 
 # 4. Stopped while finishing.
 id=$(submit)
