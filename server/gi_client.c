@@ -24,12 +24,16 @@
 #define MAX_JSON_BODY ((uint64_t)64 << 20)
 #define POLL_S 0.1     /* the longest wait between two looks at a job */
 #define POLL_MIN_S 0.01 /* the shortest, once the job is about to end */
-#define WAIT_UNANSWERED_S 300.0 /* gi wait asks a silent farm again this long */
+/* gi wait asks a farm that answered it and then went silent (a restart)
+ * again this long. */
+#define WAIT_UNANSWERED_S 300.0
 /* A farm that refuses a connection, resets it or answers 503 (busy: its
- * connection limit, 1000 clients at once) is asked again this long, with
- * a backoff from RETRY_FIRST_S doubling up to RETRY_MAX_S, each pause
- * jittered so that clients turned away together do not return together. */
+ * connection limit, 1000 clients at once) is asked again this long (unless
+ * --retry says otherwise), with a backoff from RETRY_FIRST_S doubling up to
+ * RETRY_MAX_S, each pause jittered so that clients turned away together do
+ * not return together. */
 #define RETRY_S 60.0
+#define RETRY_LIMIT_S 86400.0
 #define RETRY_FIRST_S 0.1
 #define RETRY_MAX_S 2.0
 
@@ -39,8 +43,10 @@ const char gi_client_usage[] =
     "       gi wait ID [--out DIR] [--progress MODE] | gi cancel ID | gi fetch ID [--out DIR]\n"
     "       gi retry ID [--wait] [--out DIR] [--progress MODE]  (a failed or cancelled job)\n"
     "       gi purge ID  (an ended job: removes it, its checkpoint and its outputs)\n"
-    "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070) and\n"
-    "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN)\n";
+    "         (farm commands take --farm URL (default $GI_FARM or http://127.0.0.1:7070),\n"
+    "          read the API token from --token-file FILE, $GI_FARM_TOKEN_FILE or $GI_FARM_TOKEN,\n"
+    "          and ask a farm that cannot be reached or is busy again for --retry S seconds\n"
+    "          (default 60; 0: fail at once; gi wait: 300 once the farm has answered it))\n";
 
 static volatile sig_atomic_t interrupted;
 
@@ -52,6 +58,9 @@ static void on_sigint(int sig)
 
 typedef struct client {
     gi_http_url url;
+    const char *farm, *farm_from; /* the URL as given, and where it came from */
+    double retry_s;               /* --retry */
+    int retry_given;
     char token[GI_SECRET_MAX_BYTES + 1];
     /* Options. */
     const char *out_dir, *progress;
@@ -160,7 +169,33 @@ static int may_retry(const client *c, const char *method, int status)
            strcmp(method, "PUT") == 0 || (strcmp(method, "POST") == 0 && c->idempotency_key);
 }
 
-/* A request, tried again for up to RETRY_S while may_retry says so. */
+/* Says at once that the farm does not answer, and for how long it is
+ * asked again: a newcomer's farm that is not running must not look like a
+ * hang. what: "cannot be reached", "is busy", ... */
+static void say_retrying(client *c, const char *what, const char *why, double for_s)
+{
+    if (for_s > 0)
+        gi_say("gi-farmd at %s (%s) %s: %s; asking again for up to %g s, in case it is "
+               "restarting (--retry S: how long)", c->farm, c->farm_from, what, why, for_s);
+    c->said_retrying = 1;
+}
+
+/* The message of a farm given up on: err (a connection failure) is
+ * rewritten to say what to do. */
+static void gave_up(const client *c, double asked_s, gi_error *err)
+{
+    char why[sizeof err->msg], asked[64] = "";
+    snprintf(why, sizeof why, "%s", err->msg);
+    if (asked_s > 0)
+        snprintf(asked, sizeof asked, ", asked again for %g s", asked_s);
+    gi_fail(err, GI_EIO,
+            "gi-farmd at %s (%s) cannot be reached (%s)%s: is it running? Start it (gi-farmd "
+            "--state DIR ...; docs/farm.md, Quick start), or give its URL with --farm URL or "
+            "$GI_FARM",
+            c->farm, c->farm_from, why, asked);
+}
+
+/* A request, tried again for up to c->retry_s while may_retry says so. */
 static int request(client *c, const char *method, const char *path, const void *body, size_t len,
                    const char *type, gi_buf *resp, const char *to_file, gi_error *err)
 {
@@ -170,15 +205,20 @@ static int request(client *c, const char *method, const char *path, const void *
         if (!may_retry(c, method, st) || interrupted)
             return st;
         double pause = backoff(&next, RETRY_MAX_S);
-        if (gi_now() + pause - t0 > RETRY_S)
+        if (gi_now() + pause - t0 > c->retry_s) {
+            if (st == GI_HTTP_UNSENT)
+                gave_up(c, c->retry_s, err);
             return st;
+        }
         if (!c->said_retrying) {
             char why[1200];
             if (st == 503)
-                error_text(resp, why, sizeof why);
-            gi_say("the farm is busy or unreachable (%s%s); asking again for up to %.0f s",
-                   st == 503 ? "HTTP 503: " : "", st == 503 ? why : err->msg, RETRY_S);
-            c->said_retrying = 1;
+                error_text(resp, why + 10, sizeof why - 10), memcpy(why, "HTTP 503: ", 10);
+            say_retrying(c,
+                         st == 503              ? "is busy"
+                         : st == GI_HTTP_UNSENT ? "cannot be reached"
+                                                : "broke the connection",
+                         st == 503 ? why : err->msg, c->retry_s);
         }
         sleep_s(pause);
     }
@@ -389,6 +429,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     sigaction(SIGINT, &sa, &old);
     int rc;
     double wait = POLL_MIN_S, t_start = gi_now(), unanswered = -1, retry = 0.5;
+    int answered = 0; /* the farm answered this wait once */
     char jname[256] = ""; /* the job's name, once the farm said it */
     for (;;) {
         cJSON *job = NULL;
@@ -396,23 +437,33 @@ static int wait_job(client *c, uint64_t id, int fetch)
         rc = look_at_job(c, id, &job, why, sizeof why);
         if (rc < 0 && !interrupted) {
             /* A coordinator restarting (or a network hiccup) is waited for:
-             * the job goes on, and resumes with it. */
+             * the job goes on, and resumes with it. One never reached by
+             * this wait may not run at all: it is asked as long as any
+             * request is, and then said so. */
             double now = gi_now();
+            double limit = answered && !c->retry_given ? WAIT_UNANSWERED_S : c->retry_s;
+            int unreachable = !answered && strncmp(why, "HTTP ", 5) != 0;
             if (unanswered < 0) {
                 unanswered = now;
                 if (started)
                     gi_progress_end(&prog);
-                gi_say("the farm does not answer (%s); asking again for up to %.0f s", why,
-                       WAIT_UNANSWERED_S);
-                c->said_retrying = 1; /* its requests need not say it again */
+                /* Its requests need not say it again. */
+                say_retrying(c, unreachable ? "cannot be reached" : "does not answer", why, limit);
             }
-            if (now - unanswered < WAIT_UNANSWERED_S) {
+            if (now - unanswered < limit) {
                 sleep_s(backoff(&retry, 5.0));
                 continue;
             }
-            gi_say("the farm has not answered for %.0f s (%s); job %llu goes on there when it is "
-                   "back (gi wait %llu)",
-                   WAIT_UNANSWERED_S, why, (unsigned long long)id, (unsigned long long)id);
+            if (unreachable) {
+                gi_error e;
+                gi_fail(&e, GI_EIO, "%s", why);
+                gave_up(c, limit, &e);
+                gi_say("%s", e.msg);
+            } else {
+                gi_say("the farm has not answered for %.0f s (%s); job %llu goes on there when "
+                       "it is back (gi wait %llu)",
+                       now - unanswered, why, (unsigned long long)id, (unsigned long long)id);
+            }
             if (c->mode == GI_PROGRESS_JSON)
                 gi_progress_json_end(stderr, jname, "unreachable", gi_now() - t_start, why);
             rc = 1;
@@ -429,6 +480,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
         if (unanswered >= 0)
             gi_say("the farm answers again");
         unanswered = -1;
+        answered = 1;
         retry = 0.5;
         const char *state = str(job, "state");
         snprintf(jname, sizeof jname, "%s", str(job, "name"));
@@ -799,7 +851,8 @@ int gi_client_main(int argc, char **argv)
     c.out_dir = "out";
     c.progress = "auto";
     c.priority = GI_FARM_PRIORITY_DEFAULT;
-    const char *farm = getenv("GI_FARM"), *token_file = NULL, *prio = NULL;
+    const char *farm = getenv("GI_FARM"), *token_file = NULL, *prio = NULL, *retry = NULL;
+    const char *env_farm = farm;
     if (!farm || !farm[0])
         farm = "http://127.0.0.1:7070";
     unsigned allowed = 0, given = 0;
@@ -809,9 +862,10 @@ int gi_client_main(int argc, char **argv)
     for (int i = 2; i < argc; i++) {
         const char *v;
         int rc;
-        const char *names[] = {"--farm", "--token-file", "--out", "--progress", "--priority"};
-        const char **dst[] = {&farm, &token_file, &c.out_dir, &c.progress, &prio};
-        const unsigned opt[] = {0, 0, OPT_OUT, OPT_PROGRESS, OPT_PRIORITY};
+        const char *names[] = {"--farm", "--token-file", "--out", "--progress", "--priority",
+                               "--retry"};
+        const char **dst[] = {&farm, &token_file, &c.out_dir, &c.progress, &prio, &retry};
+        const unsigned opt[] = {0, 0, OPT_OUT, OPT_PROGRESS, OPT_PRIORITY, 0};
         size_t k;
         for (k = 0, rc = 0; k < GI_ARRAY_LEN(names); k++)
             if ((rc = gi_args_take(argc, argv, &i, names[k], &v)) != 0)
@@ -823,6 +877,8 @@ int gi_client_main(int argc, char **argv)
                 return fail_msg(2, "%s: %s is not one of its options", cmd, names[k]);
             *dst[k] = v;
             given |= opt[k];
+            if (k == 0)
+                c.farm_from = "from --farm";
             continue;
         }
         unsigned flag = strcmp(argv[i], "--json") == 0   ? OPT_JSON
@@ -849,6 +905,14 @@ int gi_client_main(int argc, char **argv)
     if (gi_progress_mode_parse(c.progress, &c.mode))
         return fail_msg(2, "--progress must be auto, bar, lines, json or none");
     gi_log_json(c.mode == GI_PROGRESS_JSON);
+    c.retry_s = RETRY_S;
+    c.retry_given = retry != NULL;
+    if (retry && gi_args_number(retry, 0, RETRY_LIMIT_S, &c.retry_s))
+        return fail_msg(2, "--retry must be seconds in [0, %.0f], got \"%s\"", RETRY_LIMIT_S,
+                        retry);
+    c.farm = farm;
+    if (!c.farm_from)
+        c.farm_from = env_farm && env_farm[0] ? "from $GI_FARM" : "the default";
     if (prio && gi_args_int(prio, 1, GI_FARM_PRIORITY_MAX, &c.priority))
         return fail_msg(2, "--priority must be an integer in [1, %d]", GI_FARM_PRIORITY_MAX);
     int needs_arg = strcmp(cmd, "jobs") != 0 && strcmp(cmd, "workers") != 0;

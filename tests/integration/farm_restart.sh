@@ -66,7 +66,7 @@ api "/api/v1/jobs/$id" | grep -q "taken as checkpoint $seq\".*resumed from check
 "$GI" fetch "$id" --out "$TMP/farm" >/dev/null || fail "fetch"
 cmp "$TMP/job.json.ref/img.exr" "$TMP/farm/img.exr" || fail "the image differs after the restarts"
 wait "$waiter" || { cat "$TMP/wait.log"; fail "gi wait gave up across the restarts"; }
-grep -q "the farm does not answer" "$TMP/wait.log" && grep -q "the farm answers again" "$TMP/wait.log" ||
+grep -q "gi-farmd at .* does not answer" "$TMP/wait.log" && grep -q "the farm answers again" "$TMP/wait.log" ||
     { cat "$TMP/wait.log"; fail "gi wait did not say it waited for the farm"; }
 cmp "$TMP/job.json.ref/img.exr" "$TMP/waited/img.exr" || fail "gi wait fetched another image"
 # The journal's replay survives a torn tail (a crash in the middle of an append).

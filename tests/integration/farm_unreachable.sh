@@ -1,0 +1,61 @@
+# Farm commands against a gi-farmd that is not running (docs/farm.md, "gi
+# (client)"): they say at once on stderr that gi-farmd at the URL cannot be
+# reached, where the URL came from ($GI_FARM, --farm) and how long they ask
+# again (--retry S); then exit 1 saying to start gi-farmd or check the URL.
+# A gi-farmd started within that time is still found (a restart is waited
+# for), and gi wait gives up on a farm it never reached as the others do.
+. "$(dirname "$0")/lib.sh"
+. "$(dirname "$0")/farm/lib.sh"
+make_secrets
+LOG="$TMP/farmd.log"
+start_farmd "$TMP/state" "$LOG"
+PORTS="--listen-workers $WADDR --listen-api $API"
+stop_farmd "$LOG" # its port is closed now: "connection refused"
+
+# --retry 0: one try, one line, exit 1.
+rc=0
+"$GI" jobs --retry 0 >"$TMP/jobs.out" 2>"$TMP/jobs.err" || rc=$?
+[ $rc = 1 ] || fail "gi jobs against no farm: exit $rc"
+grep -q "^gi: gi-farmd at http://$API (from \$GI_FARM) cannot be reached (cannot connect to $API: \
+Connection refused): is it running? Start it (gi-farmd --state DIR" "$TMP/jobs.err" &&
+    [ "$(wc -l <"$TMP/jobs.err")" = 1 ] && [ ! -s "$TMP/jobs.out" ] ||
+    { cat "$TMP/jobs.out" "$TMP/jobs.err"; fail "gi jobs --retry 0: what it says"; }
+
+# --farm: named as the URL's source; asked again for --retry S, said first.
+rc=0
+"$GI" status 1 --farm "http://$API" --retry 1 2>"$TMP/status.err" || rc=$?
+[ $rc = 1 ] || fail "gi status against no farm: exit $rc"
+head -n 1 "$TMP/status.err" | grep -q "^gi: gi-farmd at http://$API (from --farm) cannot be \
+reached: cannot connect to $API: Connection refused; asking again for up to 1 s, in case it is \
+restarting (--retry S: how long)$" &&
+    tail -n 1 "$TMP/status.err" | grep -q "(from --farm) cannot be reached (.*), asked again for \
+1 s: is it running?" || { cat "$TMP/status.err"; fail "gi status --retry 1: what it says"; }
+
+# gi wait never answered: the same, not "the job goes on there".
+rc=0
+"$GI" wait 1 --retry 1 --progress none 2>"$TMP/wait.err" || rc=$?
+[ $rc = 1 ] && grep -q "cannot be reached (.*), asked again for 1 s: is it running?" \
+    "$TMP/wait.err" && ! grep -q "goes on there" "$TMP/wait.err" ||
+    { cat "$TMP/wait.err"; fail "gi wait against no farm (exit $rc)"; }
+
+# Said at once, before the retries end; a gi-farmd started meanwhile answers.
+"$GI" jobs --retry 60 >"$TMP/jobs2.out" 2>"$TMP/jobs2.err" &
+client=$!
+n=0
+until grep -q "cannot be reached: .*asking again for up to 60 s" "$TMP/jobs2.err"; do
+    n=$((n + 1)); [ $n -lt 100 ] || { cat "$TMP/jobs2.err"; fail "gi jobs did not say it at once"; }
+    sleep 0.1
+done
+kill -0 "$client" || fail "gi jobs gave up at once"
+# shellcheck disable=SC2086
+start_farmd "$TMP/state" "$LOG" -- $PORTS
+wait "$client" || { cat "$TMP/jobs2.err"; fail "gi jobs did not find the farm started meanwhile"; }
+grep -q "^ID .*STATE" "$TMP/jobs2.out" || { cat "$TMP/jobs2.out"; fail "gi jobs output"; }
+
+# A bad --retry is an argument error.
+rc=0
+"$GI" jobs --retry -1 2>"$TMP/bad.err" || rc=$?
+[ $rc = 2 ] && grep -q "\-\-retry must be seconds in \[0, 86400\]" "$TMP/bad.err" ||
+    { cat "$TMP/bad.err"; fail "gi jobs --retry -1: exit $rc"; }
+stop_farmd "$LOG"
+echo "ok"
