@@ -2,7 +2,7 @@
  *
  *   gi render JOB.json [--workers N] [--out DIR] [--progress MODE] [--checkpoint S]
  *             [--resume] [--task-timeout S]
- *   gi validate JOB.json
+ *   gi validate JOB.json | SCENE | [JOB.json] EMISSIONS.json
  *   gi relight JOB.json EMISSIONS.json [--out DIR] [--images] [--progress MODE] ...
  *   gi methods
  *
@@ -31,7 +31,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: gi render JOB.json [--workers N] [--out DIR] [--progress MODE]\n"
             "                          [--checkpoint S] [--resume] [--task-timeout S]\n"
-            "       gi validate JOB.json | SCENE\n"
+            "       gi validate JOB.json | SCENE | [JOB.json] EMISSIONS.json\n"
             "       gi relight JOB.json EMISSIONS.json [--out DIR] [--images]\n"
             "                 [--workers N] [--threads N] [--progress MODE]\n"
             "       gi methods\n"
@@ -48,7 +48,8 @@ static void usage(FILE *out)
             "          --task-timeout S: a task running longer than S seconds is stopped and\n"
             "          retried, as a crash is (default 0: none); a job's task_timeout wins\n"
             "validate  checks a job and its scene without rendering (or a scene alone: a scene\n"
-            "          JSON, OBJ, PLY or glTF file)\n"
+            "          JSON, OBJ, PLY or glTF file; or an emissions file for gi relight: with\n"
+            "          its radiosity job, its names are checked against the job's scene)\n"
             "relight   solves new emissions with a finished radiosity job's factorization\n"
             "          (in DIR, where gi render wrote it; default out): PLY and glTF per\n"
             "          emission set, and a report; --images renders the camera too\n"
@@ -278,21 +279,28 @@ static int validate_scene(const char *path)
 
 static int cmd_validate(int argc, char **argv)
 {
-    if (argc != 3) {
+    if (argc != 3 && argc != 4) {
         usage(stderr);
         return 2;
     }
     int kind = file_kind(argv[2]);
-    if (kind == FILE_SCENE)
-        return validate_scene(argv[2]);
-    /* Its names are the scene's, which only the job knows. */
-    if (kind == FILE_EMISSIONS) {
-        fprintf(stderr,
-                "gi: %s: an emissions file, not a job or a scene: gi relight JOB.json %s checks "
-                "it against the radiosity job's scene (gi validate takes a job or a scene)\n",
-                argv[2], argv[2]);
+    /* JOB.json EMISSIONS.json, as gi relight takes them (or the other way). */
+    if (argc == 4) {
+        int k2 = file_kind(argv[3]);
+        if (kind == FILE_JOB && k2 == FILE_EMISSIONS)
+            return gi_relight_validate(argv[2], argv[3]);
+        if (kind == FILE_EMISSIONS && k2 == FILE_JOB)
+            return gi_relight_validate(argv[3], argv[2]);
+        fprintf(stderr, "gi validate: two files must be a radiosity job and an emissions file "
+                "(an object with \"emissions\"), as gi relight takes them: not %s and %s\n",
+                argv[2], argv[3]);
         return 2;
     }
+    if (kind == FILE_SCENE)
+        return validate_scene(argv[2]);
+    /* Alone: its own fields; its names are the scene's, which only the job knows. */
+    if (kind == FILE_EMISSIONS)
+        return gi_relight_validate(NULL, argv[2]);
     gi_error err;
     gi_job job;
     int rc = gi_job_load(argv[2], &job, &err);

@@ -296,6 +296,54 @@ done:
     return rc;
 }
 
+static const char *set_name(const void *em, uint32_t i)
+{
+    return ((const gi_rad_emissions *)em)->items[i].name;
+}
+
+int gi_relight_validate(const char *job_path, const char *emissions_path)
+{
+    gi_error err;
+    gi_error_clear(&err);
+    gi_job job;
+    int job_loaded = 0;
+    gi_rad_emissions em;
+    memset(&em, 0, sizeof em);
+    gi_buf text;
+    gi_buf_init(&text);
+    if (job_path) {
+        job_loaded = 1;
+        if (gi_job_load(job_path, &job, &err) == 0 &&
+            strcmp(job.method->name, "radiosity") != 0)
+            gi_fail(&err, GI_EINVAL, "%s: an emissions file is for a radiosity job (gi relight), "
+                    "not %s", job_path, job.method->name);
+    }
+    if (err.code == GI_OK &&
+        gi_read_file(emissions_path, EMISSIONS_MAX_BYTES, &text, &err) == 0 &&
+        gi_rad_emissions_parse((const char *)text.data, text.len, emissions_path, &em, &err) ==
+            0 &&
+        job_path)
+        gi_rad_emissions_check_scene(&em, &job.scene, emissions_path, "emissions", &err);
+    if (err.code != GI_OK) {
+        fprintf(stderr, "gi: %s\n", err.msg);
+    } else {
+        char names[400];
+        printf("%s: ok (%u emission set%s: %s", emissions_path, em.count,
+               em.count == 1 ? "" : "s", gi_rad_name_list(names, sizeof names, em.count,
+                                                          set_name, &em));
+        if (job_path)
+            printf("; names found in %s's scene %s)\n", job_path, job.scene_name);
+        else
+            printf("; its material and object names are not checked without the job: gi "
+                   "validate JOB.json %s)\n", emissions_path);
+    }
+    gi_buf_free(&text);
+    gi_rad_emissions_free(&em);
+    if (job_loaded)
+        gi_job_free(&job);
+    return err.code != GI_OK ? gi_error_exit_status(&err) : 0;
+}
+
 int gi_relight_main(int argc, char **argv)
 {
     relight_args a;

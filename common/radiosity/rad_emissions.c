@@ -208,6 +208,51 @@ int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, c
     return 0;
 }
 
+static const char *scene_material(const void *s, uint32_t i)
+{
+    return ((const gi_scene *)s)->materials[i].name;
+}
+
+static const char *scene_object(const void *s, uint32_t i)
+{
+    return ((const gi_scene *)s)->objects[i].name;
+}
+
+int gi_rad_emissions_check_scene(const gi_rad_emissions *em, const gi_scene *s, const char *file,
+                                 const char *list, gi_error *err)
+{
+    char names[400];
+    for (uint32_t i = 0; i < em->count; i++) {
+        const gi_rad_emission *e = &em->items[i];
+        for (uint32_t j = 0; j < e->material_count; j++) {
+            uint32_t m = 0;
+            while (m < s->material_count && strcmp(s->materials[m].name, e->materials[j].name))
+                m++;
+            if (m == s->material_count)
+                return gi_fail(err, GI_EINVAL,
+                               "%s: %s[%u].materials: no material \"%s\" in the scene (its "
+                               "materials: %s)",
+                               file, list, i, e->materials[j].name,
+                               gi_rad_name_list(names, sizeof names, s->material_count,
+                                                scene_material, s));
+            if (s->materials[m].two_sided)
+                return gi_fail(err, GI_EINVAL,
+                               "%s: %s[%u].materials: \"%s\" is two-sided, and radiosity's "
+                               "elements emit from their front face only",
+                               file, list, i, e->materials[j].name);
+        }
+        for (uint32_t j = 0; j < e->object_count; j++)
+            if (gi_scene_find_object(s, e->objects[j].name) < 0)
+                return gi_fail(err, GI_EINVAL,
+                               "%s: %s[%u].objects: no object \"%s\" in the scene (its objects: "
+                               "%s)",
+                               file, list, i, e->objects[j].name,
+                               gi_rad_name_list(names, sizeof names, s->object_count,
+                                                scene_object, s));
+    }
+    return 0;
+}
+
 void gi_rad_emission_vector(const gi_rad_emissions *em, uint32_t i, const gi_rad_model *md,
                             float *E)
 {

@@ -21,6 +21,7 @@
 
 #include "gi_error.h"
 #include "gi_json.h"
+#include "gi_scene.h"
 #include "rad_model.h"
 
 #define GI_RAD_MAX_EMISSIONS 1024
@@ -65,6 +66,13 @@ const char *gi_rad_name_list(char *buf, size_t cap, uint32_t count,
  * (GI_EINVAL naming `file`, the set and the name). */
 int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
                            gi_error *err);
+/* Checks that every material and object named exists in the scene, and
+ * that no named material is two-sided (radiosity's elements emit from
+ * their front face only: half its light would be lost). GI_EINVAL naming
+ * `file` and the field, `list` being the list's own: "radiosity.emissions"
+ * in a job, "emissions" in an emissions file. */
+int gi_rad_emissions_check_scene(const gi_rad_emissions *em, const gi_scene *s, const char *file,
+                                 const char *list, gi_error *err);
 /* The emission vector of set i: n x 3 radiance per element. */
 void gi_rad_emission_vector(const gi_rad_emissions *em, uint32_t i, const gi_rad_model *md,
                             float *E);

@@ -194,21 +194,10 @@ static uint32_t tracked_level(const gi_rad_params *p)
     return p->factorization == GI_RAD_2MF ? p->patch_level : p->max_level;
 }
 
-static const char *scene_material(const void *s, uint32_t i)
-{
-    return ((const gi_scene *)s)->materials[i].name;
-}
-
-static const char *scene_object(const void *s, uint32_t i)
-{
-    return ((const gi_scene *)s)->objects[i].name;
-}
-
 static int rad_check_scene(gi_job *job, gi_error *err)
 {
     const gi_rad_params *p = job->params;
     const gi_scene *s = &job->scene;
-    char names[400];
     /* Elements emit from their front face only: a two-sided emitter would
      * silently lose half its light (and its back would stay dark). */
     for (uint32_t m = 0; m < s->material_count; m++)
@@ -218,34 +207,8 @@ static int rad_check_scene(gi_job *job, gi_error *err)
                            "elements emit from their front face only: make the emitter two "
                            "one-sided faces back to back, or render with another method",
                            job->file, s->materials[m].name);
-    for (uint32_t i = 0; i < p->emissions.count; i++) {
-        const gi_rad_emission *e = &p->emissions.items[i];
-        for (uint32_t j = 0; j < e->material_count; j++) {
-            uint32_t m = 0;
-            while (m < s->material_count && strcmp(s->materials[m].name, e->materials[j].name))
-                m++;
-            if (m == s->material_count)
-                return gi_fail(err, GI_EINVAL,
-                               "%s: radiosity.emissions[%u].materials: no material \"%s\" in "
-                               "the scene (its materials: %s)",
-                               job->file, i, e->materials[j].name,
-                               gi_rad_name_list(names, sizeof names, s->material_count,
-                                                scene_material, s));
-            if (s->materials[m].two_sided)
-                return gi_fail(err, GI_EINVAL,
-                               "%s: radiosity.emissions[%u].materials: \"%s\" is two-sided, and "
-                               "radiosity's elements emit from their front face only",
-                               job->file, i, e->materials[j].name);
-        }
-        for (uint32_t j = 0; j < e->object_count; j++)
-            if (gi_scene_find_object(s, e->objects[j].name) < 0)
-                return gi_fail(err, GI_EINVAL,
-                               "%s: radiosity.emissions[%u].objects: no object \"%s\" in the "
-                               "scene (its objects: %s)",
-                               job->file, i, e->objects[j].name,
-                               gi_rad_name_list(names, sizeof names, s->object_count,
-                                                scene_object, s));
-    }
+    if (gi_rad_emissions_check_scene(&p->emissions, s, job->file, "radiosity.emissions", err))
+        return -1;
     /* The sizes, before any work: n, and k (2MF) or its bound (2MCE). */
     gi_rad_mesh m;
     if (gi_rad_mesh_build(&m, s, gi_rad_patch_area(s, p->patches), p->levels, err))

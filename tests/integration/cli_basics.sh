@@ -1,4 +1,4 @@
-# The command line: validate (a job, a scene alone), methods, --help, JSON progress, the summary, a bare
+# The command line: validate (a job, a scene alone, an emissions file), methods, --help, JSON progress, the summary, a bare
 # OBJ (+ MTL with Kd/Ke) as a whole scene with the default camera, the default
 # pool size under a narrowed CPU set, and an interrupted render leaving no output.
 . "$(dirname "$0")/lib.sh"
@@ -30,14 +30,43 @@ rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q 'material "x" is not defined' "$TMP/bad-scene.log" ||
     { cat "$TMP/bad-scene.log"; fail "a bad scene: exit $rc"; }
-# An emissions file is neither: validate says where it is checked (exit 2).
-echo '{"emissions": [{"name": "scene"}]}' >"$TMP/em.json"
-set +e
-"$GI" validate "$TMP/em.json" 2>"$TMP/em.log"
-rc=$?
-set -e
-[ $rc -eq 2 ] && grep -q "em.json: an emissions file, not a job or a scene: gi relight JOB.json" \
-    "$TMP/em.log" || { cat "$TMP/em.log"; fail "validate an emissions file: exit $rc"; }
+# An emissions file (gi relight's): alone, its own fields (names unchecked,
+# it says so); with its radiosity job, its names against the job's scene;
+# bad ones refused naming file and field (exit 2).
+EM="$SRC/scenes/cornell-box/emissions.json"
+RJOB="$SRC/scenes/cornell-box/radiosity.json"
+"$GI" validate "$EM" >"$TMP/em.out" || fail "validate an emissions file alone"
+grep -q "emissions.json: ok (3 emission sets: scene, blue, lamp; its material and object names \
+are not checked without the job: gi validate JOB.json " "$TMP/em.out" ||
+    { cat "$TMP/em.out"; fail "validate an emissions file alone: what it says"; }
+for args in "$RJOB $EM" "$EM $RJOB"; do
+    # shellcheck disable=SC2086
+    "$GI" validate $args >"$TMP/em.out" || fail "validate $args"
+    grep -q "emissions.json: ok (3 emission sets: scene, blue, lamp; names found in .*radiosity\.json's \
+scene scene.json)" "$TMP/em.out" || { cat "$TMP/em.out"; fail "validate $args: what it says"; }
+done
+em_refused() { # em_refused WHAT MESSAGE FILE...
+    what=$1 msg=$2
+    shift 2
+    set +e
+    "$GI" validate "$@" >"$TMP/em.out" 2>"$TMP/em.log"
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] && [ ! -s "$TMP/em.out" ] && grep -q "$msg" "$TMP/em.log" ||
+        { cat "$TMP/em.out" "$TMP/em.log"; fail "validate $what: exit $rc"; }
+}
+sed 's/"tall_block"/"tall_blok"/' "$EM" >"$TMP/em-obj.json"
+em_refused "an unknown object" "em-obj.json: emissions\[2\].objects: no object \"tall_blok\" in \
+the scene (its objects: .*tall_block" "$RJOB" "$TMP/em-obj.json"
+sed 's/"light": \[2/"lite": [2/' "$EM" >"$TMP/em-mat.json"
+em_refused "an unknown material" "em-mat.json: emissions\[1\].materials: no material \"lite\"" \
+    "$RJOB" "$TMP/em-mat.json"
+echo '{"emissions": [{"name": "a", "scale": -1}]}' >"$TMP/em-scale.json"
+em_refused "a bad scale" "em-scale.json: emissions\[0\].scale: -1 is out of range" \
+    "$TMP/em-scale.json"
+em_refused "with a pt job" "pt.json: an emissions file is for a radiosity job (gi relight), not pt" \
+    "$SRC/scenes/cornell-box/pt.json" "$EM"
+em_refused "twice" "two files must be a radiosity job and an emissions file" "$EM" "$EM"
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
