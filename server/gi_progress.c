@@ -137,10 +137,15 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force)
     double rate = elapsed > 0 ? (at->samples - p->samples_at_start) / elapsed : 0.0;
     double ray_rate = elapsed > 0 ? (at->rays - p->rays_at_start) / elapsed : 0.0;
     char b1[32], b2[32], b3[32], what[64];
+    /* Before any work is seen there is no rate yet: "?", not a 0 that reads
+     * as a stalled render. */
+    int measured = elapsed > 0 && at->rays > p->rays_at_start;
     /* An animation shows its frames done; a still the rate in the method's unit. */
     if (at->frames > 1)
         snprintf(what, sizeof what, "%u/%u frames", f >= 1 ? at->frames : at->frame,
                  at->frames);
+    else if (!measured)
+        snprintf(what, sizeof what, "? %s/s", p->unit);
     else
         snprintf(what, sizeof what, "%s%s/s", gi_si(rate, b2, sizeof b2), p->unit);
     switch (p->mode) {
@@ -154,7 +159,7 @@ void gi_progress_update(gi_progress *p, const gi_progress_at *at, int force)
         bar[width] = '\0';
         fprintf(p->out, "\r%s [%s] %5.1f%%  ETA %-8s %s  %srays/s ", p->job_name, bar,
                 100.0 * f, gi_duration(eta, b1, sizeof b1), what,
-                gi_si(ray_rate, b3, sizeof b3));
+                measured ? gi_si(ray_rate, b3, sizeof b3) : "? ");
         fflush(p->out);
         p->bar_drawn = 1;
         break;

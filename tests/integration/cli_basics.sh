@@ -92,6 +92,12 @@ grep -q '"fraction":1.000000' "$TMP/progress.txt" || fail "no final progress lin
 grep -q "^obj: pt done in" "$TMP/summary.txt" || fail "no summary"
 grep -q "samples/s" "$TMP/summary.txt" || fail "summary has no rate"
 grep -q "exr  $TMP/out/obj.exr" "$TMP/summary.txt" || fail "summary does not list the EXR"
+# Progress lines: no rate before any work is seen ("?", not a 0 that reads as a stall).
+"$GI" render "$TMP/obj.json" --out "$TMP/out-lines" --progress lines 2>"$TMP/lines.txt" \
+    >/dev/null || fail "render --progress lines"
+head -n 1 "$TMP/lines.txt" | grep -q "^obj: 0.0% done, ETA ?, ? samples/s$" &&
+    ! grep -q " 0 samples/s" "$TMP/lines.txt" && grep -q "^obj: 100.0% done, .* [0-9.]* [kM]*samples/s$" \
+    "$TMP/lines.txt" || { cat "$TMP/lines.txt"; fail "progress lines' rate"; }
 # The default camera sees the lit floor (Kd 0.7 0.6 0.5 under Ke 10 9 8).
 "$IMGTOOL" stats "$TMP/out/obj.exr" >"$TMP/stats.txt"
 awk '/^mean/ { exit !($2 > 0.01 && $2 > $3 && $3 > $4) }' "$TMP/stats.txt" ||
