@@ -382,8 +382,13 @@ static int job_failed(uint64_t id, const cJSON *job)
     const char *state = str(job, "state");
     const cJSON *e = cJSON_GetObjectItemCaseSensitive(job, "error");
     int status = (int)num(e, "exit_status", 1);
+    /* A cancel's message says "cancelled: why": not "cancelled: cancelled: why". */
+    const char *msg = str(e, "message");
+    size_t n = strlen(state);
+    if (n && strncmp(msg, state, n) == 0 && strncmp(msg + n, ": ", 2) == 0)
+        msg += n + 2;
     if (status == 2)
-        return fail_msg(2, "job %llu %s: %s", (unsigned long long)id, state, str(e, "message"));
+        return fail_msg(2, "job %llu %s: %s", (unsigned long long)id, state, msg);
     const cJSON *ck = cJSON_GetObjectItemCaseSensitive(job, "checkpoint");
     const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
     double merged = num(ck, "merged", 0);
@@ -394,7 +399,7 @@ static int job_failed(uint64_t id, const cJSON *job)
     else
         snprintf(again, sizeof again, "from the start");
     return fail_msg(1, "job %llu %s: %s; `gi retry %llu` runs it again %s",
-                    (unsigned long long)id, state, str(e, "message"), (unsigned long long)id,
+                    (unsigned long long)id, state, msg, (unsigned long long)id,
                     again);
 }
 

@@ -104,7 +104,8 @@ set +e
 "$GI" wait "$id" --progress none >/dev/null 2>"$TMP/wait.log"
 rc=$?
 set -e
-[ $rc -eq 1 ] && grep -q "cancelled" "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "gi wait on a cancelled job: $rc"; }
+[ $rc -eq 1 ] && grep -q "^gi: job $id cancelled: requested through the API; .gi retry $id. runs it" \
+    "$TMP/wait.log" || { cat "$TMP/wait.log"; fail "gi wait on a cancelled job: $rc"; }
 # gi fetch of it says it has no outputs and what to do instead.
 set +e
 "$GI" fetch "$id" --out "$TMP/none" >/dev/null 2>"$TMP/fetch.log"
