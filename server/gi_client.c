@@ -123,7 +123,9 @@ static int http_failure(const client *c, const char *what, int status, const gi_
     char msg[1200];
     error_text(body, msg, sizeof msg);
     if (status == 401)
-        return fail_msg(1, "%s: the farm refused the API token: %s", what, msg);
+        return fail_msg(1, "%s: gi-farmd at %s (%s) refused the API token: %s (give the token "
+                        "gi-farmd was started with: its --token-file)", what, c->farm,
+                        c->farm_from, msg);
     /* A job id from another farm ($GI_FARM, --farm) or one purged. */
     if (status == 404 && strncmp(what, "/api/v1/jobs/", 13) == 0)
         return fail_msg(1, "%s: %s (HTTP 404 from the farm at %s; `gi jobs` lists its jobs)", what,
@@ -823,6 +825,7 @@ static int cmd_retry(client *c, uint64_t id)
     if (rc)
         return rc;
     printf("job %llu runs again\n", (unsigned long long)id);
+    fflush(stdout); /* before the progress on stderr, when stdout is a pipe */
     return c->wait ? wait_job(c, id, 1) : 0;
 }
 

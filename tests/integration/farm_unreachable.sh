@@ -4,6 +4,7 @@
 # again (--retry S); then exit 1 saying to start gi-farmd or check the URL.
 # A gi-farmd started within that time is still found (a restart is waited
 # for), and gi wait gives up on a farm it never reached as the others do.
+# A farm reached that refuses the token is named too.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -51,6 +52,13 @@ kill -0 "$client" || fail "gi jobs gave up at once"
 start_farmd "$TMP/state" "$LOG" -- $PORTS
 wait "$client" || { cat "$TMP/jobs2.err"; fail "gi jobs did not find the farm started meanwhile"; }
 grep -q "^ID .*STATE" "$TMP/jobs2.out" || { cat "$TMP/jobs2.out"; fail "gi jobs output"; }
+
+# Reached with another token: it says which gi-farmd refused it, and what to give.
+rc=0
+GI_FARM_TOKEN_FILE="$TMP/secret" "$GI" jobs 2>"$TMP/token.err" || rc=$?
+[ $rc = 1 ] && grep -q "^gi: /api/v1/jobs: gi-farmd at http://$API (from \$GI_FARM) refused the \
+API token: .* (give the token gi-farmd was started with: its --token-file)$" "$TMP/token.err" ||
+    { cat "$TMP/token.err"; fail "gi jobs with a wrong token: exit $rc"; }
 
 # A bad --retry is an argument error.
 rc=0
