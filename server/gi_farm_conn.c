@@ -311,9 +311,10 @@ static void on_auth(gi_farm *f, gi_farm_conn *c, const gi_frame *fr)
     c->next_heartbeat = gi_now() + f->cfg.heartbeat_s;
     f->m.workers_accepted++;
     gi_farm_sched_welcome(f, c);
-    gi_info("worker %s (%s) joined: %u processes, %u slots, %u cores, %.1f GiB, protocol %u, "
+    gi_info("worker %s (%s) joined: %u process%s, %u slots, %u cores, %.1f GiB, protocol %u, "
             "version %s%s",
-            c->hello.name, c->peer, c->hello.procs, c->hello.slots, c->hello.cores,
+            c->hello.name, c->peer, c->hello.procs, c->hello.procs == 1 ? "" : "es",
+            c->hello.slots, c->hello.cores,
             (double)c->hello.memory / (1u << 30), c->proto, c->hello.version,
             strcmp(c->hello.version, GI_VERSION) ? " (differs from the coordinator's)" : "");
 }

@@ -832,8 +832,8 @@ gi_farm_job *gi_farm_job_submit(gi_farm *f, const char *file, char *text,
         return NULL;
     }
     f->m.jobs_submitted++;
-    gi_farm_job_log(j, "submitted: %s, method %s, priority %u, %zu assets", j->file, j->method,
-                    j->priority, j->manifest.count);
+    gi_farm_job_log(j, "submitted: %s, method %s, priority %u, %zu asset%s", j->file, j->method,
+                    j->priority, j->manifest.count, j->manifest.count == 1 ? "" : "s");
     start_checkers(f);
     gi_error cerr;
     if (f->journal.records > COMPACT_AFTER_RECORDS && compact(f, &cerr))
