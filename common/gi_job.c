@@ -102,6 +102,18 @@ int gi_job_parse(const char *text, size_t len, const char *file, gi_job *job, gi
 
     /* The method first: its name decides which parameter block is allowed. */
     const char *method = NULL;
+    /* The usual slip: a scene or an emissions file given where a job goes. */
+    const char *kind = NULL;
+    if (cJSON_IsObject(root) && !cJSON_HasObjectItem(root, "method"))
+        kind = cJSON_HasObjectItem(root, "objects")     ? "a scene"
+               : cJSON_HasObjectItem(root, "emissions") ? "an emissions file (gi relight's)"
+                                                        : NULL;
+    if (kind)
+        return gi_fail(err, GI_EINVAL,
+                       "%s: method: missing (required): this is %s, not a job; a job names its "
+                       "scene (\"scene\") and a method (docs/job-format.md; "
+                       "scenes/cornell-box/pt.json is one)",
+                       file, kind);
     if (gi_jv_string(&v, root, "", "method", 1, &method))
         return -1;
     job->method = gi_method_find(method);

@@ -67,6 +67,16 @@ em_refused "a bad scale" "em-scale.json: emissions\[0\].scale: -1 is out of rang
 em_refused "with a pt job" "pt.json: an emissions file is for a radiosity job (gi relight), not pt" \
     "$SRC/scenes/cornell-box/pt.json" "$EM"
 em_refused "twice" "two files must be a radiosity job and an emissions file" "$EM" "$EM"
+# A scene or an emissions file given to gi render: what it is, and what a job is.
+for f in scene.json emissions.json; do
+    set +e
+    "$GI" render "$SRC/scenes/cornell-box/$f" --out "$TMP/not-a-job" 2>"$TMP/not-job.log"
+    rc=$?
+    set -e
+    [ $rc -eq 2 ] && grep -q "$f: method: missing (required): this is an* [a-z]*.*, not a job; \
+a job names its scene (\"scene\") and a method" "$TMP/not-job.log" ||
+        { cat "$TMP/not-job.log"; fail "gi render $f: exit $rc"; }
+done
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
