@@ -405,6 +405,12 @@ static int job_failed(uint64_t id, const cJSON *job)
                     again);
 }
 
+static int ended(const char *state)
+{
+    return strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
+           strcmp(state, "cancelled") == 0;
+}
+
 /* before: the job had ended when the wait began (it says when). */
 static void print_summary(uint64_t id, const cJSON *job, int before)
 {
@@ -493,8 +499,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
         snprintf(jname, sizeof jname, "%s", str(job, "name"));
         const cJSON *work = cJSON_GetObjectItemCaseSensitive(job, "work");
         const cJSON *stats = cJSON_GetObjectItemCaseSensitive(job, "stats");
-        int end = strcmp(state, "done") == 0 || strcmp(state, "failed") == 0 ||
-                  strcmp(state, "cancelled") == 0;
+        int end = ended(state);
         /* A job that had ended before the wait gets no progress line: its
          * rate over no time would be a meaningless 0. */
         if (!started && !end && strcmp(state, "checking") != 0) {
@@ -674,6 +679,13 @@ static void print_exclusions(const cJSON *job)
                "blocklisted, or none)\n");
 }
 
+/* A job's ETA, or -1: an ended job has none (the API's 0 for a done one
+ * would read as "any moment now"). */
+static double running_eta(const cJSON *job)
+{
+    return ended(str(job, "state")) ? -1 : num(job, "eta_seconds", -1);
+}
+
 static int cmd_status(client *c, uint64_t id)
 {
     cJSON *job = NULL;
@@ -687,7 +699,7 @@ static int cmd_status(client *c, uint64_t id)
     }
     const cJSON *t = cJSON_GetObjectItemCaseSensitive(job, "tasks");
     char eta[32];
-    double e = num(job, "eta_seconds", -1);
+    double e = running_eta(job);
     printf("job %llu: %s (%s), %s, priority %.0f\n", (unsigned long long)id, str(job, "name"),
            str(job, "method"), str(job, "state"), num(job, "priority", 0));
     printf("  progress %.1f%%%s%s\n", 100.0 * num(job, "progress", 0), e >= 0 ? ", ETA " : "",
@@ -752,7 +764,7 @@ static int cmd_jobs(client *c)
     const cJSON *jobs = cJSON_GetObjectItemCaseSensitive(doc, "jobs");
     for (const cJSON *j = jobs ? jobs->child : NULL; j; j = j->next) {
         char eta[32] = "";
-        double e = num(j, "eta_seconds", -1);
+        double e = running_eta(j);
         if (e >= 0)
             gi_duration(e, eta, sizeof eta);
         printf("%-6.0f %-10s %5.0f %7.1f%% %9s %-12s %s\n", num(j, "id", 0), str(j, "state"),

@@ -61,6 +61,9 @@ cmp "$TMP/job.json.ref/img.exr" "$TMP/o1/img.exr" || fail "the image differs fro
 grep -q "^[^ ]*: job $id (pt) done on the farm already, at 20" "$TMP/wait1.out" &&
     ! grep -q "/s" "$TMP/wait1.out" "$TMP/wait1.err" && cmp "$TMP/o1/img.exr" "$TMP/o1w/img.exr" ||
     { cat "$TMP/wait1.out" "$TMP/wait1.err"; fail "gi wait of a done job: what it says"; }
+# An ended job has no ETA (not "0.0s") in gi jobs and gi status.
+"$GI" jobs | grep -Eq "^$id +done +[0-9]+ +100\.0% +pt " && "$GI" status "$id" >"$TMP/st1" &&
+    grep -q "^  progress 100.0%$" "$TMP/st1" || { "$GI" jobs; cat "$TMP/st1"; fail "a done job's ETA"; }
 [ "$(metric gi_farm_jobs_finishing)" = 0 ] || fail "still a finishing job in the metrics"
 stall=$(metric gi_farm_loop_stall_max_seconds)
 awk -v s="$stall" 'BEGIN {exit !(s > 0)}' || fail "no loop stall metric ($stall)"
