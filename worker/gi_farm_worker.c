@@ -620,7 +620,13 @@ static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
             return got < 0 ? -1 : 0;
         double left = deadline - gi_now();
         if (left <= 0)
-            return gi_fail(err, GI_EIO, "no answer from the coordinator within %.0f s", HANDSHAKE_S);
+            /* The usual cause: --connect names the API port (HTTP waits
+             * for a request, and says nothing). */
+            return gi_fail(err, GI_EIO,
+                           "no answer from the coordinator at %s within %.0f s: is that "
+                           "gi-farmd's worker port (its --listen-workers, 7071 by default), "
+                           "not its API port (--listen-api, 7070)?",
+                           w->o->connect, HANDSHAKE_S);
         struct pollfd p = {.fd = w->fd, .events = POLLIN};
         int r = poll(&p, 1, (int)(left * 1000) + 1);
         if (r < 0 && errno != EINTR)
@@ -940,7 +946,7 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
     w.tokens = 2.0 * o->procs + 4;
     w.tokens_at = gi_now();
     double backoff = 0.25;
-    int rc = -1;
+    int rc = -1, said_refused = 0, ever = 0; /* ever: a session was established */
     gi_error serr;
     for (;;) {
         if (signals_seen) {
@@ -956,7 +962,17 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
         }
         if (serr.code == GI_OK)
             gi_fail(&serr, GI_EIO, "the session ended");
-        gi_warn("%s", serr.msg);
+        /* Once: a worker started before its coordinator, or pointed at
+         * the wrong address, must not look like a worker that is fine. */
+        ever |= w.established;
+        if (!ever && !said_refused && !o->once && strstr(serr.msg, "Connection refused")) {
+            gi_warn("%s (no gi-farmd listening for workers there yet: is it running, with "
+                    "--listen-workers %s? asking again, at most --backoff-max %.0f s apart)",
+                    serr.msg, o->connect, o->backoff_max_s);
+            said_refused = 1;
+        } else {
+            gi_warn("%s", serr.msg);
+        }
         if (o->once) {
             if (err)
                 *err = serr;

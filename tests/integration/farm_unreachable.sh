@@ -4,7 +4,8 @@
 # again (--retry S); then exit 1 saying to start gi-farmd or check the URL.
 # A gi-farmd started within that time is still found (a restart is waited
 # for), and gi wait gives up on a farm it never reached as the others do.
-# A farm reached that refuses the token is named too.
+# A farm reached that refuses the token is named too; so does a gi-worker
+# started before gi-farmd, or pointed at its API port.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -39,6 +40,14 @@ rc=0
     "$TMP/wait.err" && ! grep -q "goes on there" "$TMP/wait.err" ||
     { cat "$TMP/wait.err"; fail "gi wait against no farm (exit $rc)"; }
 
+# A gi-worker started before gi-farmd says once why it waits, and goes on asking.
+timeout 3 "$WORKER" --connect "$WADDR" --procs 1 --cache "$TMP/wcache" >"$TMP/early.log" 2>&1 ||
+    true
+[ "$(grep -c "Connection refused (no gi-farmd listening for workers there yet: is it running, \
+with --listen-workers $WADDR? asking again" "$TMP/early.log")" = 1 ] &&
+    [ "$(grep -c "cannot connect to $WADDR: Connection refused$" "$TMP/early.log")" -ge 1 ] ||
+    { cat "$TMP/early.log"; fail "gi-worker started before gi-farmd: what it says"; }
+
 # Said at once, before the retries end; a gi-farmd started meanwhile answers.
 "$GI" jobs --retry 60 >"$TMP/jobs2.out" 2>"$TMP/jobs2.err" &
 client=$!
@@ -60,10 +69,20 @@ GI_FARM_TOKEN_FILE="$TMP/secret" "$GI" jobs 2>"$TMP/token.err" || rc=$?
 API token: .* (give the token gi-farmd was started with: its --token-file)$" "$TMP/token.err" ||
     { cat "$TMP/token.err"; fail "gi jobs with a wrong token: exit $rc"; }
 
+# A gi-worker pointed at the API port hears nothing: it says what to check.
+"$WORKER" --connect "$API" --once --procs 1 --cache "$TMP/wcache2" --name wrongport \
+    >"$TMP/wrongport.log" 2>&1 &
+wrongport=$!
+
 # A bad --retry is an argument error.
 rc=0
 "$GI" jobs --retry -1 2>"$TMP/bad.err" || rc=$?
 [ $rc = 2 ] && grep -q "\-\-retry must be seconds in \[0, 86400\]" "$TMP/bad.err" ||
     { cat "$TMP/bad.err"; fail "gi jobs --retry -1: exit $rc"; }
+rc=0
+wait "$wrongport" || rc=$?
+[ $rc != 0 ] && grep -q "no answer from the coordinator at $API within 10 s: is that gi-farmd's \
+worker port (its --listen-workers, 7071 by default), not its API port (--listen-api, 7070)?" \
+    "$TMP/wrongport.log" || { cat "$TMP/wrongport.log"; fail "gi-worker on the API port (exit $rc)"; }
 stop_farmd "$LOG"
 echo "ok"
