@@ -443,6 +443,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     int rc;
     double wait = POLL_MIN_S, t_start = gi_now(), unanswered = -1, retry = 0.5;
     int answered = 0; /* the farm answered this wait once */
+    int said_waiting = 0; /* that the job waits for a worker, since it last did not */
     char jname[256] = ""; /* the job's name, once the farm said it */
     for (;;) {
         cJSON *job = NULL;
@@ -545,6 +546,17 @@ static int wait_job(client *c, uint64_t id, int fetch)
             cJSON_Delete(job);
             break;
         }
+        /* Else a farm without a worker (none started, all blocklisted)
+         * shows a progress stuck at 0 and says nothing. */
+        int waiting = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(job, "waiting_for_workers"));
+        if (waiting && !said_waiting) {
+            if (started)
+                gi_progress_end(&prog);
+            gi_say("job %llu waits: no connected worker may take its tasks now (none connected, "
+                   "or excluded from it or blocklisted: gi workers, gi status %llu)",
+                   (unsigned long long)id, (unsigned long long)id);
+        }
+        said_waiting = waiting;
         wait = poll_wait(job, wait);
         cJSON_Delete(job);
         if (interrupted) {

@@ -4,7 +4,8 @@
 # again (--retry S); then exit 1 saying to start gi-farmd or check the URL.
 # A gi-farmd started within that time is still found (a restart is waited
 # for), and gi wait gives up on a farm it never reached as the others do.
-# A farm reached that refuses the token is named too; so does a gi-worker
+# gi wait says when a job waits for want of a worker. A farm reached that
+# refuses the token is named too; so does a gi-worker
 # started before gi-farmd, or pointed at its API port.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
@@ -61,6 +62,17 @@ kill -0 "$client" || fail "gi jobs gave up at once"
 start_farmd "$TMP/state" "$LOG" -- $PORTS
 wait "$client" || { cat "$TMP/jobs2.err"; fail "gi jobs did not find the farm started meanwhile"; }
 grep -q "^ID .*STATE" "$TMP/jobs2.out" || { cat "$TMP/jobs2.out"; fail "gi jobs output"; }
+
+# A farm with no worker: gi wait says why the job does not move, then it does.
+cornell_job "$TMP/job.json" 3 16 16 8
+id=$("$GI" submit "$TMP/job.json" 2>/dev/null) || fail "submit"
+"$GI" wait "$id" --out "$TMP/out" --progress none >/dev/null 2>"$TMP/waiting.err" &
+waiter=$!
+wait_log "$TMP/waiting.err" "job $id waits: no connected worker may take its tasks now"
+start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 1 --cache "$TMP/wcache3"
+wait "$waiter" || { cat "$TMP/waiting.err"; fail "gi wait once a worker came"; }
+[ "$(grep -c "waits: no connected worker" "$TMP/waiting.err")" = 1 ] ||
+    { cat "$TMP/waiting.err"; fail "gi wait did not say once that the job waits for a worker"; }
 
 # Reached with another token: it says which gi-farmd refused it, and what to give.
 rc=0
