@@ -111,7 +111,9 @@ int gi_net_listen(const char *addr, char *bound, size_t bound_len, gi_error *err
     }
     freeaddrinfo(res);
     if (fd < 0)
-        return gi_fail(err, GI_EIO, "cannot listen on %s: %s", addr, strerror(last));
+        return gi_fail(err, GI_EIO, "cannot listen on %s: %s%s", addr, strerror(last),
+                       last == EADDRINUSE ? " (another program, a gi-farmd perhaps, has that "
+                                            "port: give another)" : "");
     struct sockaddr_storage ss;
     socklen_t sl = sizeof ss;
     if (bound && getsockname(fd, (struct sockaddr *)&ss, &sl) == 0)

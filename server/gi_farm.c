@@ -133,7 +133,7 @@ int gi_farm_open(gi_farm **out, gi_farm_config *cfg, gi_error *err)
         return -1;
     f->worker_fd = gi_net_listen(f->cfg.listen_workers, f->worker_addr, sizeof f->worker_addr, err);
     if (f->worker_fd < 0)
-        return -1;
+        return gi_error_prefix(err, "--listen-workers");
     if (gi_farm_api_start(f, err))
         return -1;
     if (gi_farm_jobs_replay(f, err))

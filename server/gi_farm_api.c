@@ -956,7 +956,7 @@ int gi_farm_api_start(gi_farm *f, gi_error *err)
 {
     f->api_fd = gi_net_listen(f->cfg.listen_api, f->api_addr, sizeof f->api_addr, err);
     if (f->api_fd < 0)
-        return -1;
+        return gi_error_prefix(err, "--listen-api");
     f->mhd = MHD_start_daemon(
         MHD_USE_EPOLL | MHD_USE_ERROR_LOG, 0, NULL, NULL, on_request, f,
         MHD_OPTION_EXTERNAL_LOGGER, on_mhd_log, f, MHD_OPTION_LISTEN_SOCKET, f->api_fd,

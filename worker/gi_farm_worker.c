@@ -73,6 +73,7 @@ typedef struct worker {
     /* The session. */
     int fd;
     int established;
+    int heard; /* bytes came from the coordinator on this connection */
     gi_frame_decoder dec;
     gi_outq out;
     double last_heard, next_hb;
@@ -611,22 +612,30 @@ static void flush(worker *w, double seconds)
 
 /* ---- handshake ---------------------------------------------------------------- */
 
+/* A handshake that heard nothing: the usual cause is a --connect naming
+ * the API port (HTTP waits for a request, says nothing, and closes when
+ * its --api-head-seconds run out). */
+static int silent_peer(const char *what, gi_error *err)
+{
+    return gi_fail(err, GI_EIO,
+                   "%s: is that gi-farmd's worker port (its --listen-workers, 7071 by default), "
+                   "not its API port (--listen-api, 7070)?", what);
+}
+
 /* Reads one frame within the deadline. */
 static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
 {
+    char what[160];
     for (;;) {
         int got = gi_frame_decoder_next(&w->dec, fr, err);
         if (got)
             return got < 0 ? -1 : 0;
         double left = deadline - gi_now();
-        if (left <= 0)
-            /* The usual cause: --connect names the API port (HTTP waits
-             * for a request, and says nothing). */
-            return gi_fail(err, GI_EIO,
-                           "no answer from the coordinator at %s within %.0f s: is that "
-                           "gi-farmd's worker port (its --listen-workers, 7071 by default), "
-                           "not its API port (--listen-api, 7070)?",
-                           w->o->connect, HANDSHAKE_S);
+        if (left <= 0) {
+            snprintf(what, sizeof what, "no answer from the coordinator at %s within %.0f s",
+                     w->o->connect, HANDSHAKE_S);
+            return silent_peer(what, err);
+        }
         struct pollfd p = {.fd = w->fd, .events = POLLIN};
         int r = poll(&p, 1, (int)(left * 1000) + 1);
         if (r < 0 && errno != EINTR)
@@ -637,8 +646,14 @@ static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
         ssize_t n = recv(w->fd, buf, sizeof buf, 0);
         if (n < 0 && errno == EINTR)
             continue;
+        if (n <= 0 && !w->heard) {
+            snprintf(what, sizeof what, "the coordinator at %s closed the connection during the "
+                     "handshake without a word", w->o->connect);
+            return silent_peer(what, err);
+        }
         if (n <= 0)
             return gi_fail(err, GI_EIO, "the coordinator closed the connection during the handshake");
+        w->heard = 1;
         gi_frame_decoder_feed(&w->dec, buf, (size_t)n);
     }
 }
@@ -813,6 +828,7 @@ static int stop_now(worker *w, int kill_running)
 
 static int session(worker *w, gi_error *err)
 {
+    w->heard = 0;
     w->fd = gi_net_connect(w->o->connect, HANDSHAKE_S, err);
     if (w->fd < 0)
         return SESSION_LOST;

@@ -6,7 +6,8 @@
 # for), and gi wait gives up on a farm it never reached as the others do.
 # gi wait says when a job waits for want of a worker. A farm reached that
 # refuses the token is named too; so does a gi-worker
-# started before gi-farmd, or pointed at its API port.
+# started before gi-farmd, or pointed at its API port, and a second
+# gi-farmd on a port in use.
 . "$(dirname "$0")/lib.sh"
 . "$(dirname "$0")/farm/lib.sh"
 make_secrets
@@ -91,10 +92,19 @@ rc=0
 "$GI" jobs --retry -1 2>"$TMP/bad.err" || rc=$?
 [ $rc = 2 ] && grep -q "\-\-retry must be seconds in \[0, 86400\]" "$TMP/bad.err" ||
     { cat "$TMP/bad.err"; fail "gi jobs --retry -1: exit $rc"; }
+# A second gi-farmd on the same API port names the option and the cause.
+rc=0
+"$FARMD" --state "$TMP/state2" --listen-workers 127.0.0.1:0 --listen-api "$API" 2>"$TMP/second.err" ||
+    rc=$?
+[ $rc = 1 ] && grep -q "^gi-farmd: --listen-api: cannot listen on $API: Address already in use \
+(another program, a gi-farmd perhaps, has that port: give another)$" "$TMP/second.err" ||
+    { cat "$TMP/second.err"; fail "a second gi-farmd on the API port (exit $rc)"; }
 rc=0
 wait "$wrongport" || rc=$?
-[ $rc != 0 ] && grep -q "no answer from the coordinator at $API within 10 s: is that gi-farmd's \
-worker port (its --listen-workers, 7071 by default), not its API port (--listen-api, 7070)?" \
-    "$TMP/wrongport.log" || { cat "$TMP/wrongport.log"; fail "gi-worker on the API port (exit $rc)"; }
+# (gi-farmd may close the silent connection first: its --api-head-seconds is 10 s too.)
+[ $rc != 0 ] && grep -Eq "(no answer from the coordinator at $API within 10 s|the coordinator at \
+$API closed the connection during the handshake without a word): is that" "$TMP/wrongport.log" &&
+    grep -qF "is that gi-farmd's worker port (its --listen-workers, 7071 by default), not its \
+API port (--listen-api, 7070)?" "$TMP/wrongport.log" || { cat "$TMP/wrongport.log"; fail "gi-worker on the API port (exit $rc)"; }
 stop_farmd "$LOG"
 echo "ok"
