@@ -214,8 +214,10 @@ static int request(client *c, const char *method, const char *path, const void *
         }
         if (!c->said_retrying) {
             char why[1200];
-            if (st == 503)
-                error_text(resp, why + 10, sizeof why - 10), memcpy(why, "HTTP 503: ", 10);
+            if (st == 503) {
+                memcpy(why, "HTTP 503: ", 10);
+                error_text(resp, why + 10, sizeof why - 10);
+            }
             say_retrying(c,
                          st == 503              ? "is busy"
                          : st == GI_HTTP_UNSENT ? "cannot be reached"
@@ -909,7 +911,7 @@ int gi_client_main(int argc, char **argv)
                 return fail_msg(2, "%s: %s is not one of its options", cmd, names[k]);
             *dst[k] = v;
             given |= opt[k];
-            if (k == 0)
+            if (dst[k] == &farm)
                 c.farm_from = "from --farm";
             continue;
         }
