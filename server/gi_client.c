@@ -434,7 +434,9 @@ static void print_summary(uint64_t id, const cJSON *job, int before)
 }
 
 /* Polls the job until it ends (showing progress), then fetches its outputs. */
-static int wait_job(client *c, uint64_t id, int fetch)
+/* fresh: the job was just submitted or retried by this command (so it never
+ * ended "already"). */
+static int wait_job(client *c, uint64_t id, int fetch, int fresh)
 {
     gi_progress prog;
     int started = 0;
@@ -445,6 +447,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
     int rc;
     double wait = POLL_MIN_S, t_start = gi_now(), unanswered = -1, retry = 0.5;
     int answered = 0; /* the farm answered this wait once */
+    int ended_before = 0; /* the job had ended when the farm first answered */
     int said_waiting = 0; /* that the job waits for a worker, since it last did not */
     char jname[256] = ""; /* the job's name, once the farm said it */
     for (;;) {
@@ -496,6 +499,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
         if (unanswered >= 0)
             gi_say("the farm answers again");
         unanswered = -1;
+        ended_before = !fresh && !answered && ended(str(job, "state"));
         answered = 1;
         retry = 0.5;
         const char *state = str(job, "state");
@@ -532,7 +536,7 @@ static int wait_job(client *c, uint64_t id, int fetch)
             if (strcmp(state, "done") != 0) {
                 rc = job_failed(id, job);
             } else {
-                print_summary(id, job, !started);
+                print_summary(id, job, ended_before);
                 rc = fetch ? fetch_outputs(c, id, job) : 0;
             }
             if (c->mode == GI_PROGRESS_JSON) {
@@ -650,7 +654,7 @@ static int cmd_submit(client *c)
         return rc;
     gi_say("submitted %s as job %llu", c->arg, (unsigned long long)id);
     if (c->wait)
-        return wait_job(c, id, 1);
+        return wait_job(c, id, 1, 1);
     /* Wait for the farm's own scene check, so a scene it refuses is an
      * error here rather than a surprise later. */
     for (;;) {
@@ -852,7 +856,7 @@ static int cmd_retry(client *c, uint64_t id)
         return rc;
     printf("job %llu runs again\n", (unsigned long long)id);
     fflush(stdout); /* before the progress on stderr, when stdout is a pipe */
-    return c->wait ? wait_job(c, id, 1) : 0;
+    return c->wait ? wait_job(c, id, 1, 1) : 0;
 }
 
 static int cmd_fetch(client *c, uint64_t id)
@@ -980,7 +984,7 @@ int gi_client_main(int argc, char **argv)
     else if (strcmp(cmd, "status") == 0)
         rc = cmd_status(&c, id);
     else if (strcmp(cmd, "wait") == 0)
-        rc = wait_job(&c, id, 1);
+        rc = wait_job(&c, id, 1, 0);
     else if (strcmp(cmd, "cancel") == 0)
         rc = cmd_delete(&c, id, 0);
     else if (strcmp(cmd, "purge") == 0)
