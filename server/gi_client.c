@@ -835,10 +835,10 @@ static int cmd_delete(client *c, uint64_t id, int purge)
     else if (rc == 0) {
         /* A finishing job ends once its outputs are written (not served). */
         cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
-        int finishing = doc && strcmp(str(doc, "state"), "cancelling") == 0;
+        int cancelling = doc && strcmp(str(doc, "state"), "cancelling") == 0;
         cJSON_Delete(doc);
         printf("job %llu cancelled%s\n", (unsigned long long)id,
-               finishing ? ": it ends once the outputs being written are (not served)" : "");
+               cancelling ? ": it ends once the outputs being written are (not served)" : "");
     }
     gi_buf_free(&b);
     return rc;

@@ -49,6 +49,9 @@ const char *gi_fj_state_name(gi_fj_state s);
  * finish has returned: it must not look as if it were about to be done). */
 typedef struct gi_farm_job gi_farm_job;
 const char *gi_farm_job_state_name(const gi_farm_job *j);
+/* A running job whose finish runs on its thread ("finishing" or
+ * "cancelling"). */
+int gi_farm_job_finishing(const gi_farm_job *j);
 
 #define GI_FJ_LOG_KEEP 64    /* log lines kept in memory per job */
 #define GI_FJ_ERRORS_KEEP 32 /* task errors kept per job */

@@ -55,9 +55,14 @@ const char *gi_fj_state_name(gi_fj_state s)
     return "unknown";
 }
 
+int gi_farm_job_finishing(const gi_farm_job *j)
+{
+    return j->state == GI_FJ_RUNNING && j->loaded && gi_jobrun_finishing(&j->jr);
+}
+
 const char *gi_farm_job_state_name(const gi_farm_job *j)
 {
-    if (j->state == GI_FJ_RUNNING && j->loaded && gi_jobrun_finishing(&j->jr))
+    if (gi_farm_job_finishing(j))
         return j->cancelling ? "cancelling" : "finishing";
     return gi_fj_state_name(j->state);
 }

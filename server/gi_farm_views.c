@@ -342,8 +342,7 @@ char *gi_farm_view_metrics(gi_farm *f)
     gauge(&b, "gi_farm_uptime_seconds", "Seconds since gi-farmd started.", gi_now() - f->started);
     size_t finishing = 0;
     for (size_t i = 0; i < f->job_count; i++)
-        finishing += f->jobs[i]->state == GI_FJ_RUNNING && f->jobs[i]->loaded &&
-                     gi_jobrun_finishing(&f->jobs[i]->jr); /* and "cancelling" ones */
+        finishing += gi_farm_job_finishing(f->jobs[i]); /* "cancelling" ones too */
     gauge(&b, "gi_farm_jobs_finishing",
           "Running jobs whose finish (their outputs) runs on its thread now.", (double)finishing);
     gauge(&b, "gi_farm_loop_stall_seconds",

@@ -36,6 +36,18 @@ typedef struct relight_args {
     int images, workers, threads;
 } relight_args;
 
+/* An emissions file read and parsed (its own fields; names not checked). */
+static int read_emissions(const char *path, gi_rad_emissions *em, gi_error *err)
+{
+    gi_buf text;
+    gi_buf_init(&text);
+    int rc = gi_read_file(path, EMISSIONS_MAX_BYTES, &text, err);
+    if (rc == 0)
+        rc = gi_rad_emissions_parse((const char *)text.data, text.len, path, em, err);
+    gi_buf_free(&text);
+    return rc;
+}
+
 static int parse_int(const char *opt, const char *s, int lo, int hi, int *out)
 {
     int64_t v;
@@ -224,15 +236,8 @@ static int relight(const relight_args *a, gi_error *err)
     if (gi_rad_file_read(fpath, &info, &md, &f, err))
         goto done;
     double t_load = now_ms() - t0;
-    gi_buf text;
-    gi_buf_init(&text);
-    if (gi_read_file(a->emissions, EMISSIONS_MAX_BYTES, &text, err)) {
-        gi_buf_free(&text);
-        goto done;
-    }
-    rc = gi_rad_emissions_parse((const char *)text.data, text.len, a->emissions, &em, err);
-    gi_buf_free(&text);
-    if (rc || (rc = gi_rad_emissions_check(&em, &md, a->emissions, err)))
+    if ((rc = read_emissions(a->emissions, &em, err)) ||
+        (rc = gi_rad_emissions_check(&em, &md, a->emissions, err)))
         goto done;
     rc = -1;
     if (outputs_spare_inputs(a, &job, fpath, &em, err) || gi_output_dir_ready(a->out, err))
@@ -309,8 +314,6 @@ int gi_relight_validate(const char *job_path, const char *emissions_path)
     int job_loaded = 0;
     gi_rad_emissions em;
     memset(&em, 0, sizeof em);
-    gi_buf text;
-    gi_buf_init(&text);
     if (job_path) {
         job_loaded = 1;
         if (gi_job_load(job_path, &job, &err) == 0 &&
@@ -318,11 +321,7 @@ int gi_relight_validate(const char *job_path, const char *emissions_path)
             gi_fail(&err, GI_EINVAL, "%s: an emissions file is for a radiosity job (gi relight), "
                     "not %s", job_path, job.method->name);
     }
-    if (err.code == GI_OK &&
-        gi_read_file(emissions_path, EMISSIONS_MAX_BYTES, &text, &err) == 0 &&
-        gi_rad_emissions_parse((const char *)text.data, text.len, emissions_path, &em, &err) ==
-            0 &&
-        job_path)
+    if (err.code == GI_OK && read_emissions(emissions_path, &em, &err) == 0 && job_path)
         gi_rad_emissions_check_scene(&em, &job.scene, emissions_path, "emissions", &err);
     if (err.code != GI_OK) {
         fprintf(stderr, "gi: %s\n", err.msg);
@@ -337,7 +336,6 @@ int gi_relight_validate(const char *job_path, const char *emissions_path)
             printf("; its material and object names are not checked without the job: gi "
                    "validate JOB.json %s)\n", emissions_path);
     }
-    gi_buf_free(&text);
     gi_rad_emissions_free(&em);
     if (job_loaded)
         gi_job_free(&job);

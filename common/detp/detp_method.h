@@ -64,7 +64,7 @@ void detp_encode_batch(const detp_batch_result *h, const gi_detp_accum *acc, dou
                        gi_buf *out);
 /* Adds the result's per-vertex values into irr (3 per vertex) and hits;
  * with irr and hits NULL, only checks the result. An energy beyond max in
- * magnitude (or not finite) is refused (detp_batch_energy_max). */
+ * magnitude (or not finite) is refused (detp_method.c, batch_energy_max). */
 int detp_decode_batch(gi_reader *r, uint32_t vertex_count, double max, detp_batch_result *h,
                       double *irr, uint64_t *hits, gi_error *err);
 /* Tests only (gi_method.h, damage_result): value for the first energy of a

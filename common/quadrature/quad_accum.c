@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-
 int gi_quad_accum_init(gi_quad_accum *a, int width, int height, int channels, gi_error *err)
 {
     memset(a, 0, sizeof *a);
@@ -98,11 +97,16 @@ int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, doubl
     /* Check everything first: a refused delta leaves the image as it was. */
     if (gi_quad_accum_check(r, width, height, channels, bound, err))
         return -1;
+    gi_quad_accum_add_delta(r, channels, image);
+    return 0;
+}
+
+void gi_quad_accum_add_delta(gi_reader *r, int channels, double *image)
+{
     uint32_t count = gi_get_u32(r);
     for (uint32_t i = 0; i < count; i++) {
         double *dst = image + (size_t)gi_get_u32(r) * channels;
         for (int c = 0; c < channels; c++)
             dst[c] += gi_get_f64(r);
     }
-    return 0;
 }

@@ -51,5 +51,7 @@ int gi_quad_accum_check(const gi_reader *delta, int width, int height, int chann
  * (coordinator side) after gi_quad_accum_check with the same bound. */
 int gi_quad_accum_apply(gi_reader *r, int width, int height, int channels, double bound,
                         double *image, gi_error *err);
+/* The adding half of gi_quad_accum_apply, for a delta already checked. */
+void gi_quad_accum_add_delta(gi_reader *r, int channels, double *image);
 
 #endif

@@ -241,7 +241,7 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
 }
 
 /* What a check decoded (gi_method.h, check_result's decoded): this head,
- * then the delta's pixels as the worker sent them (count x (u32 index, C
+ * then the delta as the worker sent it (u32 count, count x (u32 index, C
  * f64), checked), then the open regions' summaries, decoded, at a multiple
  * of 8 bytes. One buffer, offsets and no pointers: gi_jobrun owns and
  * frees it as any gi_buf, and may move it. */
@@ -253,12 +253,16 @@ typedef struct quad_decoded {
     uint32_t pixels, open_count;
 } quad_decoded;
 
-#define DELTA_PIXEL_BYTES (4 + 8 * GI_QUAD_CHANNELS)
+/* A delta of that many pixels, in bytes. */
+static size_t delta_bytes(uint32_t pixels)
+{
+    return 4 + (size_t)pixels * (4 + 8 * GI_QUAD_CHANNELS);
+}
 
 /* Where the open summaries of a decoded result of that many pixels start. */
 static size_t open_at(uint32_t pixels)
 {
-    return (sizeof(quad_decoded) + (size_t)pixels * DELTA_PIXEL_BYTES + 7) & ~(size_t)7;
+    return (sizeof(quad_decoded) + delta_bytes(pixels) + 7) & ~(size_t)7;
 }
 
 /* Decodes and checks a result (task's bound on its delta) into out (reset
@@ -274,7 +278,8 @@ static int quad_decode(const gi_job *job, const gi_task *task, const gi_buf *res
         gi_quad_accum_check(&r.delta, job->width, job->height, GI_QUAD_CHANNELS,
                             gi_quad_pixel_delta_max(task->id), err))
         return -1;
-    uint32_t pixels = gi_get_u32(&r.delta); /* checked: the bytes hold them */
+    gi_reader count = r.delta;
+    uint32_t pixels = gi_get_u32(&count); /* checked: the bytes hold them */
     quad_decoded h = {.evals = r.evals, .reevals = r.reevals, .splits = r.splits,
                       .closed = r.closed, .mc_samples = r.mc_samples,
                       .nonfinite = r.nonfinite, .closed_err = r.closed_err,
@@ -282,9 +287,9 @@ static int quad_decode(const gi_job *job, const gi_task *task, const gi_buf *res
     memcpy(h.dtotal, r.dtotal, sizeof h.dtotal);
     memcpy(h.mc_total, r.mc_total, sizeof h.mc_total);
     gi_buf_reset(out);
-    uint8_t *d = gi_buf_grow(out, open_at(pixels) + (size_t)r.open_count * sizeof *r.open);
+    uint8_t *d = gi_buf_grow(out, open_at(pixels) + (size_t)r.open_count * sizeof(gi_quad_summary));
     memcpy(d, &h, sizeof h);
-    memcpy(d + sizeof h, r.delta.p, (size_t)pixels * DELTA_PIXEL_BYTES);
+    memcpy(d + sizeof h, r.delta.p, delta_bytes(pixels));
     return gi_quad_result_decode_open(&rest, &st->rule, r.open_count,
                                       (gi_quad_summary *)(d + open_at(pixels)), err);
 }
@@ -334,13 +339,8 @@ int gi_quad_merge_decoded(gi_job *job, const gi_task *task, const gi_buf *decode
         return gi_fail(err, GI_EINTERNAL, "quadrature task %llu: decoded result of %zu bytes",
                        (unsigned long long)task->id, decoded->len);
     gi_reader delta;
-    gi_reader_init(&delta, decoded->data + sizeof h, (size_t)h.pixels * DELTA_PIXEL_BYTES,
-                   "quadrature result");
-    for (uint32_t i = 0; i < h.pixels; i++) {
-        double *dst = st->image + (size_t)gi_get_u32(&delta) * GI_QUAD_CHANNELS;
-        for (int c = 0; c < GI_QUAD_CHANNELS; c++)
-            dst[c] += gi_get_f64(&delta);
-    }
+    gi_reader_init(&delta, decoded->data + sizeof h, delta_bytes(h.pixels), "quadrature result");
+    gi_quad_accum_add_delta(&delta, GI_QUAD_CHANNELS, st->image);
     st->evals += h.evals;
     st->reevals += h.reevals;
     st->splits += h.splits;

@@ -42,8 +42,7 @@ typedef struct gi_quad_result {
     double dtotal[GI_QUAD_CHANNELS];
     double mc_total[GI_QUAD_CHANNELS];
     gi_reader delta; /* the image delta, not yet checked */
-    uint32_t open_count;
-    gi_quad_summary *open;
+    uint32_t open_count; /* the open regions' summaries follow (decode_open) */
 } gi_quad_result;
 
 /* Task payloads. */
@@ -71,18 +70,14 @@ static inline double gi_quad_pixel_delta_max(uint64_t id)
     return FLT_MAX / (2.0 * ((double)id + 1.0) * ((double)id + 2.0));
 }
 
-/* Results: the fixed fields and open summaries are checked; the delta is
- * left for gi_quad_accum_apply. */
-int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
-                          gi_error *err);
-/* The same in two steps, for a caller that puts the open summaries where
- * it likes: the fixed fields and counts (out->open left NULL; rest at the
- * summaries), then the count summaries into open and the end checked. */
+/* Results, in two steps, so that a caller puts the open summaries where it
+ * likes: the fixed fields and counts (rest at the summaries; the delta is
+ * left for gi_quad_accum_check), then count summaries into open and the
+ * end checked. */
 int gi_quad_result_decode_head(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
                                gi_reader *rest, gi_error *err);
 int gi_quad_result_decode_open(gi_reader *rest, const gi_quad_rule *rule, uint32_t count,
                                gi_quad_summary *open, gi_error *err);
-void gi_quad_result_free(gi_quad_result *r);
 int gi_quad_damage_result(const gi_job *job, const gi_task *task, gi_buf *result,
                           gi_damage how);
 

@@ -82,12 +82,6 @@ int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task
     return 0;
 }
 
-void gi_quad_result_free(gi_quad_result *r)
-{
-    free(r->open);
-    r->open = NULL;
-}
-
 int gi_quad_result_decode_head(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
                                gi_reader *rest, gi_error *err)
 {
@@ -139,23 +133,6 @@ int gi_quad_result_decode_open(gi_reader *rest, const gi_quad_rule *rule, uint32
         if (gi_quad_summary_get(rest, rule, &open[i], err))
             return -1;
     return gi_reader_finish(rest, err);
-}
-
-int gi_quad_result_decode(const gi_buf *b, const gi_quad_rule *rule, gi_quad_result *out,
-                          gi_error *err)
-{
-    gi_reader rest;
-    if (gi_quad_result_decode_head(b, rule, out, &rest, err))
-        return -1;
-    out->open = gi_try_calloc(out->open_count ? out->open_count : 1, sizeof *out->open, err,
-                              "quadrature result regions");
-    if (!out->open)
-        return -1;
-    if (gi_quad_result_decode_open(&rest, rule, out->open_count, out->open, err)) {
-        gi_quad_result_free(out);
-        return -1;
-    }
-    return 0;
 }
 
 /* ---- worker side ---- */

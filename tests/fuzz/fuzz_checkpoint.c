@@ -14,7 +14,6 @@
  * with its host once), then it exits. The corpus keeps older versions'
  * seeds too (the v6- ones are version 6's). */
 #define _XOPEN_SOURCE 700 /* nftw */
-#include <ftw.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,15 +30,7 @@
 static const char *const job_texts[] = {SMALL_JOB_TEXTS};
 #define JOBS SMALL_JOBS
 
-static char dir[256], job_path[JOBS][300], local_path[300];
-
-static int load(int which, gi_job *job, gi_error *err)
-{
-    if (gi_job_load(job_path[which], job, err))
-        return -1;
-    job->out_dir = gi_path_join(dir, "out");
-    return 0;
-}
+static char job_path[JOBS][SMALL_JOB_PATH_MAX], local_path[300];
 
 /* A seed: the selector byte, then the bytes of the file at path. */
 static int write_local_seed(const char *seeds, int which, uint64_t done, const char *path,
@@ -69,11 +60,7 @@ static int write_seeds(const char *seeds, int which, gi_error *err)
     gi_job job;
     gi_worker_ctx ctx;
     gi_jobrun jr;
-    if (load(which, &job, err) || gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest,
-                                                     NULL, NULL, job.assets, err))
-        return -1;
-    ctx.batch_dir = gi_path_join(dir, "batches");
-    if (gi_jobrun_start(&jr, &job, err))
+    if (small_jobs_start(job_path[which], &job, &ctx, &jr, err))
         return -1;
     uint64_t done = 0;
     size_t next = 0;
@@ -108,7 +95,7 @@ static int write_seeds(const char *seeds, int which, gi_error *err)
         if (rc == 0)
             rc = gi_write_file_atomic(path, ck.data, ck.len, err);
         gi_buf_free(&ck);
-        char *local = gi_path_join(dir, "local.checkpoint");
+        char *local = gi_path_join(small_jobs_dir, "local.checkpoint");
         if (rc == 0)
             rc = gi_local_checkpoint_write(&jr, "/var/tmp/gi-render-Seed01", local, err);
         if (rc == 0)
@@ -121,43 +108,17 @@ static int write_seeds(const char *seeds, int which, gi_error *err)
     return rc;
 }
 
-static int remove_one(const char *path, const struct stat *st, int type, struct FTW *ftw)
-{
-    (void)st;
-    (void)type;
-    (void)ftw;
-    return remove(path);
-}
-
-static void remove_dir(void) { nftw(dir, remove_one, 16, FTW_DEPTH | FTW_PHYS); }
-
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
     gi_log_set_level(GI_LOG_ERROR); /* restores and refusals are logged */
-    snprintf(dir, sizeof dir, "%s/gi-fuzz-checkpoint.XXXXXX",
-             getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    gi_error err;
-    if (!mkdtemp(dir))
-        abort();
-    atexit(remove_dir);
-    char *out = gi_path_join(dir, "out");
-    if (gi_mkdirs(out, &err))
-        abort();
-    free(out);
-    char *scene = gi_path_join(dir, "scene.json");
-    if (gi_write_file_atomic(scene, small_scene_text, strlen(small_scene_text), &err))
-        abort();
-    free(scene);
-    snprintf(local_path, sizeof local_path, "%s/fuzzed.checkpoint", dir);
-    for (int i = 0; i < JOBS; i++) {
-        snprintf(job_path[i], sizeof job_path[i], "%s/job%d.json", dir, i);
-        if (gi_write_file_atomic(job_path[i], job_texts[i], strlen(job_texts[i]), &err))
-            abort();
-    }
+    small_jobs_write("checkpoint", job_texts, JOBS, job_path);
+    atexit(small_jobs_remove);
+    snprintf(local_path, sizeof local_path, "%s/fuzzed.checkpoint", small_jobs_dir);
     const char *seeds = getenv("GI_FUZZ_CHECKPOINT_SEEDS");
     if (seeds) {
+        gi_error err;
         for (int i = 0; i < JOBS; i++)
             if (write_seeds(seeds, i, &err)) {
                 fprintf(stderr, "job %d: %s\n", i, err.msg);
@@ -174,7 +135,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     gi_job job;
     gi_error err;
-    if (load(data[0] % JOBS, &job, &err))
+    if (small_jobs_load(job_path[data[0] % JOBS], &job, &err))
         abort(); /* the jobs are fixed: they load */
     gi_jobrun jr;
     gi_error_clear(&err);

@@ -9,7 +9,6 @@
 #include <string.h>
 
 #include "gi_job.h"
-#include "quadrature/quad_accum.h"
 #include "quadrature/quad_farm.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -50,12 +49,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         gi_buf b;
         gi_buf_init(&b);
         gi_buf_put(&b, in, n);
-        gi_quad_result r;
-        if (gi_quad_result_decode(&b, &rule, &r, &err) == 0) {
-            double img[6 * 5 * 3] = {0};
-            gi_quad_accum_apply(&r.delta, 6, 5, 3, gi_quad_pixel_delta_max(n), img, &err);
-            gi_quad_result_free(&r);
-        }
         /* The coordinator's check, and the merge of what it decoded: a
          * result the check accepts merges (task id from the length). */
         gi_job job;

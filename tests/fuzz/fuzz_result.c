@@ -21,7 +21,6 @@
  * With GI_FUZZ_RESULT_SEEDS=DIR in the environment it writes the seed
  * corpus instead (the real result of the task leased at each point, as an
  * in-process worker computed it) and exits. */
-#include <ftw.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,17 +49,9 @@ typedef struct point {
     gi_buf checkpoint, result;
 } point;
 
-static char dir[256], job_path[JOBS][300];
+static char job_path[JOBS][SMALL_JOB_PATH_MAX];
 static point points[JOBS][MAX_POINTS];
 static size_t point_count[JOBS];
-
-static int load(int which, gi_job *job, gi_error *err)
-{
-    if (gi_job_load(job_path[which], job, err))
-        return -1;
-    job->out_dir = gi_path_join(dir, "out");
-    return 0;
-}
 
 /* Runs job `which` to its end with an in-process worker, recording a point
  * before each of its first MAX_POINTS tasks. */
@@ -69,11 +60,7 @@ static int record_points(int which, gi_error *err)
     gi_job job;
     gi_worker_ctx ctx;
     gi_jobrun jr;
-    if (load(which, &job, err) || gi_worker_ctx_load(&ctx, 1, job.file, job.text, &job.manifest,
-                                                     NULL, NULL, job.assets, err))
-        return -1;
-    ctx.batch_dir = gi_path_join(dir, "batches");
-    if (gi_jobrun_start(&jr, &job, err))
+    if (small_jobs_start(job_path[which], &job, &ctx, &jr, err))
         return -1;
     int rc = 0;
     while (rc == 0 && !gi_jobrun_done(&jr)) {
@@ -125,14 +112,6 @@ static int write_seeds(const char *seeds, gi_error *err)
     return 0;
 }
 
-static int remove_one(const char *path, const struct stat *st, int type, struct FTW *ftw)
-{
-    (void)st;
-    (void)type;
-    (void)ftw;
-    return remove(path);
-}
-
 static void cleanup(void)
 {
     for (int j = 0; j < JOBS; j++)
@@ -140,7 +119,7 @@ static void cleanup(void)
             gi_buf_free(&points[j][i].checkpoint);
             gi_buf_free(&points[j][i].result);
         }
-    nftw(dir, remove_one, 16, FTW_DEPTH | FTW_PHYS);
+    small_jobs_remove();
 }
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
@@ -148,24 +127,10 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     (void)argc;
     (void)argv;
     gi_log_set_level(GI_LOG_ERROR); /* refusals and finishes are logged */
-    snprintf(dir, sizeof dir, "%s/gi-fuzz-result.XXXXXX",
-             getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    gi_error err;
-    if (!mkdtemp(dir))
-        abort();
+    small_jobs_write("result", job_texts, JOBS, job_path);
     atexit(cleanup);
-    char *out = gi_path_join(dir, "out");
-    if (gi_mkdirs(out, &err))
-        abort();
-    free(out);
-    char *scene = gi_path_join(dir, "scene.json");
-    if (gi_write_file_atomic(scene, small_scene_text, strlen(small_scene_text), &err))
-        abort();
-    free(scene);
+    gi_error err;
     for (int i = 0; i < JOBS; i++) {
-        snprintf(job_path[i], sizeof job_path[i], "%s/job%d.json", dir, i);
-        if (gi_write_file_atomic(job_path[i], job_texts[i], strlen(job_texts[i]), &err))
-            abort();
         if (record_points(i, &err)) {
             fprintf(stderr, "fuzz_result: job %d: %s\n", i, err.msg);
             abort();
@@ -191,7 +156,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_job job;
     gi_jobrun jr;
     gi_error err;
-    if (load(which, &job, &err) || gi_jobrun_restore(&jr, &job, &p->checkpoint, &err))
+    if (small_jobs_load(job_path[which], &job, &err) ||
+        gi_jobrun_restore(&jr, &job, &p->checkpoint, &err))
         abort(); /* recorded from this very job: it restores */
     const gi_task *t = gi_jobrun_lease(&jr);
     if (!t)

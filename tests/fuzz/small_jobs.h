@@ -5,6 +5,16 @@
 #ifndef GI_FUZZ_SMALL_JOBS_H
 #define GI_FUZZ_SMALL_JOBS_H
 
+#include <ftw.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gi_fs.h"
+#include "gi_job.h"
+#include "gi_jobrun.h"
+#include "gi_worker_ctx.h"
+
 static const char small_scene_text[] =
     "{\"camera\": {\"position\": [0, 0, -0.9], \"look_at\": [0, 0, 0], \"fov_y\": 60},"
     " \"materials\": {\"wall\": {\"diffuse\": [0.6, 0.6, 0.6]},"
@@ -38,5 +48,72 @@ static const char small_scene_text[] =
     " \"radiosity\": {\"patches\": 4, \"levels\": 1, \"rays\": 16, \"task_elements\": 40}," \
     " \"outputs\": {\"exr\": \"d.exr\", \"report\": \"d.json\"}}"
 #define SMALL_JOBS 4
+
+#define SMALL_JOB_PATH_MAX 300
+
+static char small_jobs_dir[256];
+
+static int small_jobs_remove_one(const char *path, const struct stat *st, int type,
+                                 struct FTW *ftw)
+{
+    (void)st;
+    (void)type;
+    (void)ftw;
+    return remove(path);
+}
+
+/* Removes the directory small_jobs_write made (atexit). */
+static void small_jobs_remove(void)
+{
+    nftw(small_jobs_dir, small_jobs_remove_one, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+/* A fresh directory under $TMPDIR named after `target`, with out/, the
+ * scene and the n jobs of texts (their paths into paths); aborts on any
+ * error: a fuzz target cannot start without them. */
+static void small_jobs_write(const char *target, const char *const *texts, int n,
+                             char (*paths)[SMALL_JOB_PATH_MAX])
+{
+    snprintf(small_jobs_dir, sizeof small_jobs_dir, "%s/gi-fuzz-%s.XXXXXX",
+             getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp", target);
+    gi_error err;
+    if (!mkdtemp(small_jobs_dir))
+        abort();
+    char *out = gi_path_join(small_jobs_dir, "out");
+    if (gi_mkdirs(out, &err))
+        abort();
+    free(out);
+    char *scene = gi_path_join(small_jobs_dir, "scene.json");
+    if (gi_write_file_atomic(scene, small_scene_text, strlen(small_scene_text), &err))
+        abort();
+    free(scene);
+    for (int i = 0; i < n; i++) {
+        snprintf(paths[i], SMALL_JOB_PATH_MAX, "%s/job%d.json", small_jobs_dir, i);
+        if (gi_write_file_atomic(paths[i], texts[i], strlen(texts[i]), &err))
+            abort();
+    }
+}
+
+/* The job at path, its outputs under small_jobs_dir/out. */
+static int small_jobs_load(const char *path, gi_job *job, gi_error *err)
+{
+    if (gi_job_load(path, job, err))
+        return -1;
+    job->out_dir = gi_path_join(small_jobs_dir, "out");
+    return 0;
+}
+
+/* The job at path loaded, an in-process worker for it (its batches under
+ * small_jobs_dir) and its run started, to be driven task by task. */
+static int small_jobs_start(const char *path, gi_job *job, gi_worker_ctx *ctx, gi_jobrun *jr,
+                            gi_error *err)
+{
+    if (small_jobs_load(path, job, err) ||
+        gi_worker_ctx_load(ctx, 1, job->file, job->text, &job->manifest, NULL, NULL,
+                           job->assets, err))
+        return -1;
+    ctx->batch_dir = gi_path_join(small_jobs_dir, "batches");
+    return gi_jobrun_start(jr, job, err);
+}
 
 #endif

@@ -52,6 +52,16 @@ GI_TEST(test_ply_output_reads_back_through_assimp)
  * bytes gi_write_image_outputs writes, under the frame's names, noted only
  * once finished; a write that fails (no such directory) fails at wait and
  * at finish, naming the file, and notes nothing. */
+/* A job of nothing but the outputs f.exr and f.png into dir. */
+static void exr_and_png_job(gi_job *job, char *dir)
+{
+    memset(job, 0, sizeof *job);
+    job->outputs[0] = (gi_output_spec){"exr", "f.exr"};
+    job->outputs[1] = (gi_output_spec){"png", "f.png"};
+    job->output_count = 2;
+    job->out_dir = dir;
+}
+
 GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
 {
     gi_error err;
@@ -65,11 +75,7 @@ GI_TEST(test_image_writer_writes_what_the_synchronous_writer_does)
     snprintf(sync_dir, sizeof sync_dir, "%s/sync", dir);
     GI_REQUIRE_OK(gi_mkdirs(sync_dir, &err));
     gi_job job;
-    memset(&job, 0, sizeof job);
-    job.outputs[0] = (gi_output_spec){"exr", "f.exr"};
-    job.outputs[1] = (gi_output_spec){"png", "f.png"};
-    job.output_count = 2;
-    job.out_dir = sync_dir;
+    exr_and_png_job(&job, sync_dir);
     GI_REQUIRE_OK(gi_write_image_outputs(&job, &img, &err));
     job.out_dir = dir;
     job.in_frame = 1;
@@ -136,11 +142,7 @@ GI_TEST(test_image_outputs_refuse_a_non_finite_pixel)
     snprintf(dir, sizeof dir, "%s/nonfinite", gi_test_tmpdir());
     GI_REQUIRE_OK(gi_mkdirs(dir, &err));
     gi_job job;
-    memset(&job, 0, sizeof job);
-    job.outputs[0] = (gi_output_spec){"exr", "f.exr"};
-    job.outputs[1] = (gi_output_spec){"png", "f.png"};
-    job.output_count = 2;
-    job.out_dir = dir;
+    exr_and_png_job(&job, dir);
     job.in_frame = 1;
     job.frame = 3;
     const float bad[] = {INFINITY, -INFINITY, NAN};
