@@ -21,6 +21,8 @@ void gi_scene_free(gi_scene *s)
     for (uint32_t i = 0; i < s->material_count; i++)
         free(s->materials[i].name);
     free(s->materials);
+    gi_name_index_free(&s->material_names);
+    gi_name_index_free(&s->object_names);
     for (uint32_t i = 0; i < s->object_count; i++)
         free(s->objects[i].name);
     free(s->objects);
@@ -54,6 +56,8 @@ double gi_scene_triangle_area(const gi_scene *s, uint32_t t)
 
 int gi_scene_find_object(const gi_scene *s, const char *name)
 {
+    if (s->object_names.count == s->object_count)
+        return (int)gi_name_index_find(&s->object_names, name);
     for (uint32_t i = 0; i < s->object_count; i++)
         if (strcmp(s->objects[i].name, name) == 0)
             return (int)i;
@@ -62,16 +66,31 @@ int gi_scene_find_object(const gi_scene *s, const char *name)
 
 int gi_scene_material_index(const gi_scene *s, const char *name)
 {
+    if (s->material_names.count == s->material_count)
+        return (int)gi_name_index_find(&s->material_names, name);
     for (uint32_t i = 0; i < s->material_count; i++)
         if (strcmp(s->materials[i].name, name) == 0)
             return (int)i;
     return -1;
 }
 
+/* The capacity for `need` elements: cap doubled as often as it takes, but
+ * never over `most` (the most the scene's limits let it hold). */
+static size_t grown(size_t cap, size_t need, size_t most)
+{
+    if (need <= cap)
+        return cap;
+    size_t c = cap ? cap : 64;
+    while (c < need)
+        c *= 2;
+    return c < most ? c : need > most ? need : most;
+}
+
 void gi_scene_builder_init(gi_scene_builder *b, gi_scene *scene, const char *file)
 {
     memset(scene, 0, sizeof *scene);
     scene->name = gi_xstrdup(file);
+    memset(b, 0, sizeof *b);
     b->scene = scene;
     b->file = file;
 }
@@ -82,10 +101,15 @@ int gi_scene_add_material(gi_scene_builder *b, const gi_material *m, gi_error *e
     if (gi_scene_material_index(s, m->name) >= 0)
         return gi_fail(err, GI_EINVAL, "%s: material \"%s\" is defined twice", b->file,
                        m->name);
-    s->materials = gi_xrealloc(s->materials, (s->material_count + 1) * sizeof *s->materials);
+    size_t cap = grown(b->material_cap, (size_t)s->material_count + 1, UINT32_MAX);
+    if (cap != b->material_cap) {
+        s->materials = gi_xrealloc(s->materials, cap * sizeof *s->materials);
+        b->material_cap = cap;
+    }
     gi_material *dst = &s->materials[s->material_count];
     *dst = *m;
     dst->name = gi_xstrdup(m->name);
+    gi_name_index_add(&s->material_names, dst->name, s->material_count);
     return (int)s->material_count++;
 }
 
@@ -259,14 +283,22 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
     /* Append to the scene arrays. */
     uint32_t v0 = s->vertex_count, t0 = s->triangle_count;
     uint32_t nv = v0 + mesh->vertex_count, nt = t0 + mesh->triangle_count;
-    s->positions = gi_xrealloc(s->positions, ((size_t)nv + 1) * sizeof *s->positions);
-    s->normals = gi_xrealloc(s->normals, ((size_t)nv + 1) * sizeof *s->normals);
+    size_t cap = grown(b->vertex_cap, (size_t)nv + 1, (size_t)lim->max_scene_vertices + 1);
+    if (cap != b->vertex_cap) {
+        s->positions = gi_xrealloc(s->positions, cap * sizeof *s->positions);
+        s->normals = gi_xrealloc(s->normals, cap * sizeof *s->normals);
+        b->vertex_cap = cap;
+    }
     memcpy(s->positions + v0, mesh->positions, mesh->vertex_count * sizeof(gi_vec3));
     memcpy(s->normals + v0, mesh->normals, mesh->vertex_count * sizeof(gi_vec3));
     s->positions[nv] = s->normals[nv] = gi_v3(0, 0, 0); /* Embree's padded read */
-    s->indices = gi_xrealloc(s->indices, (size_t)nt * 3 * sizeof *s->indices);
-    s->tri_material = gi_xrealloc(s->tri_material, (size_t)nt * sizeof *s->tri_material);
-    s->tri_object = gi_xrealloc(s->tri_object, (size_t)nt * sizeof *s->tri_object);
+    cap = grown(b->triangle_cap, nt, lim->max_scene_triangles);
+    if (cap != b->triangle_cap) {
+        s->indices = gi_xrealloc(s->indices, cap * 3 * sizeof *s->indices);
+        s->tri_material = gi_xrealloc(s->tri_material, cap * sizeof *s->tri_material);
+        s->tri_object = gi_xrealloc(s->tri_object, cap * sizeof *s->tri_object);
+        b->triangle_cap = cap;
+    }
     for (uint32_t t = 0; t < mesh->triangle_count; t++) {
         for (int k = 0; k < 3; k++)
             s->indices[3 * (t0 + t) + k] = v0 + mesh->indices[3 * t + k];
@@ -274,9 +306,14 @@ int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
         s->tri_material[t0 + t] = material_map[mm < mesh->material_count ? mm : 0];
         s->tri_object[t0 + t] = s->object_count;
     }
-    s->objects = gi_xrealloc(s->objects, (s->object_count + 1) * sizeof *s->objects);
-    gi_object *o = &s->objects[s->object_count++];
+    cap = grown(b->object_cap, (size_t)s->object_count + 1, UINT32_MAX);
+    if (cap != b->object_cap) {
+        s->objects = gi_xrealloc(s->objects, cap * sizeof *s->objects);
+        b->object_cap = cap;
+    }
+    gi_object *o = &s->objects[s->object_count];
     o->name = gi_xstrdup(name);
+    gi_name_index_add(&s->object_names, o->name, s->object_count++);
     o->mobile = mobile;
     o->first_vertex = v0;
     o->vertex_count = mesh->vertex_count;
@@ -375,11 +412,32 @@ int gi_scene_update_derived(gi_scene *s, gi_error *err)
     return 0;
 }
 
+/* Gives back the room left for growth (up to half of each array). */
+static void trim(gi_scene_builder *b)
+{
+    gi_scene *s = b->scene;
+    size_t nv = (size_t)s->vertex_count + 1, nt = s->triangle_count ? s->triangle_count : 1;
+    s->positions = gi_xrealloc(s->positions, nv * sizeof *s->positions);
+    s->normals = gi_xrealloc(s->normals, nv * sizeof *s->normals);
+    s->indices = gi_xrealloc(s->indices, nt * 3 * sizeof *s->indices);
+    s->tri_material = gi_xrealloc(s->tri_material, nt * sizeof *s->tri_material);
+    s->tri_object = gi_xrealloc(s->tri_object, nt * sizeof *s->tri_object);
+    size_t no = s->object_count ? s->object_count : 1;
+    size_t nm = s->material_count ? s->material_count : 1;
+    s->objects = gi_xrealloc(s->objects, no * sizeof *s->objects);
+    s->materials = gi_xrealloc(s->materials, nm * sizeof *s->materials);
+    b->vertex_cap = nv;
+    b->triangle_cap = nt;
+    b->object_cap = no;
+    b->material_cap = nm;
+}
+
 int gi_scene_builder_finish(gi_scene_builder *b, gi_error *err)
 {
     gi_scene *s = b->scene;
     if (s->object_count == 0)
         return gi_fail(err, GI_EINVAL, "%s: the scene has no objects", b->file);
+    trim(b);
     if (gi_scene_update_derived(s, err))
         return -1;
     if (s->light_count == 0)

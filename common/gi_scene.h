@@ -18,6 +18,7 @@
 #include "gi_assets.h"
 #include "gi_error.h"
 #include "gi_math.h"
+#include "gi_name_index.h"
 
 /* Longest object or material name in a scene (bytes). A mesh's own
  * materials become "<object>/<material>" (each at most GI_MESH_NAME_MAX), and
@@ -63,6 +64,12 @@ typedef struct gi_scene {
     gi_material *materials;
     uint32_t object_count;
     gi_object *objects;
+
+    /* Names to indices, filled as the scene is built, so that lookups by
+     * name cost the same in a scene of 300,000 objects as in one of 10. A
+     * scene whose arrays were assembled otherwise (the counts differ) is
+     * scanned instead. */
+    gi_name_index material_names, object_names;
 
     uint32_t vertex_count;
     gi_vec3 *positions; /* world space; one spare element for Embree's padded reads */
@@ -157,7 +164,7 @@ int gi_scene_pose_object(gi_scene *s, uint32_t object, const gi_vec3 *base_posit
 int gi_scene_object_copy_base(const gi_scene *s, uint32_t object, gi_vec3 **positions,
                               gi_vec3 **normals, gi_error *err);
 
-/* Index of the object named `name`, or -1. */
+/* Index of the object named `name`, or -1 (constant expected time). */
 int gi_scene_find_object(const gi_scene *s, const char *name);
 
 #endif

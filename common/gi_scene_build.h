@@ -9,11 +9,16 @@
 typedef struct gi_scene_builder {
     gi_scene *scene;
     const char *file; /* for messages */
+    /* Room in the scene's arrays: they grow geometrically while objects are
+     * added (one exact realloc per object made loading quadratic in the
+     * object count), and are cut to size by gi_scene_builder_finish. */
+    size_t vertex_cap, triangle_cap, object_cap, material_cap;
 } gi_scene_builder;
 
 void gi_scene_builder_init(gi_scene_builder *b, gi_scene *scene, const char *file);
 /* Adds a material; fails if the name exists already. Returns its index. */
 int gi_scene_add_material(gi_scene_builder *b, const gi_material *m, gi_error *err);
+/* Index of the material named `name`, or -1 (constant expected time). */
 int gi_scene_material_index(const gi_scene *s, const char *name);
 /* The scene material for a mesh file's material: reflectance clamped to
  * [0, 1] and emission to >= 0 (with a warning), named `name`. */
@@ -26,7 +31,7 @@ gi_material gi_material_from_mesh(const gi_mesh_material *mm, const char *name,
 int gi_scene_add_object(gi_scene_builder *b, const char *name, int mobile,
                         int allow_non_manifold, const gi_mat4 *transform,
                         gi_mesh_data *mesh, const uint32_t *material_map, gi_error *err);
-/* Final checks (some object, lights) and derived data. */
+/* Final checks (some object, lights) and derived data; trims the arrays. */
 int gi_scene_builder_finish(gi_scene_builder *b, gi_error *err);
 
 /* Loads a scene JSON document (gi_scene_json.c). */

@@ -1,9 +1,11 @@
 /* Unit tests: scene files (JSON), assembly checks, lights, camera. */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_buf.h"
 #include "gi_camera.h"
 #include "gi_fs.h"
 #include "gi_light.h"
@@ -369,6 +371,116 @@ GI_TEST(test_bad_scenes_are_refused_with_a_clear_message)
         if (rc == 0)
             gi_scene_free(&s);
     }
+}
+
+/* Appends printf output to a growing string. */
+static void text_add(gi_buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void text_add(gi_buf *b, const char *fmt, ...)
+{
+    char line[1200];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    gi_buf_put(b, line, (size_t)n < sizeof line ? (size_t)n : sizeof line - 1);
+}
+
+/* A scene of 5,000 objects (loading once grew every array per object and
+ * scanned every name): 4,900 boxes over 1,000 materials and 100 instances
+ * of one mesh file (imported once, each instance a copy with materials of
+ * its own). Every object is found by name at its place with its own
+ * geometry, and a name repeated by a last object is still refused. */
+#define MANY_OBJECTS 5000
+#define MANY_MATERIALS 1000
+static int is_instance(int i) { return i % 50 == 49; }
+
+static void many_objects_text(gi_buf *b, const char *extra)
+{
+    text_add(b, "{\"materials\": {");
+    for (int k = 0; k < MANY_MATERIALS; k++)
+        text_add(b, "%s\"m%d\": {\"diffuse\": [0.5, 0.5, %g]}", k ? ", " : "", k, k / 2000.0);
+    text_add(b, "}, \"objects\": [");
+    for (int i = 0; i < MANY_OBJECTS; i++) {
+        if (is_instance(i))
+            text_add(b, "%s{\"name\": \"inst%d\", \"mesh\": \"%s/tests/data/meshes/"
+                        "two_materials.obj\", ", i ? ", " : "", i, gi_test_srcdir());
+        else
+            text_add(b, "%s{\"name\": \"cube%d\", \"material\": \"m%d\", \"box\": {\"size\": "
+                        "[0.5, 0.5, 0.5]}, ", i ? ", " : "", i, i % MANY_MATERIALS);
+        text_add(b, "\"transform\": [{\"translate\": [%d, 0, 0]}]}", i);
+    }
+    text_add(b, "%s]}", extra);
+    gi_buf_put_u8(b, 0);
+}
+
+GI_TEST(test_scene_with_many_objects)
+{
+    gi_error err;
+    gi_scene ref, s;
+    char text[600];
+    snprintf(text, sizeof text,
+             "{\"objects\": [{\"name\": \"m\", \"mesh\": \"%s/tests/data/meshes/two_materials.obj\"}]}",
+             gi_test_srcdir());
+    GI_REQUIRE_OK(gi_test_load_scene_text("one.json", text, &ref, &err));
+    gi_buf b;
+    gi_buf_init(&b);
+    many_objects_text(&b, "");
+    GI_REQUIRE_OK(gi_test_load_scene_text("many.json", (const char *)b.data, &s, &err));
+    GI_CHECK(s.object_count == MANY_OBJECTS);
+    GI_CHECK(s.material_count == MANY_MATERIALS + 2 * (MANY_OBJECTS / 50));
+    uint32_t nv = 0, nt = 0, bad = 0;
+    for (int i = 0; i < MANY_OBJECTS && bad < 5; i++) {
+        char name[32], mat[32];
+        snprintf(name, sizeof name, is_instance(i) ? "inst%d" : "cube%d", i);
+        const gi_object *o = &s.objects[i];
+        int ok = gi_scene_find_object(&s, name) == i && strcmp(o->name, name) == 0 &&
+                 o->first_vertex == nv && o->first_triangle == nt &&
+                 s.tri_object[nt] == (uint32_t)i && s.tri_object[nt + o->triangle_count - 1] ==
+                 (uint32_t)i;
+        if (is_instance(i)) {
+            ok &= o->vertex_count == ref.vertex_count && o->triangle_count == ref.triangle_count;
+            for (uint32_t j = 0; ok && j < o->vertex_count; j++) {
+                gi_vec3 p = s.positions[nv + j], q = ref.positions[j];
+                ok &= p.x == q.x + (float)i && p.y == q.y && p.z == q.z;
+            }
+            for (uint32_t t = 0; ok && t < o->triangle_count; t++) {
+                const char *rm = ref.materials[ref.tri_material[t]].name; /* "m/<material>" */
+                char full[64];
+                snprintf(full, sizeof full, "%s%s", name, rm + 1);
+                ok &= s.tri_material[nt + t] == (uint32_t)gi_scene_material_index(&s, full) &&
+                      strcmp(s.materials[s.tri_material[nt + t]].name, full) == 0;
+            }
+        } else {
+            snprintf(mat, sizeof mat, "m%d", i % MANY_MATERIALS);
+            ok &= o->vertex_count == 24 && o->triangle_count == 12 &&
+                  gi_scene_material_index(&s, mat) == i % MANY_MATERIALS &&
+                  s.tri_material[nt] == (uint32_t)(i % MANY_MATERIALS) &&
+                  s.positions[nv].x >= (float)i - 0.25f && s.positions[nv].x <= (float)i + 0.25f;
+        }
+        GI_CHECK_MSG(ok, "object %d (%s) is not as written", i, name);
+        bad += !ok;
+        nv += o->vertex_count;
+        nt += o->triangle_count;
+    }
+    GI_CHECK(s.vertex_count == nv && s.triangle_count == nt);
+    GI_CHECK(nv == (MANY_OBJECTS - 100) * 24 + 100 * ref.vertex_count);
+    GI_CHECK(nt == (MANY_OBJECTS - 100) * 12 + 100 * ref.triangle_count);
+    /* Embree reads past the last vertex: the padding element is there. */
+    GI_CHECK(s.positions[nv].x == 0 && s.positions[nv].y == 0 && s.positions[nv].z == 0);
+    GI_CHECK(s.light_count == 100 * ref.light_count);
+    GI_CHECK(gi_scene_find_object(&s, "cube49") == -1 && gi_scene_find_object(&s, "m") == -1);
+    GI_CHECK(gi_scene_material_index(&s, "m1000") == -1);
+    gi_scene_free(&s);
+    gi_scene_free(&ref);
+
+    gi_buf_reset(&b);
+    many_objects_text(&b, ", {\"name\": \"cube0\", \"material\": \"m1\", \"quad\": {\"size\": "
+                          "[1, 1]}}");
+    gi_error_clear(&err);
+    GI_CHECK(gi_test_load_scene_text("dup.json", (const char *)b.data, &s, &err) == -1);
+    GI_CHECK_MSG(strstr(err.msg, "dup.json: object \"cube0\": the name is used twice"),
+                 "%s", err.msg);
+    gi_buf_free(&b);
 }
 
 /* Names longer than output files carry (a radiosity factorization reads
