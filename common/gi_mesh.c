@@ -19,6 +19,28 @@ void gi_mesh_data_free(gi_mesh_data *m)
     gi_mesh_data_init(m);
 }
 
+static void *dup_array(const void *p, size_t n, size_t size)
+{
+    if (!p)
+        return NULL;
+    void *q = gi_xmalloc((n + 1) * size); /* + 1: the padding the arrays carry */
+    memcpy(q, p, n * size);
+    return q;
+}
+
+void gi_mesh_data_copy(gi_mesh_data *dst, const gi_mesh_data *src)
+{
+    *dst = *src;
+    dst->positions = dup_array(src->positions, src->vertex_count, sizeof(gi_vec3));
+    dst->normals = dup_array(src->normals, src->vertex_count, sizeof(gi_vec3));
+    dst->indices = dup_array(src->indices, 3 * (size_t)src->triangle_count, sizeof(uint32_t));
+    dst->tri_material = dup_array(src->tri_material, src->triangle_count, sizeof(uint32_t));
+    dst->materials = dup_array(src->materials, src->material_count, sizeof *src->materials);
+    for (uint32_t i = 0; i < src->material_count; i++)
+        if (src->materials[i].name)
+            dst->materials[i].name = gi_xstrdup(src->materials[i].name);
+}
+
 static void add_default_material(gi_mesh_data *m)
 {
     m->materials = gi_xrealloc(m->materials, (m->material_count + 1) * sizeof *m->materials);

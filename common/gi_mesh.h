@@ -37,6 +37,8 @@ typedef struct gi_mesh_data {
 
 void gi_mesh_data_init(gi_mesh_data *m);
 void gi_mesh_data_free(gi_mesh_data *m);
+/* dst (not initialized) becomes a copy of src, as it is. */
+void gi_mesh_data_copy(gi_mesh_data *dst, const gi_mesh_data *src);
 /* Appends src (indices shifted) to dst; src materials are appended too. */
 void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src);
 
