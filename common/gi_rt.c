@@ -95,18 +95,20 @@ int gi_rt_create(gi_rt *rt, const gi_scene *s, gi_error *err)
         rt->statics = rtcNewScene(rt->device);
         rtcSetSceneBuildQuality(rt->statics, RTC_BUILD_QUALITY_HIGH);
         rt->alone = gi_xcalloc(s->object_count, sizeof *rt->alone);
+        rt->mobiles = gi_xmalloc(s->object_count * sizeof *rt->mobiles);
         for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
-            if (s->objects[i].mobile)
+            if (s->objects[i].mobile) {
                 rt->alone[i] = alone_scene(rt, i);
-            else
+                rt->mobiles[rt->mobile_count++] = i;
+            } else {
                 attach_object(rt, rt->statics, i);
+            }
         rtcCommitScene(rt->statics);
         /* The top level changes every frame: a quick build of a few entries. */
         rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_LOW);
         attach_instance(rt, rt->statics, s->object_count); /* past every object's ID */
-        for (uint32_t i = 0; i < s->object_count && !rt->failed; i++)
-            if (rt->alone[i])
-                attach_instance(rt, rt->alone[i], i);
+        for (uint32_t k = 0; k < rt->mobile_count && !rt->failed; k++)
+            attach_instance(rt, rt->alone[rt->mobiles[k]], rt->mobiles[k]);
     }
     if (!rt->failed)
         rtcCommitScene(rt->scene);
@@ -125,6 +127,9 @@ void gi_rt_free(gi_rt *rt)
                 rtcReleaseScene(rt->alone[i]);
         free(rt->alone);
     }
+    free(rt->mobiles);
+    rt->mobiles = NULL;
+    rt->mobile_count = 0;
     if (rt->scene)
         rtcReleaseScene(rt->scene);
     if (rt->statics)
@@ -191,8 +196,8 @@ int gi_rt_others_near(gi_rt *rt, uint32_t object, gi_vec3 c, float r)
     if (!rt->statics || reaches(rt->statics, c, r))
         return 1;
     /* Every other mobile object has a scene of its own. */
-    for (uint32_t i = 0; i < rt->src->object_count; i++)
-        if (i != object && rt->src->objects[i].mobile && reaches(rt->alone[i], c, r))
+    for (uint32_t k = 0; k < rt->mobile_count; k++)
+        if (rt->mobiles[k] != object && reaches(rt->alone[rt->mobiles[k]], c, r))
             return 1;
     return 0;
 }
@@ -202,9 +207,10 @@ int gi_rt_intersect_except(gi_rt *rt, uint32_t object, gi_vec3 org, gi_vec3 dir,
 {
     rt->rays++;
     int any = gi_rt_intersect_in(rt, rt->statics, org, dir, tnear, tfar, hit);
-    for (uint32_t i = 0; i < rt->src->object_count; i++)
-        if (i != object && rt->src->objects[i].mobile &&
-            gi_rt_intersect_in(rt, rt->alone[i], org, dir, tnear, any ? hit->t : tfar, hit))
+    for (uint32_t k = 0; k < rt->mobile_count; k++)
+        if (rt->mobiles[k] != object &&
+            gi_rt_intersect_in(rt, rt->alone[rt->mobiles[k]], org, dir, tnear,
+                               any ? hit->t : tfar, hit))
             any = 1;
     return any;
 }

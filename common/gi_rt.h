@@ -31,6 +31,9 @@ typedef struct gi_rt {
     RTCScene scene;      /* what rays are traced against */
     RTCScene statics;    /* two-level only: the objects that never move, one instance in scene */
     RTCScene *alone;     /* per object: the object alone (gi_rt_object_scene), or NULL */
+    /* Two-level only: the mobile objects' indices, ascending (the per-ray
+     * loops over them would otherwise visit every object of the scene). */
+    uint32_t *mobiles, mobile_count;
     const gi_scene *src; /* geometry buffers are shared with the gi_scene */
     uint64_t rays;       /* rays traced (closest hit + occlusion) */
     int failed;          /* set by the Embree error callback */
