@@ -166,5 +166,7 @@ int gi_scene_object_copy_base(const gi_scene *s, uint32_t object, gi_vec3 **posi
 
 /* Index of the object named `name`, or -1 (constant expected time). */
 int gi_scene_find_object(const gi_scene *s, const char *name);
+/* Index of the material named `name`, or -1 (constant expected time). */
+int gi_scene_material_index(const gi_scene *s, const char *name);
 
 #endif

@@ -18,8 +18,6 @@ typedef struct gi_scene_builder {
 void gi_scene_builder_init(gi_scene_builder *b, gi_scene *scene, const char *file);
 /* Adds a material; fails if the name exists already. Returns its index. */
 int gi_scene_add_material(gi_scene_builder *b, const gi_material *m, gi_error *err);
-/* Index of the material named `name`, or -1 (constant expected time). */
-int gi_scene_material_index(const gi_scene *s, const char *name);
 /* The scene material for a mesh file's material: reflectance clamped to
  * [0, 1] and emission to >= 0 (with a warning), named `name`. */
 gi_material gi_material_from_mesh(const gi_mesh_material *mm, const char *name,

@@ -225,10 +225,8 @@ int gi_rad_emissions_check_scene(const gi_rad_emissions *em, const gi_scene *s, 
     for (uint32_t i = 0; i < em->count; i++) {
         const gi_rad_emission *e = &em->items[i];
         for (uint32_t j = 0; j < e->material_count; j++) {
-            uint32_t m = 0;
-            while (m < s->material_count && strcmp(s->materials[m].name, e->materials[j].name))
-                m++;
-            if (m == s->material_count)
+            int m = gi_scene_material_index(s, e->materials[j].name);
+            if (m < 0)
                 return gi_fail(err, GI_EINVAL,
                                "%s: %s[%u].materials: no material \"%s\" in the scene (its "
                                "materials: %s)",
