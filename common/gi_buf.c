@@ -1,6 +1,8 @@
 /* gi_buf: growable buffers and explicit little-endian serialization. */
 #include "gi_buf.h"
 
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -48,6 +50,22 @@ void gi_buf_put(gi_buf *b, const void *p, size_t n)
 {
     if (n)
         memcpy(gi_buf_grow(b, n), p, n);
+}
+
+void gi_buf_printf(gi_buf *b, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    if (n <= 0)
+        return;
+    /* The NUL vsnprintf writes goes into room reserved past the end. */
+    gi_buf_reserve(b, (size_t)n + 1);
+    va_start(ap, fmt);
+    vsnprintf((char *)b->data + b->len, (size_t)n + 1, fmt, ap);
+    va_end(ap);
+    b->len += (size_t)n;
 }
 
 void gi_le_put_u16(uint8_t *p, uint16_t v)

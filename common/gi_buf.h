@@ -26,6 +26,8 @@ void gi_buf_move(gi_buf *dst, gi_buf *src);   /* dst takes src's bytes */
 uint8_t *gi_buf_grow(gi_buf *b, size_t n);    /* appends n bytes, returns them */
 
 void gi_buf_put(gi_buf *b, const void *p, size_t n);
+/* Appends printf output (any length; no terminating NUL). */
+void gi_buf_printf(gi_buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void gi_buf_put_u8(gi_buf *b, uint8_t v);
 void gi_buf_put_u16(gi_buf *b, uint16_t v);
 void gi_buf_put_u32(gi_buf *b, uint32_t v);

@@ -1,6 +1,5 @@
 /* Unit tests: scene files (JSON), assembly checks, lights, camera. */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -373,18 +372,6 @@ GI_TEST(test_bad_scenes_are_refused_with_a_clear_message)
     }
 }
 
-/* Appends printf output to a growing string. */
-static void text_add(gi_buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void text_add(gi_buf *b, const char *fmt, ...)
-{
-    char line[1200];
-    va_list ap;
-    va_start(ap, fmt);
-    int n = vsnprintf(line, sizeof line, fmt, ap);
-    va_end(ap);
-    gi_buf_put(b, line, (size_t)n < sizeof line ? (size_t)n : sizeof line - 1);
-}
-
 /* A scene of 5,000 objects (loading once grew every array per object and
  * scanned every name): 4,900 boxes over 1,000 materials and 100 instances
  * of one mesh file (imported once, each instance a copy with materials of
@@ -396,20 +383,20 @@ static int is_instance(int i) { return i % 50 == 49; }
 
 static void many_objects_text(gi_buf *b, const char *extra)
 {
-    text_add(b, "{\"materials\": {");
+    gi_buf_printf(b, "{\"materials\": {");
     for (int k = 0; k < MANY_MATERIALS; k++)
-        text_add(b, "%s\"m%d\": {\"diffuse\": [0.5, 0.5, %g]}", k ? ", " : "", k, k / 2000.0);
-    text_add(b, "}, \"objects\": [");
+        gi_buf_printf(b, "%s\"m%d\": {\"diffuse\": [0.5, 0.5, %g]}", k ? ", " : "", k, k / 2000.0);
+    gi_buf_printf(b, "}, \"objects\": [");
     for (int i = 0; i < MANY_OBJECTS; i++) {
         if (is_instance(i))
-            text_add(b, "%s{\"name\": \"inst%d\", \"mesh\": \"%s/tests/data/meshes/"
+            gi_buf_printf(b, "%s{\"name\": \"inst%d\", \"mesh\": \"%s/tests/data/meshes/"
                         "two_materials.obj\", ", i ? ", " : "", i, gi_test_srcdir());
         else
-            text_add(b, "%s{\"name\": \"cube%d\", \"material\": \"m%d\", \"box\": {\"size\": "
+            gi_buf_printf(b, "%s{\"name\": \"cube%d\", \"material\": \"m%d\", \"box\": {\"size\": "
                         "[0.5, 0.5, 0.5]}, ", i ? ", " : "", i, i % MANY_MATERIALS);
-        text_add(b, "\"transform\": [{\"translate\": [%d, 0, 0]}]}", i);
+        gi_buf_printf(b, "\"transform\": [{\"translate\": [%d, 0, 0]}]}", i);
     }
-    text_add(b, "%s]}", extra);
+    gi_buf_printf(b, "%s]}", extra);
     gi_buf_put_u8(b, 0);
 }
 
@@ -419,7 +406,8 @@ GI_TEST(test_scene_with_many_objects)
     gi_scene ref, s;
     char text[600];
     snprintf(text, sizeof text,
-             "{\"objects\": [{\"name\": \"m\", \"mesh\": \"%s/tests/data/meshes/two_materials.obj\"}]}",
+             "{\"objects\": [{\"name\": \"m\", \"mesh\": "
+             "\"%s/tests/data/meshes/two_materials.obj\"}]}",
              gi_test_srcdir());
     GI_REQUIRE_OK(gi_test_load_scene_text("one.json", text, &ref, &err));
     gi_buf b;
