@@ -1,5 +1,6 @@
-/* Unit tests: RNG, buffers, paths, JSON validation. */
+/* Unit tests: RNG, buffers, paths, JSON validation, name indices. */
 #include <signal.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -12,6 +13,7 @@
 #include "gi_fs.h"
 #include "gi_image.h"
 #include "gi_json.h"
+#include "gi_name_index.h"
 #include "gi_rng.h"
 #include "gi_test.h"
 
@@ -344,4 +346,31 @@ GI_TEST(test_json_errors_name_file_and_field)
     GI_CHECK(gi_jv_keys(&v, o, "o", okeys) == -1);
     GI_CHECK_MSG(strstr(err.msg, "o.k: unknown key (expected one of: x)") != NULL, "%s", err.msg);
     cJSON_Delete(doc);
+}
+
+/* Every name added is found at its index through the table's growth, names
+ * that share a prefix or differ in one byte are told apart, and a name never
+ * added (or any name in an empty index) is not found. */
+GI_TEST(test_name_index_finds_every_name)
+{
+    enum { N = 50000 };
+    gi_name_index x;
+    gi_name_index_init(&x);
+    GI_CHECK(gi_name_index_find(&x, "a") == -1 && gi_name_index_find(&x, "") == -1);
+    char (*names)[16] = malloc(N * sizeof *names);
+    GI_REQUIRE(names);
+    for (int i = 0; i < N; i++) {
+        snprintf(names[i], sizeof names[i], "n%d", i);
+        gi_name_index_add(&x, names[i], (uint32_t)(N - 1 - i));
+    }
+    GI_CHECK(x.count == N && x.cap >= 2 * (size_t)N);
+    int wrong = 0;
+    for (int i = 0; i < N; i++)
+        wrong += gi_name_index_find(&x, names[i]) != N - 1 - i;
+    GI_CHECK_MSG(wrong == 0, "%d names found at the wrong index", wrong);
+    GI_CHECK(gi_name_index_find(&x, "n") == -1 && gi_name_index_find(&x, "n50000") == -1 &&
+             gi_name_index_find(&x, "n1x") == -1 && gi_name_index_find(&x, "") == -1);
+    gi_name_index_free(&x);
+    GI_CHECK(x.count == 0 && gi_name_index_find(&x, "n1") == -1);
+    free(names);
 }
