@@ -29,6 +29,13 @@ echo "== resume_anim: gi render --resume of a 24-frame animation stopped at fram
 sh bench/resume_anim.sh "$BIN" 4000000 500000 24 16
 echo "== mesh_import: gi validate on a 25 MB OBJ (980k triangles; assimp in a child process)"
 sh bench/mesh_import.sh "$BIN" 700 5
+echo "== many_objects: scene load and tiny renders of 1k, 10k, 100k cubes (gi_scenegen grid; ~5 min)"
+sh bench/many_objects.sh "$BIN" "1000 10000 100000" 3
+echo "== rt_build: the Embree build of 100,000 cubes, by geometry layout and build quality"
+G=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-grid.XXXXXX")
+"$BIN/scenes/gi_scenegen" grid "$G" --objects 100000
+"$BIN/bench/rt_build" "$G/scene.json" 3
+rm -rf "$G"
 echo "== farm_overhead: a job through gi-farmd + gi-worker (2 processes, loopback) vs gi render --workers 2"
 sh bench/farm_overhead.sh "$BIN" 5
 echo "== quad_genz: adaptive cubature on Genz's test families (evaluations for 1e-3 and 1e-6)"

@@ -24,6 +24,15 @@
  *       inside a block (the room's middle is 12 mm from the tall block). A
  *       50% sphere is as wide as the box and is free nowhere.
  *
+ *   gi_scenegen grid DIR --objects N [--mesh]
+ *       Many small objects: N cubes of side 0.5 in a square grid of unit
+ *       cells on the floor of a closed room (an inward box), lit by a quad
+ *       under its ceiling; four materials in turn. Each cube is a "box"
+ *       object, or with --mesh a reference to DIR/cube.obj (whose material
+ *       then becomes one scene material per object, as mesh files' do).
+ *       Writes DIR/scene.json (and cube.obj). The scene that load and
+ *       per-object costs are measured on (bench/many_objects.sh).
+ *
  * Deterministic: the same arguments give the same bytes. */
 #include <errno.h>
 #include <math.h>
@@ -373,10 +382,73 @@ static int cornell_mobile(const char *base, const char *out, double frac)
     return 0;
 }
 
+static int grid(const char *dir, long n, int use_mesh)
+{
+    long side = (long)ceil(sqrt((double)n));
+    double w = (double)side + 2.0, h = fmax(3.0, 0.5 * w);
+    char *path = gi_path_join(dir, "scene.json");
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        fprintf(stderr, "gi_scenegen: %s: %s\n", path, strerror(errno));
+        free(path);
+        return 1;
+    }
+    fprintf(f, "{\n\"description\": \"%ld cubes on the floor of a closed room lit by a "
+               "ceiling quad (gi_scenegen grid%s)\",\n",
+            n, use_mesh ? ", --mesh" : "");
+    fprintf(f, "\"camera\": {\"position\": [%.6g, %.6g, %.6g], \"look_at\": [%.6g, 0, %.6g], "
+               "\"up\": [0, 1, 0], \"fov_y\": 60},\n",
+            0.5 * w, 0.8 * h, 0.05 * w, 0.5 * w, 0.5 * w);
+    fprintf(f, "\"materials\": {\n"
+               "  \"wall\": {\"diffuse\": [0.7, 0.7, 0.7]},\n"
+               "  \"light\": {\"diffuse\": [0.5, 0.5, 0.5], \"emission\": [10, 10, 10]},\n"
+               "  \"m0\": {\"diffuse\": [0.7, 0.2, 0.2]}, \"m1\": {\"diffuse\": [0.2, 0.7, 0.2]},\n"
+               "  \"m2\": {\"diffuse\": [0.2, 0.2, 0.7]}, \"m3\": {\"diffuse\": [0.6, 0.6, 0.3]}\n"
+               "},\n\"objects\": [\n");
+    fprintf(f, "{\"name\": \"room\", \"material\": \"wall\", \"box\": {\"size\": [%.6g, %.6g, "
+               "%.6g], \"inward\": true}, \"transform\": [{\"translate\": [%.6g, %.6g, %.6g]}]},\n",
+            w, h, w, 0.5 * w, 0.5 * h, 0.5 * w);
+    fprintf(f, "{\"name\": \"light\", \"material\": \"light\", \"quad\": {\"size\": [%.6g, %.6g]}, "
+               "\"transform\": [{\"rotate\": {\"axis\": [1, 0, 0], \"degrees\": 180}}, "
+               "{\"translate\": [%.6g, %.6g, %.6g]}]}",
+            0.25 * w, 0.25 * w, 0.5 * w, 0.999 * h, 0.5 * w);
+    for (long i = 0; i < n; i++) {
+        double x = 1.5 + (double)(i % side), z = 1.5 + (double)(i / side);
+        fprintf(f, ",\n{\"name\": \"cube%ld\", ", i);
+        if (use_mesh)
+            fprintf(f, "\"mesh\": \"cube.obj\", ");
+        else
+            fprintf(f, "\"material\": \"m%ld\", \"box\": {\"size\": [0.5, 0.5, 0.5]}, ", i % 4);
+        fprintf(f, "\"transform\": [{\"translate\": [%.6g, 0.25, %.6g]}]}", x, z);
+    }
+    int bad = fprintf(f, "\n]\n}\n") < 0;
+    bad |= fclose(f) != 0;
+    if (bad)
+        fprintf(stderr, "gi_scenegen: %s: %s\n", path, strerror(errno));
+    free(path);
+    if (bad || !use_mesh)
+        return bad;
+    /* A 0.5 cube about the origin, outward faces, one material of its own. */
+    mesh m = {0};
+    for (int k = 0; k < 8; k++)
+        vert(&m, V(k & 1 ? 0.25 : -0.25, k & 2 ? 0.25 : -0.25, k & 4 ? 0.25 : -0.25));
+    static const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                    {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (int q = 0; q < 6; q++) {
+        tri(&m, (size_t)quads[q][0], (size_t)quads[q][1], (size_t)quads[q][2]);
+        tri(&m, (size_t)quads[q][0], (size_t)quads[q][2], (size_t)quads[q][3]);
+    }
+    int rc = write_obj(dir, "cube.obj", &m) ? 1 : 0;
+    free(m.v);
+    free(m.t);
+    return rc;
+}
+
 static int usage(void)
 {
     fprintf(stderr, "usage: gi_scenegen tree DIR [--seed N]\n"
-                    "       gi_scenegen cornell-mobile BASE.json OUT.json --radius FRACTION\n");
+                    "       gi_scenegen cornell-mobile BASE.json OUT.json --radius FRACTION\n"
+                    "       gi_scenegen grid DIR --objects N [--mesh]\n");
     return 2;
 }
 
@@ -403,6 +475,20 @@ int main(int argc, char **argv)
             return 2;
         }
         return cornell_mobile(argv[2], argv[3], frac);
+    }
+    if ((argc == 5 || argc == 6) && strcmp(argv[1], "grid") == 0 &&
+        strcmp(argv[3], "--objects") == 0) {
+        char *end;
+        long n = strtol(argv[4], &end, 10);
+        int use_mesh = argc == 6 && strcmp(argv[5], "--mesh") == 0;
+        if (*end || n < 0 || n > 10000000 || (argc == 6 && !use_mesh))
+            return usage();
+        gi_error err;
+        if (gi_mkdirs(argv[2], &err)) {
+            fprintf(stderr, "gi_scenegen: %s\n", err.msg);
+            return 1;
+        }
+        return grid(argv[2], n, use_mesh);
     }
     return usage();
 }
