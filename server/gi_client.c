@@ -68,6 +68,7 @@ typedef struct client {
     int json, wait;
     int64_t priority;
     const char *arg; /* the command's operand (job file or id) */
+    gi_job job;      /* submit: arg, loaded and checked before the farm is asked */
     /* The submission's Idempotency-Key while it is being sent (else NULL). */
     const char *idempotency_key;
     int said_retrying; /* stderr said once that the farm is asked again */
@@ -609,24 +610,29 @@ static int upload_assets(client *c, const gi_job *job)
     return 0;
 }
 
-static int cmd_submit(client *c)
+/* The job file, checked as gi validate checks it (and with --wait, the
+ * outputs against its inputs): all that needs no farm, so it comes before
+ * the token and the connection, and a bad job never reaches the farm. */
+static int submit_check(client *c)
 {
     gi_error err;
-    gi_job job;
-    /* Checked here first: a bad job never reaches the farm. */
-    if (gi_job_load(c->arg, &job, &err) ||
-        (c->wait && gi_job_outputs_spare_inputs(&job, c->arg, c->out_dir, &err))) {
-        gi_job_free(&job);
+    if (gi_job_load(c->arg, &c->job, &err) ||
+        (c->wait && gi_job_outputs_spare_inputs(&c->job, c->arg, c->out_dir, &err)))
         return fail_msg(gi_error_exit_status(&err), "%s", err.msg);
-    }
-    int rc = upload_assets(c, &job);
+    return 0;
+}
+
+static int cmd_submit(client *c)
+{
+    const gi_job *job = &c->job;
+    int rc = upload_assets(c, job);
     uint64_t id = 0;
     if (rc == 0) {
         const char *base = strrchr(c->arg, '/');
         gi_buf body, resp;
         gi_buf_init(&body);
         gi_buf_init(&resp);
-        gi_farm_submission_build(&body, base ? base + 1 : c->arg, job.text, &job.manifest,
+        gi_farm_submission_build(&body, base ? base + 1 : c->arg, job->text, &job->manifest,
                                  (uint32_t)c->priority);
         /* Sent again after a connection broken before its answer, the
          * submission makes no second job: the farm knows it by this key. */
@@ -649,7 +655,7 @@ static int cmd_submit(client *c)
         gi_buf_free(&body);
         gi_buf_free(&resp);
     }
-    gi_job_free(&job);
+    gi_job_free(&c->job); /* its scene and assets are not held while waiting */
     if (rc)
         return rc;
     gi_say("submitted %s as job %llu", c->arg, (unsigned long long)id);
@@ -881,6 +887,54 @@ static int cmd_fetch(client *c, uint64_t id)
     return rc;
 }
 
+/* After the checks that need no farm: the --out to fetch into, the farm's
+ * URL and the token, then the command itself. */
+static int client_run(client *c, const char *cmd, uint64_t id, const char *farm,
+                      const char *token_file)
+{
+    gi_error err;
+    /* Outputs are fetched at the end: an --out they cannot go to is said now,
+     * not after the job has run. */
+    int fetches = strcmp(cmd, "wait") == 0 || strcmp(cmd, "fetch") == 0 ||
+                  ((strcmp(cmd, "submit") == 0 || strcmp(cmd, "retry") == 0) && c->wait);
+    if (fetches && gi_output_dir_ready(c->out_dir, &err))
+        return fail_msg(gi_error_exit_status(&err), "--out: %s", err.msg);
+    if (gi_http_url_parse(farm, &c->url, &err))
+        return fail_msg(2, "%s", err.msg);
+    gi_buf tok;
+    gi_buf_init(&tok);
+    if (gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token",
+                       "--token-file", &tok, &err)) {
+        gi_http_url_free(&c->url);
+        return fail_msg(2, "%s", err.msg);
+    }
+    memcpy(c->token, tok.data, tok.len);
+    c->token[tok.len] = '\0';
+    gi_secret_free(&tok);
+    int rc;
+    if (strcmp(cmd, "submit") == 0)
+        rc = cmd_submit(c);
+    else if (strcmp(cmd, "status") == 0)
+        rc = cmd_status(c, id);
+    else if (strcmp(cmd, "wait") == 0)
+        rc = wait_job(c, id, 1, 0);
+    else if (strcmp(cmd, "cancel") == 0)
+        rc = cmd_delete(c, id, 0);
+    else if (strcmp(cmd, "purge") == 0)
+        rc = cmd_delete(c, id, 1);
+    else if (strcmp(cmd, "retry") == 0)
+        rc = cmd_retry(c, id);
+    else if (strcmp(cmd, "jobs") == 0)
+        rc = cmd_jobs(c);
+    else if (strcmp(cmd, "workers") == 0)
+        rc = cmd_workers(c);
+    else
+        rc = cmd_fetch(c, id);
+    gi_http_url_free(&c->url);
+    memset(c->token, 0, sizeof c->token);
+    return rc;
+}
+
 int gi_client_main(int argc, char **argv)
 {
     const char *cmd = argv[1];
@@ -959,45 +1013,11 @@ int gi_client_main(int argc, char **argv)
     uint64_t id = 0;
     if (needs_arg && strcmp(cmd, "submit") != 0 && parse_id(c.arg, &id))
         return fail_msg(2, "%s: \"%s\" is not a job id", cmd, c.arg);
-    gi_error err;
-    /* Outputs are fetched at the end: an --out they cannot go to is said now,
-     * not after the job has run. */
-    int fetches = strcmp(cmd, "wait") == 0 || strcmp(cmd, "fetch") == 0 ||
-                  ((strcmp(cmd, "submit") == 0 || strcmp(cmd, "retry") == 0) && c.wait);
-    if (fetches && gi_output_dir_ready(c.out_dir, &err))
-        return fail_msg(gi_error_exit_status(&err), "--out: %s", err.msg);
-    if (gi_http_url_parse(farm, &c.url, &err))
-        return fail_msg(2, "%s", err.msg);
-    gi_buf tok;
-    gi_buf_init(&tok);
-    if (gi_secret_read(token_file, "GI_FARM_TOKEN_FILE", "GI_FARM_TOKEN", "API token",
-                       "--token-file", &tok, &err)) {
-        gi_http_url_free(&c.url);
-        return fail_msg(2, "%s", err.msg);
-    }
-    memcpy(c.token, tok.data, tok.len);
-    c.token[tok.len] = '\0';
-    gi_secret_free(&tok);
-    int rc;
-    if (strcmp(cmd, "submit") == 0)
-        rc = cmd_submit(&c);
-    else if (strcmp(cmd, "status") == 0)
-        rc = cmd_status(&c, id);
-    else if (strcmp(cmd, "wait") == 0)
-        rc = wait_job(&c, id, 1, 0);
-    else if (strcmp(cmd, "cancel") == 0)
-        rc = cmd_delete(&c, id, 0);
-    else if (strcmp(cmd, "purge") == 0)
-        rc = cmd_delete(&c, id, 1);
-    else if (strcmp(cmd, "retry") == 0)
-        rc = cmd_retry(&c, id);
-    else if (strcmp(cmd, "jobs") == 0)
-        rc = cmd_jobs(&c);
-    else if (strcmp(cmd, "workers") == 0)
-        rc = cmd_workers(&c);
-    else
-        rc = cmd_fetch(&c, id);
-    gi_http_url_free(&c.url);
-    memset(c.token, 0, sizeof c.token);
+    int submit = strcmp(cmd, "submit") == 0;
+    int rc = submit ? submit_check(&c) : 0;
+    if (rc == 0)
+        rc = client_run(&c, cmd, id, farm, token_file);
+    if (submit)
+        gi_job_free(&c.job);
     return rc;
 }

@@ -77,6 +77,28 @@ for f in scene.json emissions.json; do
 a job names its scene (\"scene\") and a method" "$TMP/not-job.log" ||
         { cat "$TMP/not-job.log"; fail "gi render $f: exit $rc"; }
 done
+# gi submit checks the job file before it looks for a token or a farm: a
+# bad job is told as gi validate tells it, not "no API token"; a good one
+# without a token is then told about the token.
+for tok in none given; do
+    rc=0
+    if [ $tok = none ]; then
+        env -u GI_FARM_TOKEN -u GI_FARM_TOKEN_FILE "$GI" submit "$SRC/tests/data/bad/bad-camera.json" \
+            --retry 0 >"$TMP/submit.out" 2>"$TMP/submit.err" || rc=$?
+    else # and with a token, before the farm (none here) is asked
+        GI_FARM_TOKEN=abcdefghijklmnopqrstuvwxyz012345 GI_FARM=http://127.0.0.1:9 \
+            "$GI" submit "$SRC/tests/data/bad/bad-camera.json" --retry 0 >"$TMP/submit.out" \
+            2>"$TMP/submit.err" || rc=$?
+    fi
+    [ $rc -eq 2 ] && [ "$(cat "$TMP/submit.err")" = "gi: $SRC/tests/data/bad/bad-camera.json: \
+camera.up: is zero or parallel to the view direction" ] && [ ! -s "$TMP/submit.out" ] ||
+        { cat "$TMP/submit.err"; fail "gi submit of a bad job ($tok token): exit $rc"; }
+done
+rc=0
+env -u GI_FARM_TOKEN -u GI_FARM_TOKEN_FILE "$GI" submit "$TMP/obj.json" --retry 0 \
+    2>"$TMP/submit.err" || rc=$?
+[ $rc -eq 2 ] && grep -q "^gi: no API token" "$TMP/submit.err" ||
+    { cat "$TMP/submit.err"; fail "gi submit of a good job with no token: exit $rc"; }
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
