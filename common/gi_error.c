@@ -9,20 +9,36 @@
 #include <stdlib.h>
 #include <string.h>
 
-int gi_fail(gi_error *err, gi_errcode code, const char *fmt, ...)
+static int vfail(gi_error *err, gi_errcode code, int errnum, const char *fmt, va_list ap)
 {
     if (err) {
-        va_list ap;
-        va_start(ap, fmt);
         err->code = code;
+        err->sys_errno = errnum;
         vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-        va_end(ap);
         /* Keep messages on one line: a multi-line message breaks logs and the
          * "one-line error" promise. */
         for (char *p = err->msg; *p; p++)
             if (*p == '\n' || *p == '\r')
                 *p = ' ';
     }
+    return -1;
+}
+
+int gi_fail(gi_error *err, gi_errcode code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfail(err, code, 0, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+int gi_fail_errno(gi_error *err, gi_errcode code, int errnum, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfail(err, code, errnum, fmt, ap);
+    va_end(ap);
     return -1;
 }
 
@@ -54,6 +70,7 @@ void gi_error_clear(gi_error *err)
 {
     if (err) {
         err->code = GI_OK;
+        err->sys_errno = 0;
         err->msg[0] = '\0';
     }
 }

@@ -25,12 +25,20 @@ typedef enum gi_errcode {
 
 typedef struct gi_error {
     gi_errcode code;
+    /* The errno of the system call that failed, where the caller may act on
+     * it (ECONNREFUSED from a connect: nobody listens there yet); else 0.
+     * Callers test this, never the message's strerror text. */
+    int sys_errno;
     char msg[1024];
 } gi_error;
 
-/* Fills err (if non-NULL) and returns -1, so callers can `return gi_fail(...)`. */
+/* Fills err (if non-NULL, sys_errno 0) and returns -1, so callers can
+ * `return gi_fail(...)`. */
 int gi_fail(gi_error *err, gi_errcode code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+/* gi_fail, keeping errnum in sys_errno (the message says it in words). */
+int gi_fail_errno(gi_error *err, gi_errcode code, int errnum, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
 
 /* Prepends "prefix: " to an existing message (adds context on the way up). */
 int gi_error_prefix(gi_error *err, const char *fmt, ...)

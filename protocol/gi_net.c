@@ -184,7 +184,8 @@ int gi_net_connect(const char *addr, double timeout_s, gi_error *err)
     }
     freeaddrinfo(res);
     if (fd < 0)
-        return gi_fail(err, GI_EIO, "cannot connect to %s: %s", addr, strerror(last));
+        return gi_fail_errno(err, GI_EIO, last, "cannot connect to %s: %s", addr,
+                             strerror(last));
     int fl = fcntl(fd, F_GETFL);
     fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
     gi_net_tune(fd);

@@ -981,7 +981,7 @@ int gi_farm_worker_run(gi_worker_opts *o, gi_error *err)
         /* Once: a worker started before its coordinator, or pointed at
          * the wrong address, must not look like a worker that is fine. */
         ever |= w.established;
-        if (!ever && !said_refused && !o->once && strstr(serr.msg, "Connection refused")) {
+        if (!ever && !said_refused && !o->once && serr.sys_errno == ECONNREFUSED) {
             gi_warn("%s (no gi-farmd listening for workers there yet: is it running, with "
                     "--listen-workers %s? asking again, at most --backoff-max %.0f s apart)",
                     serr.msg, o->connect, o->backoff_max_s);

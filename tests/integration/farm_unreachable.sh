@@ -49,6 +49,13 @@ timeout 3 "$WORKER" --connect "$WADDR" --procs 1 --cache "$TMP/wcache" >"$TMP/ea
 with --listen-workers $WADDR? asking again" "$TMP/early.log")" = 1 ] &&
     [ "$(grep -c "cannot connect to $WADDR: Connection refused$" "$TMP/early.log")" -ge 1 ] ||
     { cat "$TMP/early.log"; fail "gi-worker started before gi-farmd: what it says"; }
+# Told by the connect's errno, not by words in the message: an address that
+# cannot be resolved, whose name holds those words, gets no such hint.
+timeout 3 "$WORKER" --connect "Connection refused:1" --procs 1 --cache "$TMP/wcache" \
+    >"$TMP/words.log" 2>&1 || true
+grep -q 'address "Connection refused:1": ' "$TMP/words.log" &&
+    ! grep -q "no gi-farmd listening" "$TMP/words.log" ||
+    { cat "$TMP/words.log"; fail "gi-worker took words in an address for a refused connection"; }
 
 # Said at once, before the retries end; a gi-farmd started meanwhile answers.
 "$GI" jobs --retry 60 >"$TMP/jobs2.out" 2>"$TMP/jobs2.err" &

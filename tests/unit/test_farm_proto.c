@@ -398,3 +398,27 @@ GI_TEST(test_net_peer_is_loopback)
     if (u >= 0)
         close(u);
 }
+
+/* A connect nobody answers carries its errno (gi-worker tells "no gi-farmd
+ * listening yet" by ECONNREFUSED, not by the message's words); the message
+ * says it as before. Any other failure has no errno of its own. */
+GI_TEST(test_net_connect_refused_carries_errno)
+{
+    gi_error err;
+    char bound[64], want[128];
+    int l = gi_net_listen("127.0.0.1:0", bound, sizeof bound, &err);
+    GI_REQUIRE_OK(l < 0 ? -1 : 0);
+    close(l); /* the port is free now: a connect there is refused */
+    GI_CHECK(gi_net_connect(bound, 5.0, &err) == -1);
+    GI_CHECK(err.code == GI_EIO && err.sys_errno == ECONNREFUSED);
+    snprintf(want, sizeof want, "cannot connect to %s: %s", bound, strerror(ECONNREFUSED));
+    GI_CHECK(strcmp(err.msg, want) == 0);
+    gi_error_prefix(&err, "coordinator");
+    GI_CHECK(err.sys_errno == ECONNREFUSED);
+    gi_fail(&err, GI_EIO, "the session ended");
+    GI_CHECK(err.sys_errno == 0);
+    gi_fail_errno(&err, GI_EIO, ECONNREFUSED, "x");
+    gi_error_clear(&err);
+    GI_CHECK(err.sys_errno == 0 && err.code == GI_OK);
+    GI_CHECK(gi_net_connect("127.0.0.1:notaport", 1.0, &err) == -1 && err.sys_errno == 0);
+}
