@@ -39,6 +39,75 @@ static size_t string_nul(const char *text, size_t len)
     return len;
 }
 
+/* As cJSON skips it: every byte up to ' ' (control characters too). */
+static size_t skip_space(const char *t, size_t len, size_t i)
+{
+    while (i < len && (unsigned char)t[i] <= ' ')
+        i++;
+    return i;
+}
+
+/* Past the string whose opening quote is at t[i]; len if it does not end. */
+static size_t skip_string(const char *t, size_t len, size_t i)
+{
+    for (i++; i < len; i++) {
+        if (t[i] == '\\')
+            i++;
+        else if (t[i] == '"')
+            return i + 1;
+    }
+    return len;
+}
+
+int gi_json_top_keys(const char *text, size_t len, const char *const *keys, unsigned *found)
+{
+    *found = 0;
+    size_t i = len >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0 ? 3 : 0; /* a BOM, as cJSON */
+    i = skip_space(text, len, i);
+    if (i >= len || text[i] != '{')
+        return -1;
+    i = skip_space(text, len, i + 1);
+    if (i < len && text[i] == '}')
+        return 0;
+    for (;;) {
+        if (i >= len || text[i] != '"')
+            return -1;
+        size_t k0 = i + 1;
+        i = skip_string(text, len, i);
+        if (i >= len)
+            return -1;
+        for (unsigned k = 0; k < 32 && keys[k]; k++)
+            if (strlen(keys[k]) == i - 1 - k0 && memcmp(text + k0, keys[k], i - 1 - k0) == 0)
+                *found |= 1u << k;
+        i = skip_space(text, len, i);
+        if (i >= len || text[i] != ':')
+            return -1;
+        /* The value: to the ',' or '}' outside any string or bracket. */
+        size_t depth = 0;
+        for (i++; i < len; i++) {
+            char c = text[i];
+            if (c == '"') {
+                i = skip_string(text, len, i) - 1;
+            } else if (c == '{' || c == '[') {
+                depth++;
+            } else if (c == '}' || c == ']') {
+                if (depth == 0)
+                    break;
+                depth--;
+            } else if (c == ',' && depth == 0) {
+                break;
+            }
+        }
+        if (i >= len)
+            return -1;
+        if (text[i] == '}')
+            return 0;
+        if (text[i] != ',')
+            return -1;
+        i = skip_space(text, len, i + 1);
+    }
+}
+
 int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
                   gi_error *err)
 {

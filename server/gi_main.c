@@ -8,18 +8,21 @@
  *
  * Exit status: 0 success, 2 invalid input (job, scene, mesh, arguments),
  * 1 any other failure, 130 interrupted. */
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#include <cjson/cJSON.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "gi_args.h"
 #include "gi_blas_threads.h"
 #include "gi_client.h"
 #include "gi_fs.h"
 #include "gi_job.h"
+#include "gi_json.h"
 #include "gi_local.h"
 #include "gi_log.h"
 #include "gi_progress.h"
@@ -231,26 +234,31 @@ static int cmd_render(int argc, char **argv)
 enum { FILE_JOB, FILE_SCENE, FILE_EMISSIONS };
 
 /* What gi validate was given: a scene (a bare mesh file, or JSON with
- * "objects"), an emissions file for gi relight, or a job. */
+ * "objects"), an emissions file for gi relight, or a job. Told by the
+ * top-level keys alone (gi_json_top_keys, on the file mapped), not by
+ * parsing it: each kind has its own size limit (a job's 16 MiB, a scene's
+ * 2 GiB), which its loader applies to the file's size before it parses,
+ * so an oversized job is refused at once, naming its size and the limit. */
 static int file_kind(const char *path)
 {
     const char *dot = strrchr(path, '.');
     if (!dot || strcmp(dot, ".json") != 0)
         return FILE_SCENE;
-    gi_buf b;
-    gi_buf_init(&b);
+    struct stat st;
+    int fd = gi_open_regular(path, O_RDONLY, &st, NULL);
+    if (fd < 0)
+        return FILE_JOB; /* its loader says why */
     int kind = FILE_JOB;
-    if (gi_read_file(path, (size_t)64 << 20, &b, NULL) == 0) {
-        cJSON *doc = cJSON_ParseWithLength((const char *)b.data, b.len);
-        int method = cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "method");
-        if (!method && cJSON_IsObject(doc) && cJSON_GetObjectItemCaseSensitive(doc, "objects"))
-            kind = FILE_SCENE;
-        else if (!method && cJSON_IsObject(doc) &&
-                 cJSON_GetObjectItemCaseSensitive(doc, "emissions"))
-            kind = FILE_EMISSIONS;
-        cJSON_Delete(doc);
-    }
-    gi_buf_free(&b);
+    void *map = st.st_size > 0 ? mmap(NULL, (size_t)st.st_size, PROT_READ, MAP_PRIVATE, fd, 0)
+                               : MAP_FAILED;
+    close(fd);
+    static const char *const keys[] = {"method", "objects", "emissions", NULL};
+    unsigned found;
+    if (map != MAP_FAILED &&
+        gi_json_top_keys(map, (size_t)st.st_size, keys, &found) == 0 && !(found & 1))
+        kind = found & 2 ? FILE_SCENE : found & 4 ? FILE_EMISSIONS : FILE_JOB;
+    if (map != MAP_FAILED)
+        munmap(map, (size_t)st.st_size);
     return kind;
 }
 

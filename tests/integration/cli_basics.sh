@@ -99,6 +99,33 @@ env -u GI_FARM_TOKEN -u GI_FARM_TOKEN_FILE "$GI" submit "$TMP/obj.json" --retry 
     2>"$TMP/submit.err" || rc=$?
 [ $rc -eq 2 ] && grep -q "^gi: no API token" "$TMP/submit.err" ||
     { cat "$TMP/submit.err"; fail "gi submit of a good job with no token: exit $rc"; }
+# gi validate tells a job from a scene or an emissions file by its top-level
+# keys, not by parsing it whole: a job over its 16 MiB limit is refused by
+# its size before anything parses it (it took 765 MB and 3 s to parse that
+# one first); a scene JSON past 16 MiB is a scene all the same.
+python3 -c 'import sys; sys.stdout.write("{\"method\": \"pt\", \"pad\": [" + "1," * 9000000 + "1]}")' \
+    >"$TMP/huge.json"
+size=$(wc -c <"$TMP/huge.json")
+python3 - "$GI_RELEASE" "$TMP/huge.json" >"$TMP/huge.out" 2>"$TMP/huge.err" <<'PY' ||
+import resource, subprocess, sys
+rc = subprocess.call([sys.argv[1], "validate", sys.argv[2]])
+print("rc", rc, "maxrss_kb", resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+PY
+    fail "measuring gi validate of a huge job"
+[ "$(cat "$TMP/huge.err")" = "gi: $TMP/huge.json: file is $size bytes, over the limit of 16777216" ] &&
+    grep -q "^rc 2 " "$TMP/huge.out" ||
+    { cat "$TMP/huge.out" "$TMP/huge.err"; fail "gi validate of a job over 16 MiB"; }
+[ "$(awk '{print $4}' "$TMP/huge.out")" -lt 150000 ] ||
+    { cat "$TMP/huge.out"; fail "gi validate parsed a job over its limit before refusing it"; }
+python3 - "$SRC/scenes/cornell-box/scene.json" "$TMP/huge-scene.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+s["description"] = "x" * (17 << 20)
+json.dump(s, open(sys.argv[2], "w"))
+PY
+"$GI" validate "$TMP/huge-scene.json" | grep -q "huge-scene.json: ok (scene: 8 objects" ||
+    fail "gi validate of a scene JSON past 16 MiB"
+rm -f "$TMP/huge.json" "$TMP/huge-scene.json"
 "$GI" methods | grep -q "^pt " || fail "methods does not list pt"
 "$GI" --version | grep -q "^gi [0-9]" || fail "--version"
 for cmd in "" render submit relight; do
