@@ -211,6 +211,8 @@ const gi_task *gi_jobrun_lease_if(gi_jobrun *jr, int (*accept)(void *ctx, const 
         jr->pending_head++;
         jt->state = GI_TASK_LEASED;
         jr->leased++;
+        if (!jr->clock.working)
+            gi_progress_clock_working(&jr->clock, jr->cost_done, gi_now());
         return &jt->task;
     }
     return NULL;

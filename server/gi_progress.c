@@ -78,9 +78,22 @@ void gi_progress_clock_note(gi_progress_clock *c, const gi_job_progress *at, dou
             c->frame_base = at->frame == 0 ? 0 : cost_done;
         c->t_frame = now;
         c->done_at_t = cost_done;
+        c->working = 0;
         c->noted = 1;
     }
     c->at = *at;
+}
+
+void gi_progress_clock_working(gi_progress_clock *c, double cost_done, double now)
+{
+    /* Until a task is out the job waits (for a worker, a farm's free
+     * slot): counted in the rate, that wait would inflate the first ETAs
+     * by as much as it lasted. */
+    if (c->noted && !c->working) {
+        c->t_frame = now;
+        c->done_at_t = cost_done;
+        c->working = 1;
+    }
 }
 
 void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, double cost_done,

@@ -34,8 +34,10 @@ typedef struct gi_progress_at {
  * later_frame_cost), or alike without one. The weights depend on the job's
  * state alone, so that a restored job's fraction goes on where it was.
  * The ETA is the current frame's rest at the rate this process has seen in
- * it, plus the frames after it at the mean time of the frames this process
- * saw whole past frame 0 (before one is seen: the current frame's
+ * it since it handed out the frame's first task (time a job waits for a
+ * worker, queued on a farm with none free, is no work), plus the frames
+ * after it at the mean time of the frames this process saw whole past
+ * frame 0 (before one is seen: the current frame's
  * projected time, or in frame 0 its rate times the method's estimate).
  * Monotonic seconds; not checkpointed. */
 typedef struct gi_progress_clock {
@@ -45,8 +47,10 @@ typedef struct gi_progress_clock {
     /* Set before the first note by a job restored from a checkpoint that
      * kept its frame_base (< 0: not kept; frame 0's is 0 all the same). */
     double restored_base;
-    double t_frame;      /* when this process saw this frame (or itself) start */
+    double t_frame;      /* when this process saw this frame (or itself) start, moved to
+                          * when it handed out the frame's first task */
     double done_at_t;    /* work done then */
+    int working;         /* a task of this frame was handed out: t_frame stays */
     int frame_seen_whole; /* this process saw this frame start */
     double later_seconds; /* frames past 0 seen whole: their time and count */
     uint32_t later_count;
@@ -56,6 +60,9 @@ typedef struct gi_progress_clock {
  * tasks are counted in cost_total. */
 void gi_progress_clock_note(gi_progress_clock *c, const gi_job_progress *at, double cost_total,
                             double cost_done, double now);
+/* A task was handed out (to a worker or a pool child), cost_done being
+ * done: the first of the frame starts its rate's clock. */
+void gi_progress_clock_working(gi_progress_clock *c, double cost_done, double now);
 /* Fills fraction, eta_s, done, total, frame and frames. */
 void gi_progress_clock_read(const gi_progress_clock *c, double cost_total, double cost_done,
                             double now, gi_progress_at *out);

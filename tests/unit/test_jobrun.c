@@ -815,6 +815,51 @@ GI_TEST(test_jobrun_progress_counts_follow_ups_before_they_are_planned)
     gi_job_free(&job);
 }
 
+/* A job that waited 100 s for a worker before its first task went out,
+ * then did 10 of its 100 units in 10 s: 90 s left, not the 990 s that the
+ * rate since the job started would say; a frame's wait is not counted
+ * either, and once work is under way later leases do not move the clock. */
+GI_TEST(test_progress_clock_rate_counts_from_the_first_task_out)
+{
+    gi_progress_clock c;
+    memset(&c, 0, sizeof c);
+    gi_progress_at at;
+    gi_job_progress still = {.frames = 1};
+    gi_progress_clock_note(&c, &still, 100, 0, 1000.0);
+    gi_progress_clock_read(&c, 100, 0, 1100.0, &at);
+    GI_CHECK(at.eta_s < 0); /* no rate yet */
+    gi_progress_clock_working(&c, 0, 1100.0);
+    gi_progress_clock_working(&c, 5, 1105.0); /* work under way: no change */
+    gi_progress_clock_read(&c, 100, 10, 1110.0, &at);
+    GI_CHECK_MSG(fabs(at.eta_s - 90.0) < 1e-9, "first ETA %.3f s after a 100 s wait", at.eta_s);
+    /* Frame 1 of 2 waits 50 s for a worker too; its 100 units at 10/s. */
+    gi_progress_clock_note(&c, &(gi_job_progress){.frames = 2}, 100, 0, 2000.0);
+    gi_progress_clock_working(&c, 0, 2000.0);
+    gi_progress_clock_note(&c, &(gi_job_progress){.frame = 1, .frames = 2}, 100, 100, 2010.0);
+    gi_progress_clock_working(&c, 100, 2060.0);
+    gi_progress_clock_read(&c, 200, 120, 2062.0, &at);
+    GI_CHECK_MSG(fabs(at.eta_s - 8.0) < 1e-9, "frame 1's ETA %.3f s", at.eta_s);
+}
+
+/* The same through a run: a job left waiting (its clock set back as if it
+ * had been planned 1000 s ago) whose first task then runs at once has a
+ * first ETA of the order of that task's time, not of the wait. */
+GI_TEST(test_jobrun_eta_leaves_out_the_wait_for_workers)
+{
+    gi_job job;
+    gi_jobrun jr;
+    gi_error err;
+    GI_REQUIRE_OK(start(&fake_method, &job, &jr, &err));
+    jr.clock.t_frame -= 1000.0;
+    drive(&jr, 4);
+    gi_progress_at at;
+    gi_jobrun_progress(&jr, gi_now(), &at);
+    GI_CHECK_MSG(at.eta_s >= 0 && at.eta_s < 100.0, "first ETA %.1f s after a 1000 s wait",
+                 at.eta_s);
+    gi_jobrun_free(&jr);
+    gi_job_free(&job);
+}
+
 /* An animation as the clock sees it (times in seconds): frame 0 bakes for
  * 8 s then renders tiles for 2 s; frames 1.. take 1 s each, half update,
  * half tiles; 100 units of work each way. */
