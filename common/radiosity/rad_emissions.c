@@ -188,14 +188,21 @@ int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, c
     char names[400];
     for (uint32_t i = 0; i < em->count; i++) {
         const gi_rad_emission *e = &em->items[i];
-        for (uint32_t j = 0; j < e->material_count; j++)
-            if (gi_rad_model_find_material(md, e->materials[j].name) < 0)
+        for (uint32_t j = 0; j < e->material_count; j++) {
+            int m = gi_rad_model_find_material(md, e->materials[j].name);
+            if (m < 0)
                 return gi_fail(err, GI_EINVAL,
                                "%s: emissions[%u] (\"%s\"): no material \"%s\" in the scene "
                                "(its materials: %s)",
                                file, i, e->name, e->materials[j].name,
                                gi_rad_name_list(names, sizeof names, md->material_count,
                                                 material_name, md));
+            if (md->materials[m].two_sided)
+                return gi_fail(err, GI_EINVAL,
+                               "%s: emissions[%u] (\"%s\"): material \"%s\" is two-sided, and "
+                               "radiosity's elements emit from their front face only",
+                               file, i, e->name, e->materials[j].name);
+        }
         for (uint32_t j = 0; j < e->object_count; j++)
             if (gi_rad_model_find_object(md, e->objects[j].name) < 0)
                 return gi_fail(err, GI_EINVAL,

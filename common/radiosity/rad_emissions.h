@@ -62,8 +62,9 @@ void gi_rad_emissions_scene(gi_rad_emissions *em);
  * message, cut with "..." to fit cap (a mesh file may bring hundreds). */
 const char *gi_rad_name_list(char *buf, size_t cap, uint32_t count,
                              const char *(*name)(const void *ctx, uint32_t i), const void *ctx);
-/* Checks that every material and object named exists in the model
- * (GI_EINVAL naming `file`, the set and the name). */
+/* Checks that every material and object named exists in the model, and
+ * that no named material is two-sided (as gi_rad_emissions_check_scene;
+ * GI_EINVAL naming `file`, the set and the name). */
 int gi_rad_emissions_check(const gi_rad_emissions *em, const gi_rad_model *md, const char *file,
                            gi_error *err);
 /* Checks that every material and object named exists in the scene, and

@@ -32,6 +32,7 @@ void gi_rad_file_encode(const gi_rad_file_info *info, const gi_rad_model *md,
         gi_buf_put_str(&p, md->materials[i].name);
         gi_buf_put_f32s(&p, md->materials[i].rho, 3);
         gi_buf_put_f32s(&p, md->materials[i].emission, 3);
+        gi_buf_put_u32(&p, md->materials[i].two_sided ? GI_RAD_MATERIAL_TWO_SIDED : 0);
     }
     gi_buf_put_u32(&p, md->object_count);
     for (uint32_t i = 0; i < md->object_count; i++)
@@ -91,8 +92,9 @@ static int finite3(const float *v)
 
 /* The body, after the header checks; outputs are freed by the caller on
  * failure. */
-static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info, gi_rad_model *md,
-                          gi_rad_factor *f, gi_error *err)
+static int decode_payload(gi_reader *r, uint32_t version, const char *name,
+                          gi_rad_file_info *info, gi_rad_model *md, gi_rad_factor *f,
+                          gi_error *err)
 {
     char *method = gi_get_str(r, 7);
     if (!method)
@@ -128,8 +130,14 @@ static int decode_payload(gi_reader *r, const char *name, gi_rad_file_info *info
         mt->name = gi_get_str(r, MAX_NAME);
         gi_get_f32s(r, mt->rho, 3);
         gi_get_f32s(r, mt->emission, 3);
+        /* Version 1 did not record two-sidedness: its materials read as
+         * one-sided, as that version's relighting treated them. */
+        uint32_t flags = version >= 2 ? gi_get_u32(r) : 0;
         if (r->failed || !mt->name)
             return bad(err, name, "truncated material table");
+        if (flags & ~GI_RAD_MATERIAL_TWO_SIDED)
+            return bad(err, name, "unknown material flags");
+        mt->two_sided = (flags & GI_RAD_MATERIAL_TWO_SIDED) != 0;
         if (!finite3(mt->rho) || !finite3(mt->emission))
             return bad(err, name, "non-finite material value");
         for (int c = 0; c < 3; c++)
@@ -225,9 +233,10 @@ int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name, gi_rad
     uint32_t version = gi_le_get_u32(data + 8), flags = gi_le_get_u32(data + 12);
     uint64_t plen = gi_le_get_u64(data + 16);
     uint32_t crc = gi_le_get_u32(data + 24);
-    if (version != GI_RAD_FILE_VERSION)
-        return gi_fail(err, GI_EINVAL, "%s: factorization file version %u (this gi reads %u)", name,
-                       version, GI_RAD_FILE_VERSION);
+    if (version < GI_RAD_FILE_OLDEST_VERSION || version > GI_RAD_FILE_VERSION)
+        return gi_fail(err, GI_EINVAL,
+                       "%s: factorization file version %u (this gi reads %u to %u)", name,
+                       version, GI_RAD_FILE_OLDEST_VERSION, GI_RAD_FILE_VERSION);
     if (flags != 0)
         return bad(err, name, "unknown flags");
     if (plen != len - GI_RAD_FILE_HEADER)
@@ -236,7 +245,7 @@ int gi_rad_file_decode(const uint8_t *data, size_t len, const char *name, gi_rad
         return bad(err, name, "checksum mismatch (corrupted)");
     gi_reader r;
     gi_reader_init(&r, data + GI_RAD_FILE_HEADER, plen, name);
-    if (decode_payload(&r, name, info, md, f, err)) {
+    if (decode_payload(&r, version, name, info, md, f, err)) {
         gi_rad_model_free(md);
         gi_rad_factor_free(f);
         return -1;

@@ -3,13 +3,14 @@
  * form factors nor Embree. Format (little-endian, docs/job-format.md,
  * "Factorization file"):
  *
- *   "GIRADFAC" | u32 version (1) | u32 flags (0) | u64 payload bytes |
+ *   "GIRADFAC" | u32 version (2) | u32 flags (0) | u64 payload bytes |
  *   u32 CRC-32C of the payload | payload
  *
  *   payload:
  *     str method ("2mf" / "2mce")            (str: u32 length + bytes)
  *     u32 n, k, rays, levels, roots
- *     u32 materials; each: str name, f32 rho[3], f32 emission[3]
+ *     u32 materials; each: str name, f32 rho[3], f32 emission[3],
+ *                          u32 flags (bit 0: two-sided; version 2 on)
  *     u32 objects; each: str name
  *     n x (u32 material, u32 object, f64 area)
  *     u32 vertices; each f32 x, y, z;  n x 3 u32 corner vertex ids
@@ -32,7 +33,9 @@
 #include "rad_model.h"
 
 #define GI_RAD_FILE_MAGIC "GIRADFAC"
-#define GI_RAD_FILE_VERSION 1u
+#define GI_RAD_FILE_VERSION 2u
+#define GI_RAD_FILE_OLDEST_VERSION 1u /* still read: see decode_payload */
+#define GI_RAD_MATERIAL_TWO_SIDED 1u
 #define GI_RAD_FILE_HEADER 28u
 #define GI_RAD_FILE_MAX_BYTES ((size_t)16 << 30)
 

@@ -20,6 +20,7 @@ int gi_rad_model_build(gi_rad_model *md, const gi_rad_mesh *m, const gi_scene *s
         md->materials[i].emission[0] = mt->emission.x;
         md->materials[i].emission[1] = mt->emission.y;
         md->materials[i].emission[2] = mt->emission.z;
+        md->materials[i].two_sided = mt->two_sided;
     }
     md->objects = gi_xcalloc(s->object_count ? s->object_count : 1, sizeof *md->objects);
     for (uint32_t i = 0; i < s->object_count; i++)

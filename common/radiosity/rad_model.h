@@ -17,6 +17,8 @@ typedef struct gi_rad_material {
     char *name;
     float rho[3];      /* diffuse reflectance */
     float emission[3]; /* emitted radiance (front faces) */
+    int two_sided;     /* the scene's material emits from both faces: radiosity's
+                        * elements cannot, so an emission set may not name it */
 } gi_rad_material;
 
 typedef struct gi_rad_model {

@@ -3,7 +3,9 @@
  * input goes to both. For the factorization, an input that does not start
  * with the magic has its first byte dropped and the rest wrapped in a valid
  * header (magic, version, length, CRC-32C), so the fuzzer reaches the
- * payload checks instead of stopping at the checksum. Any
+ * payload checks instead of stopping at the checksum; the dropped byte
+ * picks the version (odd: the oldest still read, whose materials have no
+ * flags). Any
  * input must parse or fail with a one-line GI_EINVAL message; never crash,
  * leak or hang. */
 #include <stdint.h>
@@ -33,7 +35,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_buf_init(&b);
     if (size > 0 && (size < 8 || memcmp(data, GI_RAD_FILE_MAGIC, 8) != 0)) {
         gi_buf_put(&b, GI_RAD_FILE_MAGIC, 8);
-        gi_buf_put_u32(&b, GI_RAD_FILE_VERSION);
+        gi_buf_put_u32(&b, data[0] & 1 ? GI_RAD_FILE_OLDEST_VERSION : GI_RAD_FILE_VERSION);
         gi_buf_put_u32(&b, 0);
         gi_buf_put_u64(&b, size - 1);
         gi_buf_put_u32(&b, gi_crc32c(0, data + 1, size - 1));

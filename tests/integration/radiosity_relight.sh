@@ -67,6 +67,27 @@ expect_error 'no object "box" in the scene (its objects: floor, light, ceiling,'
 expect_error "$TMP/elsewhere/cb.fact: no such file: relight reads the factorization the job wrote" \
     "$TMP/job.json" "$TMP/em.json" --out "$TMP/elsewhere"
 [ ! -e "$TMP/elsewhere" ] || fail "a relight with no factorization made its --out"
+# A two-sided material may reflect in a radiosity job, but an emission set
+# may not light it: its elements would emit from their front face only. The
+# factorization remembers which materials are two-sided (the scene is not
+# read by a relight).
+sed 's/"green": {"diffuse": \[0.14, 0.45, 0.091\]/&, "two_sided": true/' \
+    "$SRC/scenes/cornell-box/scene.json" >"$TMP/two-sided.json"
+grep -q '"two_sided": true}' "$TMP/two-sided.json" || fail "no two-sided green in the scene copy"
+write_job "$TMP/two-sided-job.json" <<JOB
+{"name": "ts", "scene": "$TMP/two-sided.json", "method": "radiosity",
+ "image": {"width": 40, "height": 32}, "radiosity": {"patches": 80, "levels": 2, "rays": 256},
+ "outputs": {"ply": "ts.ply", "factorization": "ts.fact"}}
+JOB
+"$GI_RELEASE" render "$TMP/two-sided-job.json" --workers 2 --out "$TMP/ts" --progress none \
+    >/dev/null || fail "render with a two-sided reflector"
+echo '{"emissions": [{"name": "glow", "materials": {"green": [1, 1, 1]}}]}' >"$TMP/ts-em.json"
+expect_error 'emissions[0] ("glow"): material "green" is two-sided' \
+    "$TMP/two-sided-job.json" "$TMP/ts-em.json" --out "$TMP/ts"
+[ ! -e "$TMP/ts/ts-glow.ply" ] || fail "a refused relight wrote its PLY"
+echo '{"emissions": [{"name": "glow", "materials": {"white": [1, 1, 1]}}]}' >"$TMP/ts-em.json"
+"$GI" relight "$TMP/two-sided-job.json" "$TMP/ts-em.json" --out "$TMP/ts" >/dev/null 2>&1 ||
+    fail "relight of a one-sided material beside a two-sided one"
 echo '{"emissions": [{"name": "x", "scale": "big"}]}' >"$TMP/bad2.json"
 expect_error "bad2.json: emissions[0].scale" "$TMP/job.json" "$TMP/bad2.json" --out "$TMP/out"
 cp "$TMP/out/cb.fact" "$TMP/good.fact"

@@ -18,8 +18,8 @@ static void small(gi_rad_model *md, gi_rad_factor *f, gi_error *err)
     md->n = 6;
     md->material_count = 2;
     md->materials = calloc(2, sizeof *md->materials);
-    md->materials[0] = (gi_rad_material){strdup("white"), {0.5f, 0.5f, 0.5f}, {0, 0, 0}};
-    md->materials[1] = (gi_rad_material){strdup("lamp"), {0.8f, 0.7f, 0.6f}, {4, 3, 2}};
+    md->materials[0] = (gi_rad_material){strdup("white"), {0.5f, 0.5f, 0.5f}, {0, 0, 0}, 0};
+    md->materials[1] = (gi_rad_material){strdup("lamp"), {0.8f, 0.7f, 0.6f}, {4, 3, 2}, 0};
     md->object_count = 2;
     md->objects = calloc(2, sizeof *md->objects);
     md->objects[0] = strdup("room");
@@ -186,6 +186,69 @@ GI_TEST(test_rad_factorization_file_refuses_damage)
 static int parse(const char *text, gi_rad_emissions *em, gi_error *err)
 {
     return gi_rad_emissions_parse(text, strlen(text), "em.json", em, err);
+}
+
+/* Payload offsets of small()'s two material flags: the method (4 + 3), five
+ * sizes (20) and the count (4), then per material its name (4 + length),
+ * rho and emission (24). */
+#define FLAGS_WHITE (31 + 4 + 5 + 24)
+#define FLAGS_LAMP (FLAGS_WHITE + 4 + 4 + 4 + 24)
+
+GI_TEST(test_rad_factorization_file_keeps_two_sidedness)
+{
+    gi_error err;
+    gi_rad_model md, md2;
+    gi_rad_factor f, f2;
+    gi_rad_file_info info;
+    small(&md, &f, &err);
+    md.materials[1].two_sided = 1;
+    gi_buf a;
+    gi_buf_init(&a);
+    gi_rad_file_encode(&small_info, &md, &f, &a);
+    size_t P = GI_RAD_FILE_HEADER;
+    GI_REQUIRE(gi_le_get_u32(a.data + P + FLAGS_WHITE) == 0);
+    GI_REQUIRE(gi_le_get_u32(a.data + P + FLAGS_LAMP) == GI_RAD_MATERIAL_TWO_SIDED);
+    GI_REQUIRE_OK(gi_rad_file_decode(a.data, a.len, "t.fact", &info, &md2, &f2, &err));
+    GI_CHECK(!md2.materials[0].two_sided && md2.materials[1].two_sided);
+    /* An emission set may light the one-sided material, not the two-sided. */
+    gi_rad_emissions em;
+    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"w\", \"materials\": "
+                        "{\"white\": [1, 1, 1]}}]}",
+                        &em, &err));
+    GI_CHECK_OK(gi_rad_emissions_check(&em, &md2, "em.json", &err));
+    gi_rad_emissions_free(&em);
+    GI_REQUIRE_OK(parse("{\"emissions\": [{\"name\": \"w\"}, {\"name\": \"l\", "
+                        "\"materials\": {\"lamp\": [1, 1, 1]}}]}",
+                        &em, &err));
+    GI_CHECK(gi_rad_emissions_check(&em, &md2, "em.json", &err) == -1 &&
+             strstr(err.msg, "em.json: emissions[1] (\"l\"): material \"lamp\" is two-sided"));
+    gi_rad_emissions_free(&em);
+    gi_rad_model_free(&md2);
+    gi_rad_factor_free(&f2);
+    /* Flags this version does not know are refused. */
+    gi_le_put_u32(a.data + P + FLAGS_WHITE, 2);
+    reseal(&a);
+    expect_bad(a.data, a.len, "unknown material flags", __LINE__);
+    /* A version 1 file (no flags) still loads, its materials one-sided. */
+    gi_buf v1;
+    gi_buf_init(&v1);
+    gi_buf_put(&v1, a.data, P + FLAGS_WHITE);
+    gi_buf_put(&v1, a.data + P + FLAGS_WHITE + 4, FLAGS_LAMP - FLAGS_WHITE - 4);
+    gi_buf_put(&v1, a.data + P + FLAGS_LAMP + 4, a.len - P - FLAGS_LAMP - 4);
+    gi_le_put_u32(v1.data + 8, 1);
+    gi_le_put_u64(v1.data + 16, v1.len - P);
+    reseal(&v1);
+    GI_REQUIRE_OK(gi_rad_file_decode(v1.data, v1.len, "v1.fact", &info, &md2, &f2, &err));
+    GI_CHECK(!md2.materials[0].two_sided && !md2.materials[1].two_sided);
+    GI_CHECK(memcmp(f2.M, f.M, 3 * 4 * sizeof(float)) == 0);
+    gi_rad_model_free(&md2);
+    gi_rad_factor_free(&f2);
+    gi_le_put_u32(v1.data + 8, 0);
+    expect_bad(v1.data, v1.len, "version 0 (this gi reads 1 to 2)", __LINE__);
+    gi_buf_free(&v1);
+    gi_buf_free(&a);
+    gi_rad_model_free(&md);
+    gi_rad_factor_free(&f);
 }
 
 GI_TEST(test_rad_emissions_apply_overrides_in_order)
