@@ -207,7 +207,10 @@ def upload():
               b"Content-Length: 1000000\r\n\r\n" % (b"b" * 64, sys.argv[2].encode()))
     return s
 def stall(conns):
-    time.sleep(0.5)  # their heads read: the bytes below count as moved by the requests
+    # Their heads read (2 s, for a loaded machine: a head still unread is an
+    # idle connection, which a newcomer may shed): the bytes below count as
+    # moved by the requests.
+    time.sleep(2)
     for s in conns:
         s.sendall(b"x" * 100000)
 # A 64th coming while the others' heads are not read yet (they are idle)
@@ -225,7 +228,7 @@ while not os.path.exists(sys.argv[3]) and time.time() - t0 < 60:
 print("closed by gi-farmd: %d" % len(select.select(conns, [], [], 0)[0]))
 PY
 uploader=$!
-started $uploader "$TMP/uploads.out" stopped
+started $uploader "$TMP/uploads.out" '^stopped$'
 sleep 2
 api /api/v1/workers -o /dev/null || fail "a client turned away by uploads that stopped"
 : >"$TMP/release"
