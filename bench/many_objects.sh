@@ -4,6 +4,7 @@
 # room, and this times, in seconds (wall clock; median of ROUNDS):
 #   validate       gi validate of the scene (JSON, assembly, checks)
 #   validate-mesh  the same with every cube a reference to one cube.obj
+#   validate-files the same with every cube a mesh file of its own (N OBJs)
 #   pt, detp, quadrature, radiosity
 #                  gi render --workers 1 of a tiny job of each method (a
 #                  32 x 32 image, 1 sample / 2,000 photons / small budgets),
@@ -13,13 +14,14 @@
 # With a second gi, the two alternate (e.g. a build from before a change);
 # its column is the second figure.
 #   bench/many_objects.sh BUILD_DIR "N1 N2 ..." [ROUNDS] [OTHER_GI] [STEPS]
-# STEPS (default all): a subset of "validate validate-mesh pt detp quadrature radiosity".
+# STEPS (default all): a subset of "validate validate-mesh validate-files pt detp quadrature
+# radiosity".
 set -eu
 BIN=${1:-build/release}
 SIZES=${2:-1000 10000 100000}
 ROUNDS=${3:-3}
 OTHER=${4:-}
-STEPS=${5:-validate validate-mesh pt detp quadrature radiosity}
+STEPS=${5:-validate validate-mesh validate-files pt detp quadrature radiosity}
 T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-many.XXXXXX")
 trap 'rm -rf "$T"' EXIT INT TERM
 now() { date +%s.%N; }
@@ -42,6 +44,7 @@ run() {
     case $step in
     validate) set -- "$gi" validate "$dir/scene.json" ;;
     validate-mesh) set -- "$gi" validate "$dir/mesh/scene.json" ;;
+    validate-files) set -- "$gi" validate "$dir/files/scene.json" ;;
     *) set -- "$gi" render "$dir/$step.json" --workers 1 --out "$dir/out" --progress none ;;
     esac
     t0=$(now)
@@ -56,6 +59,9 @@ for n in $SIZES; do
     d="$T/n$n"
     "$BIN/scenes/gi_scenegen" grid "$d" --objects "$n"
     "$BIN/scenes/gi_scenegen" grid "$d/mesh" --objects "$n" --mesh
+    case $STEPS in *validate-files*)
+        "$BIN/scenes/gi_scenegen" grid "$d/files" --objects "$n" --mesh-files ;;
+    esac
     for m in pt detp quadrature radiosity; do job $m >"$d/$m.json"; done
     echo "N = $n: $(wc -c <"$d/scene.json") bytes of scene, $((12 * n + 14)) triangles"
     for step in $STEPS; do

@@ -30,7 +30,10 @@ sh bench/resume_anim.sh "$BIN" 4000000 500000 24 16
 echo "== mesh_import: gi validate on a 25 MB OBJ (980k triangles; assimp in a child process)"
 sh bench/mesh_import.sh "$BIN" 700 5
 echo "== many_objects: scene load and tiny renders of 1k, 10k, 100k cubes (gi_scenegen grid; ~5 min)"
-sh bench/many_objects.sh "$BIN" "1000 10000 100000" 3
+sh bench/many_objects.sh "$BIN" "1000 10000 100000" 3 "" \
+    "validate validate-mesh pt detp quadrature radiosity"
+echo "== many_objects: 1k and 10k cubes, each a mesh file of its own (~1 min)"
+sh bench/many_objects.sh "$BIN" "1000 10000" 3 "" validate-files
 echo "== rt_build: the Embree build of 100,000 cubes, by geometry layout and build quality"
 G=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-grid.XXXXXX")
 "$BIN/scenes/gi_scenegen" grid "$G" --objects 100000

@@ -50,6 +50,18 @@ void gi_mesh_data_append(gi_mesh_data *dst, const gi_mesh_data *src);
 int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
                    gi_error *err);
 
+/* A session of imports from one source (a scene's load): gi_mesh_import,
+ * file after file, with one importer process for all of them while each
+ * succeeds (a failure, a crash or a file over its deadline ends it; the next
+ * file gets a new one). Not for use across fork(). */
+typedef struct gi_mesh_importer gi_mesh_importer;
+gi_mesh_importer *gi_mesh_importer_new(const gi_asset_source *src);
+int gi_mesh_importer_run(gi_mesh_importer *imp, const char *name, gi_mesh_data *out,
+                         gi_error *err);
+void gi_mesh_importer_free(gi_mesh_importer *imp);
+/* How many importer processes the session has started so far. */
+unsigned gi_mesh_importer_processes(const gi_mesh_importer *imp);
+
 /* Refuses files whose headers declare more data than they hold (assimp
  * would allocate what the header says): used by gi_mesh_import. */
 int gi_mesh_precheck(const char *name, const uint8_t *data, size_t len, gi_error *err);

@@ -250,10 +250,15 @@ static int assimp_import(import_ctx *c, const char *name, gi_mesh_data *out, gi_
  * leaks on some error paths. So it runs in a forked child: the parent serves
  * the files it asks for (through the job's source, whose manifest and cache
  * stay the parent's) and reads back the converted mesh or the error; a child
- * that dies is an error naming the file. Messages on the socket pair:
- * u8 type, u64 length, payload. */
+ * that dies is an error naming the file. One child imports a session's files
+ * one after another (a scene of thousands of mesh files paid a fork and a
+ * fresh process's page faults for each: 26 ms a file); after a file it fails
+ * on, crashes on or outlives its deadline on, the next file gets a new child,
+ * so a failure is always pinned to its file and no damage carries over.
+ * Messages on the socket pair: u8 type, u64 length, payload. */
 
 enum {
+    MSG_IMPORT = 'I', /* parent: a file's name, to import */
     MSG_READ = 'R',  /* child: a file's name */
     MSG_FILE = 'F',  /* parent: u8 ok, then the bytes or u32 code + message */
     MSG_MESH = 'M',  /* child: the mesh (gi_mesh_encode) */
@@ -375,10 +380,11 @@ static uint64_t import_memory_budget(size_t bytes)
     return phys && phys < budget ? phys : budget;
 }
 
-/* In the child: caps its address space at what it has mapped now plus the
- * budget (never above a limit it already has: gi-farmd's check process sets
- * one). Returns the budget, or 0 if no limit was set. */
-static uint64_t limit_import_memory(size_t bytes)
+/* In the child, before each file: caps its address space at what it has
+ * mapped now plus the file's budget (never above `given`, the limit the
+ * child started with: gi-farmd's check process sets one). Returns the
+ * budget, or 0 if the limit is `given`'s. */
+static uint64_t limit_import_memory(size_t bytes, const struct rlimit *given)
 {
     unsigned long long vm_pages = 0;
     FILE *f = fopen("/proc/self/statm", "re");
@@ -386,22 +392,25 @@ static uint64_t limit_import_memory(size_t bytes)
     if (f)
         fclose(f);
     long psize = sysconf(_SC_PAGESIZE);
-    struct rlimit rl;
-    if (!ok || psize <= 0 || getrlimit(RLIMIT_AS, &rl) != 0)
+    if (!ok || psize <= 0)
         return 0;
     uint64_t budget = import_memory_budget(bytes);
     rlim_t want = (rlim_t)(vm_pages * (uint64_t)psize + budget);
-    if (rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur <= want)
-        return 0; /* a tighter limit is already there */
+    struct rlimit rl = *given;
+    if (given->rlim_cur != RLIM_INFINITY && given->rlim_cur <= want) {
+        setrlimit(RLIMIT_AS, given); /* the tighter limit it was given */
+        return 0;
+    }
     rl.rlim_cur = want;
     return setrlimit(RLIMIT_AS, &rl) == 0 ? budget : 0;
 }
 #else
-static uint64_t limit_import_memory(size_t bytes) { return 0; }
+static uint64_t limit_import_memory(size_t bytes, const struct rlimit *given) { return 0; }
 #endif
 
-/* In the child: assimp over files asked of the parent; never returns. */
-static void child_main(int fd, const char *name, size_t bytes)
+/* In the child: one file, its files asked of the parent; 0 when the answer
+ * was sent. */
+static int child_import(int fd, const char *name, const struct rlimit *given)
 {
     import_ctx c;
     memset(&c, 0, sizeof c);
@@ -413,8 +422,10 @@ static void child_main(int fd, const char *name, size_t bytes)
     gi_error_clear(&e);
     gi_buf b;
     gi_buf_init(&b);
-    int rc = ctx_fetch(&c, name)->ok ? -2 : -1;
-    uint64_t budget = rc == -2 ? limit_import_memory(bytes) : 0;
+    import_file *main_file = ctx_fetch(&c, name);
+    size_t bytes = main_file->bytes.len;
+    int rc = main_file->ok ? -2 : -1;
+    uint64_t budget = rc == -2 ? limit_import_memory(bytes, given) : 0;
     if (rc == -2)
         rc = assimp_import(&c, name, &m, &e);
     /* assimp says "std::bad_alloc"; a failed allocation of ours, GI_ENOMEM. */
@@ -428,6 +439,29 @@ static void child_main(int fd, const char *name, size_t bytes)
     else
         put_error(&b, e.code != GI_OK ? &e : &c.files[0]->err);
     rc = send_msg(fd, rc == 0 ? MSG_MESH : MSG_ERROR, &b);
+    gi_buf_free(&b);
+    gi_mesh_data_free(&m);
+    ctx_free(&c);
+    return rc;
+}
+
+/* In the child: imports the files the parent names until it hangs up;
+ * never returns. */
+static void child_main(int fd)
+{
+    struct rlimit given = {RLIM_INFINITY, RLIM_INFINITY};
+    getrlimit(RLIMIT_AS, &given);
+    gi_buf b;
+    gi_buf_init(&b);
+    uint8_t type;
+    int rc = 0;
+    while (rc == 0 && recv_msg(fd, &type, &b) == 0 && type == MSG_IMPORT) {
+        char *name = gi_xmalloc(b.len + 1);
+        memcpy(name, b.data, b.len);
+        name[b.len] = '\0';
+        rc = child_import(fd, name, &given);
+        free(name);
+    }
     _exit(rc ? 1 : 0); /* no atexit handlers or stdio flushes of the parent's */
 }
 
@@ -452,17 +486,122 @@ static int wait_readable(int fd, double deadline)
     }
 }
 
-/* Serves the child's reads until it sends its answer, then reaps it. */
-static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_mesh_data *out,
-                       gi_error *err)
+struct gi_mesh_importer {
+    const gi_asset_source *src;
+    int fd;    /* the child's end of the socket pair, -1 with no child */
+    pid_t pid; /* the child, -1 with none */
+    unsigned processes; /* children started */
+};
+
+gi_mesh_importer *gi_mesh_importer_new(const gi_asset_source *src)
+{
+    gi_mesh_importer *imp = gi_xcalloc(1, sizeof *imp);
+    imp->src = src;
+    imp->fd = -1;
+    imp->pid = -1;
+    return imp;
+}
+
+/* Ends the child (killed: it may be looping in assimp) and reaps it; its
+ * wait status into *status if asked. */
+static void stop_child(gi_mesh_importer *imp, int *status)
+{
+    if (imp->fd >= 0)
+        close(imp->fd);
+    if (imp->pid > 0) {
+        kill(imp->pid, SIGKILL);
+        int st = 0;
+        pid_t w;
+        while ((w = waitpid(imp->pid, &st, 0)) < 0 && errno == EINTR)
+            ;
+        if (status)
+            *status = w == imp->pid ? st : -1;
+    }
+    imp->fd = -1;
+    imp->pid = -1;
+}
+
+void gi_mesh_importer_free(gi_mesh_importer *imp)
+{
+    if (!imp)
+        return;
+    stop_child(imp, NULL);
+    free(imp);
+}
+
+/* Forks the session's child if none runs: 0, or -1 with errno set. */
+static int start_child(gi_mesh_importer *imp)
+{
+    if (imp->pid > 0)
+        return 0;
+    int sv[2];
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+        return -1;
+    fflush(NULL); /* nothing buffered is written twice */
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(sv[0]);
+        prctl(PR_SET_PDEATHSIG, SIGKILL); /* no importer outlives its parent */
+        /* Die by the signal (the parent names it), whatever handlers this
+         * process had installed (a crash reporter, a fuzzer's). */
+        static const int crash_signals[] = {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
+        for (size_t i = 0; i < sizeof crash_signals / sizeof crash_signals[0]; i++)
+            signal(crash_signals[i], SIG_DFL);
+        child_main(sv[1]);
+    }
+    int why = errno;
+    close(sv[1]);
+    if (pid < 0) {
+        close(sv[0]);
+        errno = why;
+        return -1;
+    }
+    imp->fd = sv[0];
+    imp->pid = pid;
+    imp->processes++;
+    return 0;
+}
+
+unsigned gi_mesh_importer_processes(const gi_mesh_importer *imp) { return imp->processes; }
+
+/* Why the child gave no answer, from how it ended. */
+static int child_lost(const char *name, int status, gi_error *err)
+{
+    if (status != -1 && WIFSIGNALED(status)) {
+        int sig = WTERMSIG(status);
+        /* An assertion or a bad access in assimp is the file's doing; a
+         * kill (the OOM killer, an operator) is not. */
+        int file = sig == SIGABRT || sig == SIGSEGV || sig == SIGBUS || sig == SIGFPE ||
+                   sig == SIGILL;
+        return gi_fail(err, file ? GI_EINVAL : GI_ECRASH,
+                       "%s: cannot import: the importer (assimp) died on it (%s)%s", name,
+                       strsignal(sig), file ? ": the file is malformed or unsupported" : "");
+    }
+    return gi_fail(err, GI_ECRASH,
+                   "%s: cannot import: the importer process ended without an answer (exit "
+                   "status %d)",
+                   name, status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+}
+
+/* Has the child import `name`, serving its reads, until it answers or the
+ * deadline passes. A child that did not answer with a mesh is stopped. 1:
+ * the child was gone before it was asked (nothing was tried). */
+static int child_run(gi_mesh_importer *imp, import_ctx *c, const char *name, gi_mesh_data *out,
+                     gi_error *err)
 {
     gi_buf b;
     gi_buf_init(&b);
-    int rc = -1, answered = 0, late = 0;
+    gi_buf_put(&b, name, strlen(name));
+    int rc = -1, answered = 0, late = 0, mesh = 0;
     uint8_t type;
     double limit = import_seconds(c->files[0]->bytes.len), deadline = gi_now() + limit;
-    while (!answered && !(late = wait_readable(fd, deadline) == 1) &&
-           recv_msg(fd, &type, &b) == 0) {
+    if (send_msg(imp->fd, MSG_IMPORT, &b)) { /* it died while it waited */
+        gi_buf_free(&b);
+        stop_child(imp, NULL);
+        return 1;
+    }
+    while (!answered && !(late = wait_readable(imp->fd, deadline) == 1) &&
+           recv_msg(imp->fd, &type, &b) == 0) {
         if (type == MSG_READ) {
             char *want = gi_xmalloc(b.len + 1);
             memcpy(want, b.data, b.len);
@@ -475,11 +614,11 @@ static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_me
                 gi_buf_put(&b, f->bytes.data, f->bytes.len);
             else
                 put_error(&b, &f->err);
-            if (send_msg(fd, MSG_FILE, &b))
+            if (send_msg(imp->fd, MSG_FILE, &b))
                 break;
         } else if (type == MSG_MESH) {
             rc = gi_mesh_decode(b.data, b.len, name, out, err);
-            answered = 1;
+            answered = mesh = 1;
         } else if (type == MSG_ERROR) {
             gi_reader r;
             gi_reader_init(&r, b.data, b.len, "importer error");
@@ -490,13 +629,12 @@ static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_me
         }
     }
     gi_buf_free(&b);
-    close(fd);
-    if (late)
-        kill(pid, SIGKILL);
-    int status = 0;
-    pid_t w;
-    while ((w = waitpid(pid, &status, 0)) < 0 && errno == EINTR)
-        ;
+    if (mesh)
+        return rc;
+    /* An error may leave assimp's memory in any state (it leaks on some
+     * error paths): the next file gets a new child. */
+    int status = -1;
+    stop_child(imp, late || answered ? NULL : &status);
     if (answered)
         return rc;
     if (late)
@@ -504,27 +642,16 @@ static int parent_main(int fd, pid_t pid, import_ctx *c, const char *name, gi_me
                        "%s: cannot import: the importer (assimp) took more than %.0f s on its "
                        "%zu bytes: the file is malformed or unsupported",
                        name, limit, c->files[0]->bytes.len);
-    if (w == pid && WIFSIGNALED(status)) {
-        int sig = WTERMSIG(status);
-        /* An assertion or a bad access in assimp is the file's doing; a
-         * kill (the OOM killer, an operator) is not. */
-        int file = sig == SIGABRT || sig == SIGSEGV || sig == SIGBUS || sig == SIGFPE ||
-                   sig == SIGILL;
-        return gi_fail(err, file ? GI_EINVAL : GI_ECRASH,
-                       "%s: cannot import: the importer (assimp) died on it (%s)%s", name,
-                       strsignal(sig), file ? ": the file is malformed or unsupported" : "");
-    }
-    return gi_fail(err, GI_ECRASH, "%s: cannot import: the importer process ended without an "
-                   "answer (exit status %d)", name, w == pid && WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    return child_lost(name, status, err);
 }
 
-int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
-                   gi_error *err)
+int gi_mesh_importer_run(gi_mesh_importer *imp, const char *name, gi_mesh_data *out,
+                         gi_error *err)
 {
     gi_mesh_data_init(out);
     import_ctx c;
     memset(&c, 0, sizeof c);
-    c.src = src;
+    c.src = imp->src;
     /* Read the main file first, so a missing one is reported as the
      * source says it (and not as assimp's "unable to open"). */
     import_file *main_file = ctx_fetch(&c, name);
@@ -544,32 +671,15 @@ int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *o
 
     gi_error e;
     gi_error_clear(&e);
-    int sv[2], rc, why = 0;
-    pid_t pid = -1;
-    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) == 0) {
-        fflush(NULL); /* nothing buffered is written twice */
-        pid = fork();
-        if (pid == 0) {
-            close(sv[0]);
-            prctl(PR_SET_PDEATHSIG, SIGKILL); /* no importer outlives its parent */
-            /* Die by the signal (the parent names it), whatever handlers this
-             * process had installed (a crash reporter, a fuzzer's). */
-            static const int crash_signals[] = {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
-            for (size_t i = 0; i < sizeof crash_signals / sizeof crash_signals[0]; i++)
-                signal(crash_signals[i], SIG_DFL);
-            child_main(sv[1], name, main_file->bytes.len);
-        }
-        why = errno;
-        close(sv[1]);
-        if (pid < 0)
-            close(sv[0]);
-    } else {
-        why = errno;
-    }
-    if (pid > 0) {
-        rc = parent_main(sv[0], pid, &c, name, out, &e);
-    } else {
-        gi_debug("%s: importing in this process (no child: %s)", name, strerror(why));
+    int rc;
+    int started = start_child(imp) == 0;
+    rc = started ? child_run(imp, &c, name, out, &e) : -1;
+    if (rc == 1 && (started = start_child(imp) == 0))
+        rc = child_run(imp, &c, name, out, &e);
+    if (rc == 1)
+        rc = gi_fail(&e, GI_ECRASH, "%s: cannot import: the importer process is gone", name);
+    if (!started) {
+        gi_debug("%s: importing in this process (no child: %s)", name, strerror(errno));
         rc = assimp_import(&c, name, out, &e);
     }
     if (rc && err)
@@ -577,5 +687,14 @@ int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *o
     ctx_free(&c);
     if (rc)
         gi_mesh_data_free(out);
+    return rc;
+}
+
+int gi_mesh_import(const gi_asset_source *src, const char *name, gi_mesh_data *out,
+                   gi_error *err)
+{
+    gi_mesh_importer *imp = gi_mesh_importer_new(src);
+    int rc = gi_mesh_importer_run(imp, name, out, err);
+    gi_mesh_importer_free(imp);
     return rc;
 }

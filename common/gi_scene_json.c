@@ -235,10 +235,11 @@ static int parse_shape(gi_jv *v, const cJSON *obj, const char *path, const char 
     return 0;
 }
 
-/* Mesh files that several objects name are imported once per load: an
- * import forks an assimp child (about 18 ms), which made 1,000 instances of
- * one mesh take 18 s. A mesh is kept only while objects still to come name
- * it, and the last of them takes it over. */
+/* Mesh files that several objects name are imported once per load (an
+ * import costs a few milliseconds even for a tiny file: 1,000 instances of
+ * one mesh took 18 s when each object imported it, each import in a process
+ * of its own). A mesh is kept only while objects still to come name it, and
+ * the last of them takes it over. */
 typedef struct mesh_ref {
     char *path;         /* normalized, as imported */
     uint32_t uses_left; /* objects still to come that name it */
@@ -248,6 +249,7 @@ typedef struct mesh_ref {
 
 typedef struct mesh_cache {
     const gi_asset_source *src;
+    gi_mesh_importer *importer; /* one importer process for the load's files */
     mesh_ref *refs;
     size_t count, cap;
     gi_name_index index; /* path -> refs[] */
@@ -299,9 +301,17 @@ static void mesh_cache_free(mesh_cache *c)
     }
     free(c->refs);
     gi_name_index_free(&c->index);
+    gi_mesh_importer_free(c->importer);
 }
 
-/* gi_mesh_import of `path` (normalized), through the cache. */
+static int mesh_cache_load(mesh_cache *c, const char *path, gi_mesh_data *out, gi_error *err)
+{
+    if (!c->importer)
+        c->importer = gi_mesh_importer_new(c->src);
+    return gi_mesh_importer_run(c->importer, path, out, err);
+}
+
+/* The import of `path` (normalized), through the cache. */
 static int mesh_cache_import(mesh_cache *c, const char *path, gi_mesh_data *out, gi_error *err)
 {
     int64_t i = gi_name_index_find(&c->index, path);
@@ -309,10 +319,10 @@ static int mesh_cache_import(mesh_cache *c, const char *path, gi_mesh_data *out,
     if (!r || (!r->loaded && r->uses_left <= 1)) {
         if (r)
             r->uses_left = 0;
-        return gi_mesh_import(c->src, path, out, err);
+        return mesh_cache_load(c, path, out, err);
     }
     if (!r->loaded) {
-        if (gi_mesh_import(c->src, path, &r->mesh, err))
+        if (mesh_cache_load(c, path, &r->mesh, err))
             return -1;
         r->loaded = 1;
     }

@@ -24,13 +24,15 @@
  *       inside a block (the room's middle is 12 mm from the tall block). A
  *       50% sphere is as wide as the box and is free nowhere.
  *
- *   gi_scenegen grid DIR --objects N [--mesh]
+ *   gi_scenegen grid DIR --objects N [--mesh | --mesh-files]
  *       Many small objects: N cubes of side 0.5 in a square grid of unit
  *       cells on the floor of a closed room (an inward box), lit by a quad
  *       under its ceiling; four materials in turn. Each cube is a "box"
  *       object, or with --mesh a reference to DIR/cube.obj (whose material
- *       then becomes one scene material per object, as mesh files' do).
- *       Writes DIR/scene.json (and cube.obj). The scene that load and
+ *       then becomes one scene material per object, as mesh files' do), or
+ *       with --mesh-files to a file of its own, DIR/cubeI.obj (the same
+ *       bytes: a scene of many distinct mesh files, each imported apart).
+ *       Writes DIR/scene.json (and the OBJs). The scene that load and
  *       per-object costs are measured on (bench/many_objects.sh).
  *
  * Deterministic: the same arguments give the same bytes. */
@@ -382,7 +384,9 @@ static int cornell_mobile(const char *base, const char *out, double frac)
     return 0;
 }
 
-static int grid(const char *dir, long n, int use_mesh)
+enum { GRID_BOXES, GRID_ONE_MESH, GRID_MESH_FILES };
+
+static int grid(const char *dir, long n, int kind)
 {
     long side = (long)ceil(sqrt((double)n));
     double w = (double)side + 2.0, h = fmax(3.0, 0.5 * w);
@@ -395,7 +399,8 @@ static int grid(const char *dir, long n, int use_mesh)
     }
     fprintf(f, "{\n\"description\": \"%ld cubes on the floor of a closed room lit by a "
                "ceiling quad (gi_scenegen grid%s)\",\n",
-            n, use_mesh ? ", --mesh" : "");
+            n, kind == GRID_ONE_MESH ? ", --mesh" : kind == GRID_MESH_FILES ? ", --mesh-files"
+                                                                              : "");
     fprintf(f, "\"camera\": {\"position\": [%.6g, %.6g, %.6g], \"look_at\": [%.6g, 0, %.6g], "
                "\"up\": [0, 1, 0], \"fov_y\": 60},\n",
             0.5 * w, 0.8 * h, 0.05 * w, 0.5 * w, 0.5 * w);
@@ -415,8 +420,10 @@ static int grid(const char *dir, long n, int use_mesh)
     for (long i = 0; i < n; i++) {
         double x = 1.5 + (double)(i % side), z = 1.5 + (double)(i / side);
         fprintf(f, ",\n{\"name\": \"cube%ld\", ", i);
-        if (use_mesh)
+        if (kind == GRID_ONE_MESH)
             fprintf(f, "\"mesh\": \"cube.obj\", ");
+        else if (kind == GRID_MESH_FILES)
+            fprintf(f, "\"mesh\": \"cube%ld.obj\", ", i);
         else
             fprintf(f, "\"material\": \"m%ld\", \"box\": {\"size\": [0.5, 0.5, 0.5]}, ", i % 4);
         fprintf(f, "\"transform\": [{\"translate\": [%.6g, 0.25, %.6g]}]}", x, z);
@@ -426,7 +433,7 @@ static int grid(const char *dir, long n, int use_mesh)
     if (bad)
         fprintf(stderr, "gi_scenegen: %s: %s\n", path, strerror(errno));
     free(path);
-    if (bad || !use_mesh)
+    if (bad || kind == GRID_BOXES)
         return bad;
     /* A 0.5 cube about the origin, outward faces, one material of its own. */
     mesh m = {0};
@@ -439,6 +446,11 @@ static int grid(const char *dir, long n, int use_mesh)
         tri(&m, (size_t)quads[q][0], (size_t)quads[q][2], (size_t)quads[q][3]);
     }
     int rc = write_obj(dir, "cube.obj", &m) ? 1 : 0;
+    for (long i = 0; kind == GRID_MESH_FILES && i < n && rc == 0; i++) {
+        char name[40];
+        snprintf(name, sizeof name, "cube%ld.obj", i);
+        rc = write_obj(dir, name, &m) ? 1 : 0;
+    }
     free(m.v);
     free(m.t);
     return rc;
@@ -448,7 +460,7 @@ static int usage(void)
 {
     fprintf(stderr, "usage: gi_scenegen tree DIR [--seed N]\n"
                     "       gi_scenegen cornell-mobile BASE.json OUT.json --radius FRACTION\n"
-                    "       gi_scenegen grid DIR --objects N [--mesh]\n");
+                    "       gi_scenegen grid DIR --objects N [--mesh | --mesh-files]\n");
     return 2;
 }
 
@@ -480,15 +492,18 @@ int main(int argc, char **argv)
         strcmp(argv[3], "--objects") == 0) {
         char *end;
         long n = strtol(argv[4], &end, 10);
-        int use_mesh = argc == 6 && strcmp(argv[5], "--mesh") == 0;
-        if (*end || n < 0 || n > 10000000 || (argc == 6 && !use_mesh))
+        int kind = argc == 5                         ? GRID_BOXES
+                   : strcmp(argv[5], "--mesh") == 0       ? GRID_ONE_MESH
+                   : strcmp(argv[5], "--mesh-files") == 0 ? GRID_MESH_FILES
+                                                          : -1;
+        if (*end || n < 0 || n > 10000000 || kind < 0)
             return usage();
         gi_error err;
         if (gi_mkdirs(argv[2], &err)) {
             fprintf(stderr, "gi_scenegen: %s\n", err.msg);
             return 1;
         }
-        return grid(argv[2], n, use_mesh);
+        return grid(argv[2], n, kind);
     }
     return usage();
 }

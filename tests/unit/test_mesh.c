@@ -900,6 +900,57 @@ GI_TEST(mesh_import_refuses_non_finite_points)
     gi_dir_source_free(&d);
 }
 
+/* One importer process serves a session's files while they import; a file
+ * it fails on or dies on is named, and the next file gets a new process
+ * that imports it exactly as a session of its own would. */
+GI_TEST(mesh_importer_session_pins_failures_to_their_files)
+{
+    char *dir = data_dir();
+    gi_dir_source d;
+    gi_dir_source_init(&d, dir);
+    gi_asset_source src = gi_dir_source_as_source(&d);
+    static const struct {
+        const char *file, *fails_with; /* NULL: imports */
+        unsigned processes;            /* started by the session after it */
+    } steps[] = {
+        {"two_materials.obj", NULL, 1},
+        {"transformed.gltf", NULL, 1},
+        {"ascii.ply", NULL, 1},
+        {"assimp_abort.ply", "assimp_abort.ply: cannot import: the importer (assimp) died", 1},
+        {"two_materials.obj", NULL, 2},
+        {"missing_bin.gltf", "missing_bin.gltf: cannot import", 2},
+        {"bad_index.obj", "bad_index.obj", 2}, /* refused before any process */
+        {"transformed.gltf", NULL, 3},
+        {"cube_shared.obj", NULL, 3},
+    };
+    gi_mesh_importer *imp = gi_mesh_importer_new(&src);
+    for (size_t i = 0; i < GI_ARRAY_LEN(steps); i++) {
+        gi_error err;
+        gi_error_clear(&err);
+        gi_mesh_data m, alone;
+        int rc = gi_mesh_importer_run(imp, steps[i].file, &m, &err);
+        if (steps[i].fails_with) {
+            GI_CHECK(rc == -1 && err.code == GI_EINVAL && strstr(err.msg, steps[i].fails_with));
+        } else {
+            GI_REQUIRE_OK(rc);
+            GI_REQUIRE_OK(gi_mesh_import(&src, steps[i].file, &alone, &err));
+            GI_CHECK(m.vertex_count == alone.vertex_count && m.triangle_count == alone.triangle_count);
+            size_t tris = m.triangle_count;
+            GI_CHECK(memcmp(m.positions, alone.positions,
+                            m.vertex_count * sizeof *m.positions) == 0);
+            GI_CHECK(memcmp(m.indices, alone.indices, 3 * tris * sizeof *m.indices) == 0);
+            gi_mesh_data_free(&alone);
+        }
+        gi_mesh_data_free(&m);
+        if (gi_mesh_importer_processes(imp) != steps[i].processes)
+            gi_test_failed(__FILE__, __LINE__, "after %s: %u importer processes, expected %u",
+                           steps[i].file, gi_mesh_importer_processes(imp), steps[i].processes);
+    }
+    gi_mesh_importer_free(imp);
+    gi_dir_source_free(&d);
+    free(dir);
+}
+
 GI_TEST(mesh_import_repeated_does_not_leak)
 {
     /* Run under LSan (ASAN_OPTIONS=detect_leaks=1): successes and failures
