@@ -34,6 +34,8 @@ void gi_manifest_init(gi_manifest *m)
 {
     m->entries = NULL;
     m->count = m->cap = 0;
+    gi_name_index_init(&m->by_name);
+    gi_name_index_init(&m->by_hash);
 }
 
 void gi_manifest_free(gi_manifest *m)
@@ -41,7 +43,23 @@ void gi_manifest_free(gi_manifest *m)
     for (size_t i = 0; i < m->count; i++)
         free(m->entries[i].name);
     free(m->entries);
+    gi_name_index_free(&m->by_name);
+    gi_name_index_free(&m->by_hash);
     gi_manifest_init(m);
+}
+
+static void index_hash(gi_manifest *m, size_t i)
+{
+    if (gi_name_index_find(&m->by_hash, m->entries[i].hash) < 0)
+        gi_name_index_add(&m->by_hash, m->entries[i].hash, (uint32_t)i);
+}
+
+/* The hash index points into the entries: made again when they move. */
+static void reindex_hashes(gi_manifest *m)
+{
+    gi_name_index_free(&m->by_hash);
+    for (size_t i = 0; i < m->count; i++)
+        index_hash(m, i);
 }
 
 void gi_manifest_append(gi_manifest *m, const char *name, const char *hash, uint64_t size)
@@ -49,11 +67,15 @@ void gi_manifest_append(gi_manifest *m, const char *name, const char *hash, uint
     if (m->count == m->cap) {
         m->cap = m->cap ? 2 * m->cap : 8;
         m->entries = gi_xrealloc(m->entries, m->cap * sizeof *m->entries);
+        reindex_hashes(m);
     }
-    gi_manifest_entry *e = &m->entries[m->count++];
+    size_t i = m->count++;
+    gi_manifest_entry *e = &m->entries[i];
     e->name = gi_xstrdup(name);
     memcpy(e->hash, hash, GI_HASH_HEX);
     e->size = size;
+    gi_name_index_add(&m->by_name, e->name, (uint32_t)i);
+    index_hash(m, i);
 }
 
 void gi_manifest_put(gi_manifest *m, const char *name, const char *hash, uint64_t size)
@@ -63,24 +85,22 @@ void gi_manifest_put(gi_manifest *m, const char *name, const char *hash, uint64_
         gi_manifest_append(m, name, hash, size);
         return;
     }
-    memcpy(e->hash, hash, GI_HASH_HEX);
     e->size = size;
+    if (memcmp(e->hash, hash, GI_HASH_HEX) != 0) {
+        memcpy(e->hash, hash, GI_HASH_HEX);
+        reindex_hashes(m);
+    }
 }
 
 const gi_manifest_entry *gi_manifest_find(const gi_manifest *m, const char *name)
 {
-    for (size_t i = 0; i < m->count; i++)
-        if (strcmp(m->entries[i].name, name) == 0)
-            return &m->entries[i];
-    return NULL;
+    int64_t i = gi_name_index_find(&m->by_name, name);
+    return i >= 0 ? &m->entries[i] : NULL;
 }
 
 int gi_manifest_has_hash(const gi_manifest *m, const char *hash)
 {
-    for (size_t i = 0; i < m->count; i++)
-        if (strcmp(m->entries[i].hash, hash) == 0)
-            return 1;
-    return 0;
+    return gi_name_index_find(&m->by_hash, hash) >= 0;
 }
 
 void gi_manifest_encode(const gi_manifest *m, gi_buf *out)
@@ -122,7 +142,8 @@ int gi_manifest_decode(gi_reader *r, gi_manifest *m, gi_error *err)
     return 0;
 }
 
-/* The store is small (a job has a handful of files): a flat array. */
+/* A flat array, indexed by hash (a scene may bring tens of thousands of
+ * files). */
 typedef struct store_entry {
     char hash[GI_HASH_HEX];
     gi_buf bytes;
@@ -131,7 +152,15 @@ typedef struct store_entry {
 struct gi_asset_store {
     store_entry *entries;
     size_t count, cap, bytes;
+    gi_name_index by_hash; /* points into entries: made again when they move */
 };
+
+static void store_reindex(gi_asset_store *s)
+{
+    gi_name_index_free(&s->by_hash);
+    for (size_t i = 0; i < s->count; i++)
+        gi_name_index_add(&s->by_hash, s->entries[i].hash, (uint32_t)i);
+}
 
 gi_asset_store *gi_asset_store_new(void) { return gi_xcalloc(1, sizeof(gi_asset_store)); }
 
@@ -142,15 +171,23 @@ void gi_asset_store_free(gi_asset_store *s)
     for (size_t i = 0; i < s->count; i++)
         gi_buf_free(&s->entries[i].bytes);
     free(s->entries);
+    gi_name_index_free(&s->by_hash);
     free(s);
+}
+
+/* The entry of a hash (its first 64 characters), or -1. */
+static int64_t store_find(const gi_asset_store *s, const char *hash)
+{
+    char key[GI_HASH_HEX];
+    memcpy(key, hash, 64);
+    key[64] = '\0';
+    return gi_name_index_find(&s->by_hash, key);
 }
 
 const gi_buf *gi_asset_store_get(const gi_asset_store *s, const char *hash)
 {
-    for (size_t i = 0; i < s->count; i++)
-        if (memcmp(s->entries[i].hash, hash, 64) == 0)
-            return &s->entries[i].bytes;
-    return NULL;
+    int64_t i = store_find(s, hash);
+    return i >= 0 ? &s->entries[i].bytes : NULL;
 }
 
 const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void *data,
@@ -162,25 +199,34 @@ const gi_buf *gi_asset_store_put(gi_asset_store *s, const char *hash, const void
     if (s->count == s->cap) {
         s->cap = s->cap ? 2 * s->cap : 8;
         s->entries = gi_xrealloc(s->entries, s->cap * sizeof *s->entries);
+        store_reindex(s);
     }
-    store_entry *e = &s->entries[s->count++];
-    memcpy(e->hash, hash, GI_HASH_HEX);
+    size_t i = s->count++;
+    store_entry *e = &s->entries[i];
+    memcpy(e->hash, hash, 64);
+    e->hash[64] = '\0';
     gi_buf_init(&e->bytes);
     gi_buf_put(&e->bytes, data, len);
     s->bytes += len;
+    gi_name_index_add(&s->by_hash, e->hash, (uint32_t)i);
     return &e->bytes;
 }
 
 int gi_asset_store_remove(gi_asset_store *s, const char *hash)
 {
-    for (size_t i = 0; i < s->count; i++)
-        if (memcmp(s->entries[i].hash, hash, 64) == 0) {
-            s->bytes -= s->entries[i].bytes.len;
-            gi_buf_free(&s->entries[i].bytes);
-            s->entries[i] = s->entries[--s->count];
-            return 1;
-        }
-    return 0;
+    int64_t i = store_find(s, hash);
+    if (i < 0)
+        return 0;
+    s->bytes -= s->entries[i].bytes.len;
+    gi_buf_free(&s->entries[i].bytes);
+    gi_name_index_remove(&s->by_hash, s->entries[i].hash);
+    size_t last = --s->count;
+    if ((size_t)i != last) { /* the last entry moves into i's place */
+        gi_name_index_remove(&s->by_hash, s->entries[last].hash);
+        s->entries[i] = s->entries[last];
+        gi_name_index_add(&s->by_hash, s->entries[i].hash, (uint32_t)i);
+    }
+    return 1;
 }
 
 size_t gi_asset_store_bytes(const gi_asset_store *s) { return s->bytes; }

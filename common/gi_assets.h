@@ -16,6 +16,7 @@
 
 #include "gi_buf.h"
 #include "gi_error.h"
+#include "gi_name_index.h"
 
 #define GI_HASH_HEX 65 /* 64 hex digits + NUL */
 #define GI_ASSET_MAX_BYTES ((size_t)2 << 30) /* 2 GiB per file */
@@ -41,9 +42,15 @@ typedef struct gi_manifest_entry {
     uint64_t size;
 } gi_manifest_entry;
 
+/* Looked up by name and by hash in constant expected time (a scene of tens
+ * of thousands of mesh files made every scan per file quadratic). Change it
+ * only through these functions; a struct copy moves it (one owner frees). */
 typedef struct gi_manifest {
     gi_manifest_entry *entries;
     size_t count, cap;
+    gi_name_index by_name; /* entries[i].name -> i */
+    gi_name_index by_hash; /* entries[i].hash -> the first i with it (rebuilt when
+                            * the entries move or a hash is replaced) */
 } gi_manifest;
 
 void gi_manifest_init(gi_manifest *m);

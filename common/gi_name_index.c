@@ -63,3 +63,30 @@ void gi_name_index_add(gi_name_index *x, const char *name, uint32_t index)
     put(x->slots, x->cap, (gi_name_slot){name, name_hash(name), index});
     x->count++;
 }
+
+int gi_name_index_remove(gi_name_index *x, const char *name)
+{
+    if (!x->cap)
+        return 0;
+    size_t mask = x->cap - 1, i = name_hash(name) & mask;
+    for (;; i = (i + 1) & mask) {
+        if (!x->slots[i].name)
+            return 0;
+        if (strcmp(x->slots[i].name, name) == 0)
+            break;
+    }
+    /* Backward shift: the slots after the hole that probed past it move up,
+     * so that no search stops early at the hole. */
+    x->slots[i].name = NULL;
+    x->count--;
+    for (size_t j = (i + 1) & mask; x->slots[j].name; j = (j + 1) & mask) {
+        size_t home = x->slots[j].hash & mask;
+        int stays = i <= j ? i < home && home <= j : i < home || home <= j;
+        if (stays)
+            continue;
+        x->slots[i] = x->slots[j];
+        x->slots[j].name = NULL;
+        i = j;
+    }
+    return 1;
+}

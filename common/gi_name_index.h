@@ -28,5 +28,7 @@ void gi_name_index_free(gi_name_index *x);
 int64_t gi_name_index_find(const gi_name_index *x, const char *name);
 /* Records that `name` (not in the index yet) is entry `index`. */
 void gi_name_index_add(gi_name_index *x, const char *name, uint32_t index);
+/* Forgets `name` (1 if it was there). */
+int gi_name_index_remove(gi_name_index *x, const char *name);
 
 #endif

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gi_assets.h"
 #include "gi_auth.h"
 #include "gi_buf.h"
 #include "gi_fs.h"
@@ -373,4 +374,94 @@ GI_TEST(test_name_index_finds_every_name)
     gi_name_index_free(&x);
     GI_CHECK(x.count == 0 && gi_name_index_find(&x, "n1") == -1);
     free(names);
+}
+
+GI_TEST(test_name_index_forgets_names)
+{
+    enum { N = 3000 };
+    gi_name_index x;
+    gi_name_index_init(&x);
+    GI_CHECK(gi_name_index_remove(&x, "a") == 0);
+    char (*names)[16] = malloc(N * sizeof *names);
+    GI_REQUIRE(names);
+    for (int i = 0; i < N; i++) {
+        snprintf(names[i], sizeof names[i], "k%d", i);
+        gi_name_index_add(&x, names[i], (uint32_t)i);
+    }
+    /* Every third name, in an order that wraps around the table's end. */
+    int removed = 0;
+    for (int i = N - 1; i >= 0; i -= 3)
+        removed += gi_name_index_remove(&x, names[i]);
+    GI_CHECK(removed == N / 3 && x.count == (size_t)(N - N / 3));
+    GI_CHECK(gi_name_index_remove(&x, names[N - 1]) == 0 && gi_name_index_remove(&x, "k") == 0);
+    int wrong = 0;
+    for (int i = 0; i < N; i++) {
+        int64_t want = (N - 1 - i) % 3 == 0 ? -1 : i;
+        wrong += gi_name_index_find(&x, names[i]) != want;
+    }
+    GI_CHECK_MSG(wrong == 0, "%d names wrong after removals", wrong);
+    /* Removed names come back with new entries. */
+    for (int i = N - 1; i >= 0; i -= 3)
+        gi_name_index_add(&x, names[i], (uint32_t)(i + N));
+    wrong = 0;
+    for (int i = 0; i < N; i++)
+        wrong += gi_name_index_find(&x, names[i]) != ((N - 1 - i) % 3 == 0 ? i + N : i);
+    GI_CHECK_MSG(wrong == 0, "%d names wrong after adding them again", wrong);
+    gi_name_index_free(&x);
+    free(names);
+}
+
+GI_TEST(test_manifest_and_store_look_up_many_files)
+{
+    enum { N = 5000 };
+    gi_manifest m;
+    gi_manifest_init(&m);
+    gi_asset_store *s = gi_asset_store_new();
+    char name[32], hash[GI_HASH_HEX];
+    for (int i = 0; i < N; i++) {
+        snprintf(name, sizeof name, "meshes/m%d.obj", i);
+        gi_hash_hex(name, strlen(name), hash);
+        gi_manifest_put(&m, name, hash, (uint64_t)i);
+        gi_asset_store_put(s, hash, name, strlen(name));
+    }
+    GI_REQUIRE(m.count == N && gi_asset_store_count(s) == N);
+    int wrong = 0;
+    for (int i = 0; i < N; i++) {
+        snprintf(name, sizeof name, "meshes/m%d.obj", i);
+        gi_hash_hex(name, strlen(name), hash);
+        const gi_manifest_entry *e = gi_manifest_find(&m, name);
+        const gi_buf *b = gi_asset_store_get(s, hash);
+        wrong += !e || e->size != (uint64_t)i || strcmp(e->hash, hash) != 0 ||
+                 !gi_manifest_has_hash(&m, hash) || !b || b->len != strlen(name) ||
+                 memcmp(b->data, name, b->len) != 0;
+    }
+    GI_CHECK_MSG(wrong == 0, "%d files not found as put", wrong);
+    /* A name given new bytes: its old hash is gone, unless another name has it. */
+    char h0[GI_HASH_HEX], h1[GI_HASH_HEX];
+    gi_hash_hex("meshes/m0.obj", 13, h0);
+    gi_hash_hex("meshes/m1.obj", 13, h1);
+    gi_manifest_put(&m, "meshes/m0.obj", h1, 7);
+    GI_CHECK(!gi_manifest_has_hash(&m, h0) && gi_manifest_has_hash(&m, h1));
+    GI_CHECK(gi_manifest_find(&m, "meshes/m0.obj")->size == 7 && m.count == N);
+    gi_manifest_put(&m, "meshes/m1.obj", h0, 1);
+    GI_CHECK(gi_manifest_has_hash(&m, h0) && gi_manifest_has_hash(&m, h1));
+    /* The store forgets what is removed, keeps the rest. */
+    GI_CHECK(gi_asset_store_remove(s, h0) == 1 && gi_asset_store_remove(s, h0) == 0);
+    GI_CHECK(!gi_asset_store_get(s, h0) && gi_asset_store_get(s, h1));
+    GI_CHECK(gi_asset_store_count(s) == N - 1);
+    for (int i = 2; i < N; i += 2) {
+        snprintf(name, sizeof name, "meshes/m%d.obj", i);
+        gi_hash_hex(name, strlen(name), hash);
+        GI_CHECK(gi_asset_store_remove(s, hash) == 1);
+    }
+    wrong = 0;
+    for (int i = 1; i < N; i++) {
+        snprintf(name, sizeof name, "meshes/m%d.obj", i);
+        gi_hash_hex(name, strlen(name), hash);
+        const gi_buf *b = gi_asset_store_get(s, hash);
+        wrong += i % 2 ? !b || memcmp(b->data, name, b->len) != 0 : b != NULL;
+    }
+    GI_CHECK_MSG(wrong == 0, "%d files wrong in the store after removals", wrong);
+    gi_asset_store_free(s);
+    gi_manifest_free(&m);
 }
