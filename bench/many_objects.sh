@@ -5,6 +5,7 @@
 #   validate       gi validate of the scene (JSON, assembly, checks)
 #   validate-mesh  the same with every cube a reference to one cube.obj
 #   validate-files the same with every cube a mesh file of its own (N OBJs)
+#   pt-files       gi render --workers 1 of the tiny pt job below on that scene
 #   pt, detp, quadrature, radiosity
 #                  gi render --workers 1 of a tiny job of each method (a
 #                  32 x 32 image, 1 sample / 2,000 photons / small budgets),
@@ -14,28 +15,28 @@
 # With a second gi, the two alternate (e.g. a build from before a change);
 # its column is the second figure.
 #   bench/many_objects.sh BUILD_DIR "N1 N2 ..." [ROUNDS] [OTHER_GI] [STEPS]
-# STEPS (default all): a subset of "validate validate-mesh validate-files pt detp quadrature
-# radiosity".
+# STEPS (default all): a subset of "validate validate-mesh validate-files pt-files pt detp
+# quadrature radiosity".
 set -eu
 BIN=${1:-build/release}
 SIZES=${2:-1000 10000 100000}
 ROUNDS=${3:-3}
 OTHER=${4:-}
-STEPS=${5:-validate validate-mesh validate-files pt detp quadrature radiosity}
+STEPS=${5:-validate validate-mesh validate-files pt-files pt detp quadrature radiosity}
 T=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-many.XXXXXX")
 trap 'rm -rf "$T"' EXIT INT TERM
 now() { date +%s.%N; }
 median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
 
-job() { # METHOD -> a job file for it in the current scene directory
+job() { # METHOD [SCENE] -> a job file for it (SCENE: default scene.json)
     case $1 in
     pt) params='"pt": {"spp": 1, "tile": 32}' ;;
     detp) params='"detp": {"photons": 2000, "batch": 1000, "tile": 32}' ;;
     quadrature) params='"quadrature": {"max_evals": 20000}' ;;
     radiosity) params='"radiosity": {"patches": 16, "levels": 1, "rays": 16}' ;;
     esac
-    printf '{"scene": "scene.json", "method": "%s", "seed": 1, "image": {"width": 32, "height": 32},\n %s, "outputs": {"exr": "t.exr"}}\n' \
-        "$1" "$params"
+    printf '{"scene": "%s", "method": "%s", "seed": 1, "image": {"width": 32, "height": 32},\n %s, "outputs": {"exr": "t.exr"}}\n' \
+        "${2:-scene.json}" "$1" "$params"
 }
 
 # run GI STEP DIR -> seconds on stdout, or "refused: ..." when gi failed
@@ -59,10 +60,11 @@ for n in $SIZES; do
     d="$T/n$n"
     "$BIN/scenes/gi_scenegen" grid "$d" --objects "$n"
     "$BIN/scenes/gi_scenegen" grid "$d/mesh" --objects "$n" --mesh
-    case $STEPS in *validate-files*)
+    case $STEPS in *-files*)
         "$BIN/scenes/gi_scenegen" grid "$d/files" --objects "$n" --mesh-files ;;
     esac
     for m in pt detp quadrature radiosity; do job $m >"$d/$m.json"; done
+    job pt files/scene.json >"$d/pt-files.json"
     echo "N = $n: $(wc -c <"$d/scene.json") bytes of scene, $((12 * n + 14)) triangles"
     for step in $STEPS; do
         : >"$T/a"

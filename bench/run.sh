@@ -32,8 +32,8 @@ sh bench/mesh_import.sh "$BIN" 700 5
 echo "== many_objects: scene load and tiny renders of 1k, 10k, 100k cubes (gi_scenegen grid; ~5 min)"
 sh bench/many_objects.sh "$BIN" "1000 10000 100000" 3 "" \
     "validate validate-mesh pt detp quadrature radiosity"
-echo "== many_objects: 1k and 10k cubes, each a mesh file of its own (~1 min)"
-sh bench/many_objects.sh "$BIN" "1000 10000" 3 "" validate-files
+echo "== many_objects: 1k, 10k cubes, each a mesh file of its own: validate, tiny pt (~3 min)"
+sh bench/many_objects.sh "$BIN" "1000 10000" 3 "" "validate-files pt-files"
 echo "== rt_build: the Embree build of 100,000 cubes, by geometry layout and build quality"
 G=$(mktemp -d "${TMPDIR:-/tmp}/gi-bench-grid.XXXXXX")
 "$BIN/scenes/gi_scenegen" grid "$G" --objects 100000
