@@ -27,7 +27,9 @@
 
 #include "bench_util.h"
 #include "gi_assets.h"
+#include "gi_rng.h"
 #include "gi_rt.h"
+#include "gi_sampling.h"
 #include "gi_scene.h"
 
 /* The scene's triangles in one Embree scene: one geometry per object (as
@@ -65,84 +67,35 @@ static double bare_build(RTCDevice dev, const gi_scene *s, int one_geometry,
     return t;
 }
 
-static uint64_t splitmix(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    return z ^ (z >> 31);
-}
-
-static float uniform01(uint64_t *x)
-{
-    return (float)(splitmix(x) >> 40) * (1.0f / 16777216.0f);
-}
-
 typedef struct {
-    float org[3], dir[3];
+    gi_vec3 org, dir;
 } bounce_ray;
 
-static gi_vec3 corner(const gi_scene *s, uint32_t tri, int k)
-{
-    return s->positions[s->indices[3 * (size_t)tri + (size_t)k]];
-}
-
-/* n rays off the scene's triangles, area-weighted, cosine about the normal. */
+/* n rays off the scene's triangles, area-weighted, cosine about the normal
+ * (the samplers the methods use). */
 static bounce_ray *bounce_rays(const gi_scene *s, size_t n)
 {
-    double *cdf = malloc(s->triangle_count * sizeof *cdf);
-    double total = 0;
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
-        gi_vec3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
-        gi_vec3 e1 = {b.x - a.x, b.y - a.y, b.z - a.z}, e2 = {c.x - a.x, c.y - a.y, c.z - a.z};
-        double nx = (double)e1.y * e2.z - (double)e1.z * e2.y;
-        double ny = (double)e1.z * e2.x - (double)e1.x * e2.z;
-        double nz = (double)e1.x * e2.y - (double)e1.y * e2.x;
-        total += 0.5 * sqrt(nx * nx + ny * ny + nz * nz);
-        cdf[t] = total;
-    }
+    uint32_t tris = s->triangle_count;
+    double *cdf = malloc((tris + 1) * sizeof *cdf);
+    cdf[0] = 0;
+    for (uint32_t t = 0; t < tris; t++)
+        cdf[t + 1] = cdf[t] + gi_scene_triangle_area(s, t);
+    for (uint32_t t = 1; t <= tris; t++)
+        cdf[t] /= cdf[tris];
     bounce_ray *r = malloc(n * sizeof *r);
-    uint64_t seed = 12345;
+    gi_rng rng;
+    gi_rng_init(&rng, 12345, 0, 0);
     for (size_t i = 0; i < n; i++) {
-        double u = (double)uniform01(&seed) * total;
-        size_t lo = 0, hi = s->triangle_count - 1;
-        while (lo < hi) {
-            size_t mid = (lo + hi) / 2;
-            if (cdf[mid] < u)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        uint32_t t = (uint32_t)lo;
-        gi_vec3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
-        float su = sqrtf(uniform01(&seed)), v = uniform01(&seed);
-        float wa = 1 - su, wb = su * (1 - v), wc = su * v;
-        gi_vec3 e1 = {b.x - a.x, b.y - a.y, b.z - a.z}, e2 = {c.x - a.x, c.y - a.y, c.z - a.z};
-        float nx = e1.y * e2.z - e1.z * e2.y, ny = e1.z * e2.x - e1.x * e2.z,
-              nz = e1.x * e2.y - e1.y * e2.x;
-        float len = sqrtf(nx * nx + ny * ny + nz * nz);
-        if (len == 0) {
-            nx = 0, ny = 0, nz = 1, len = 1;
-        }
-        nx /= len, ny /= len, nz /= len;
-        /* Any two tangents; the cosine lobe is symmetric about the normal. */
-        float tx, ty, tz;
-        if (fabsf(nx) < 0.9f)
-            tx = 0, ty = -nz, tz = ny;
-        else
-            tx = nz, ty = 0, tz = -nx;
-        float tl = sqrtf(tx * tx + ty * ty + tz * tz);
-        tx /= tl, ty /= tl, tz /= tl;
-        float bx = ny * tz - nz * ty, by = nz * tx - nx * tz, bz = nx * ty - ny * tx;
-        float r1 = uniform01(&seed), phi = 6.2831853f * uniform01(&seed);
-        float sr = sqrtf(r1), x = sr * cosf(phi), y = sr * sinf(phi), z = sqrtf(1 - r1);
-        bounce_ray *q = &r[i];
-        q->org[0] = wa * a.x + wb * b.x + wc * c.x;
-        q->org[1] = wa * a.y + wb * b.y + wc * c.y;
-        q->org[2] = wa * a.z + wb * b.z + wc * c.z;
-        q->dir[0] = x * tx + y * bx + z * nx;
-        q->dir[1] = x * ty + y * by + z * ny;
-        q->dir[2] = x * tz + y * bz + z * nz;
+        uint32_t t = gi_sample_cdf(cdf, tris, gi_rng_double(&rng));
+        const uint32_t *v = &s->indices[3 * (size_t)t];
+        gi_vec3 a = s->positions[v[0]], b = s->positions[v[1]], c = s->positions[v[2]];
+        gi_vec3 nrm = gi_triangle_normal(a, b, c);
+        if (gi_dot(nrm, nrm) == 0)
+            nrm = gi_v3(0, 0, 1);
+        float u1 = gi_rng_float(&rng), u2 = gi_rng_float(&rng);
+        r[i].org = gi_sample_triangle(a, b, c, u1, u2);
+        u1 = gi_rng_float(&rng), u2 = gi_rng_float(&rng);
+        r[i].dir = gi_sample_cosine(nrm, u1, u2);
     }
     free(cdf);
     return r;
@@ -157,8 +110,8 @@ static double trace(RTCScene sc, const bounce_ray *r, size_t n, uint64_t *hits)
     double t0 = gi_bench_now();
     for (size_t i = 0; i < n; i++) {
         struct RTCRayHit rh;
-        rh.ray.org_x = r[i].org[0], rh.ray.org_y = r[i].org[1], rh.ray.org_z = r[i].org[2];
-        rh.ray.dir_x = r[i].dir[0], rh.ray.dir_y = r[i].dir[1], rh.ray.dir_z = r[i].dir[2];
+        rh.ray.org_x = r[i].org.x, rh.ray.org_y = r[i].org.y, rh.ray.org_z = r[i].org.z;
+        rh.ray.dir_x = r[i].dir.x, rh.ray.dir_y = r[i].dir.y, rh.ray.dir_z = r[i].dir.z;
         rh.ray.tnear = 1e-4f;
         rh.ray.tfar = INFINITY;
         rh.ray.mask = ~0u;

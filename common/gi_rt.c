@@ -75,7 +75,7 @@ static void attach_instance(gi_rt *rt, RTCScene lower, uint32_t id)
 }
 
 /* Medium, not high, for the static triangles: high's spatial splits cost
- * 8-15 times the build (100,000 cubes: 3.6 against 0.49 s on one core)
+ * 8-10 times the build (100,000 cubes: 3.6 against 0.49 s on one core)
  * and bought no faster GI bounce rays on any scene measured (cubes: 18%
  * slower; a tree, a Cornell box, long slivers: within 2%), `bench/rt_build`. */
 #define GI_RT_STATIC_QUALITY RTC_BUILD_QUALITY_MEDIUM

@@ -7,8 +7,8 @@
  * triangle index. Embree errors go through an error callback into gi_error.
  *
  * A scene with mobile objects is two-level: the static objects are one
- * scene, built once (medium quality, see gi_rt.c), and each mobile object a scene of
- * its own (gi_rt_object_scene), all placed in the top scene as identity
+ * scene, built once (medium quality, see gi_rt.c), and each mobile object
+ * a scene of its own (gi_rt_object_scene), all placed in the top scene as identity
  * instances. Moving an object then refits its own scene and rebuilds a top
  * level of a few entries instead of the whole BVH, and a ray traced against
  * the mobile alone finds bit for bit the hits it finds there in the whole
