@@ -39,73 +39,110 @@ static size_t string_nul(const char *text, size_t len)
     return len;
 }
 
-/* As cJSON skips it: every byte up to ' ' (control characters too). */
-static size_t skip_space(const char *t, size_t len, size_t i)
+/* The scanner's states: before the '{' (a BOM, then spaces), then in turn
+ * a key (or '}' after '{'), the key's bytes, its ':', its value, and after
+ * the value's ',' the next key. */
+enum { TK_BOM, TK_OPEN, TK_FIRST, TK_KEY, TK_COLON, TK_VALUE, TK_NEXT, TK_DONE, TK_FAILED };
+
+void gi_json_top_keys_begin(gi_json_top_keys_scan *s, const char *const *keys)
 {
-    while (i < len && (unsigned char)t[i] <= ' ')
-        i++;
-    return i;
+    memset(s, 0, sizeof *s);
+    s->keys = keys;
+    s->state = TK_BOM;
 }
 
-/* Past the string whose opening quote is at t[i]; len if it does not end. */
-static size_t skip_string(const char *t, size_t len, size_t i)
+static void key_ended(gi_json_top_keys_scan *s)
 {
-    for (i++; i < len; i++) {
-        if (t[i] == '\\')
-            i++;
-        else if (t[i] == '"')
-            return i + 1;
+    for (unsigned k = 0; k < 32 && s->keys[k]; k++)
+        if (s->key_len <= sizeof s->key && strlen(s->keys[k]) == s->key_len &&
+            memcmp(s->key, s->keys[k], s->key_len) == 0)
+            s->found |= 1u << k;
+}
+
+/* One byte; the state after it. As cJSON, every byte up to ' ' (control
+ * characters too) is space. */
+static int scan_byte(gi_json_top_keys_scan *s, unsigned char c)
+{
+    int space = c <= ' ';
+    switch (s->state) {
+    case TK_BOM: /* "\xef\xbb\xbf" at the start, as cJSON skips it */
+        if (c == (unsigned char)"\xef\xbb\xbf"[s->bom])
+            return ++s->bom < 3 ? TK_BOM : TK_OPEN;
+        if (s->bom > 0)
+            return TK_FAILED;
+        return space ? TK_OPEN : c == '{' ? TK_FIRST : TK_FAILED; /* no BOM */
+    case TK_OPEN:
+        return space ? TK_OPEN : c == '{' ? TK_FIRST : TK_FAILED;
+    case TK_FIRST:
+    case TK_NEXT:
+        if (space)
+            return s->state;
+        if (c == '}' && s->state == TK_FIRST)
+            return TK_DONE;
+        s->key_len = 0;
+        s->escape = 0;
+        return c == '"' ? TK_KEY : TK_FAILED;
+    case TK_KEY: /* its raw bytes: a key written with escapes matches none */
+        if (!s->escape && c == '"') {
+            key_ended(s);
+            return TK_COLON;
+        }
+        s->escape = !s->escape && c == '\\';
+        if (s->key_len < sizeof s->key)
+            s->key[s->key_len] = (char)c;
+        if (s->key_len <= sizeof s->key) /* one past: longer than any key */
+            s->key_len++;
+        return TK_KEY;
+    case TK_COLON:
+        if (space)
+            return TK_COLON;
+        s->depth = 0;
+        return c == ':' ? TK_VALUE : TK_FAILED;
+    case TK_VALUE: /* to the ',' or '}' outside any string or bracket */
+        if (s->in_string) {
+            if (s->escape)
+                s->escape = 0;
+            else if (c == '\\')
+                s->escape = 1;
+            else if (c == '"')
+                s->in_string = 0;
+            return TK_VALUE;
+        }
+        if (c == '"') {
+            s->in_string = 1;
+        } else if (c == '{' || c == '[') {
+            s->depth++;
+        } else if (c == '}' || c == ']') {
+            if (s->depth == 0)
+                return c == '}' ? TK_DONE : TK_FAILED;
+            s->depth--;
+        } else if (c == ',' && s->depth == 0) {
+            return TK_NEXT;
+        }
+        return TK_VALUE;
     }
-    return len;
+    return s->state; /* done or failed: what follows is not read */
+}
+
+int gi_json_top_keys_feed(gi_json_top_keys_scan *s, const char *text, size_t len)
+{
+    for (size_t i = 0; i < len && s->state != TK_DONE && s->state != TK_FAILED; i++)
+        s->state = scan_byte(s, (unsigned char)text[i]);
+    return s->state == TK_DONE ? 0 : s->state == TK_FAILED ? -1 : 1;
+}
+
+int gi_json_top_keys_end(const gi_json_top_keys_scan *s, unsigned *found)
+{
+    *found = s->found;
+    return s->state == TK_DONE ? 0 : -1;
 }
 
 int gi_json_top_keys(const char *text, size_t len, const char *const *keys, unsigned *found)
 {
-    *found = 0;
-    size_t i = len >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0 ? 3 : 0; /* a BOM, as cJSON */
-    i = skip_space(text, len, i);
-    if (i >= len || text[i] != '{')
-        return -1;
-    i = skip_space(text, len, i + 1);
-    if (i < len && text[i] == '}')
-        return 0;
-    for (;;) {
-        if (i >= len || text[i] != '"')
-            return -1;
-        size_t k0 = i + 1;
-        i = skip_string(text, len, i);
-        if (i >= len)
-            return -1;
-        for (unsigned k = 0; k < 32 && keys[k]; k++)
-            if (strlen(keys[k]) == i - 1 - k0 && memcmp(text + k0, keys[k], i - 1 - k0) == 0)
-                *found |= 1u << k;
-        i = skip_space(text, len, i);
-        if (i >= len || text[i] != ':')
-            return -1;
-        /* The value: to the ',' or '}' outside any string or bracket. */
-        size_t depth = 0;
-        for (i++; i < len; i++) {
-            char c = text[i];
-            if (c == '"') {
-                i = skip_string(text, len, i) - 1;
-            } else if (c == '{' || c == '[') {
-                depth++;
-            } else if (c == '}' || c == ']') {
-                if (depth == 0)
-                    break;
-                depth--;
-            } else if (c == ',' && depth == 0) {
-                break;
-            }
-        }
-        if (i >= len)
-            return -1;
-        if (text[i] == '}')
-            return 0;
-        if (text[i] != ',')
-            return -1;
-        i = skip_space(text, len, i + 1);
-    }
+    gi_json_top_keys_scan s;
+    gi_json_top_keys_begin(&s, keys);
+    gi_json_top_keys_feed(&s, text, len);
+    return gi_json_top_keys_end(&s, found);
 }
 
 int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,

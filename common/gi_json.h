@@ -30,15 +30,30 @@ void gi_json_print_line(FILE *out, cJSON *o);
 int gi_json_parse(const char *text, size_t len, const char *file, cJSON **out,
                   gi_error *err);
 
-/* Which of `keys` (NULL-terminated, at most 32, plain ASCII) the top-level
- * object of text names, as bit i of *found, without parsing it: strings
- * and nested values are skipped by their brackets and quotes, in one pass
- * with nothing allocated, so that a file can be told apart (gi validate: a
- * job, a scene or an emissions file) before its size is checked against
- * its kind's limit. It does not validate (the kind's own parser does); a
- * key written with escapes is not recognised. -1 if text is not an object
- * as far as it reads. */
+/* Which of `keys` (NULL-terminated, at most 32, plain ASCII, each at most
+ * 64 bytes) the top-level object of text names, as bit i of *found, without
+ * parsing it: strings and nested values are skipped by their brackets and
+ * quotes, in one pass with nothing allocated, so that a file can be told
+ * apart (gi validate: a job, a scene or an emissions file) before its size
+ * is checked against its kind's limit. It does not validate (the kind's own
+ * parser does); a key written with escapes is not recognised. -1 if text is
+ * not an object as far as it reads. */
 int gi_json_top_keys(const char *text, size_t len, const char *const *keys, unsigned *found);
+
+/* The same, fed in pieces (a file read as it comes, which a map would not
+ * survive being truncated under it): begin, feed each piece in order (1:
+ * more wanted; 0: the object has closed and *found is final; -1: not an
+ * object of this form), then end, which says 0 only if the object closed. */
+typedef struct gi_json_top_keys_scan {
+    const char *const *keys;
+    int state, escape, in_string;
+    unsigned bom, found;
+    size_t depth, key_len;
+    char key[64];
+} gi_json_top_keys_scan;
+void gi_json_top_keys_begin(gi_json_top_keys_scan *s, const char *const *keys);
+int gi_json_top_keys_feed(gi_json_top_keys_scan *s, const char *text, size_t len);
+int gi_json_top_keys_end(const gi_json_top_keys_scan *s, unsigned *found);
 
 /* "path.key" (or "key" when path is empty) into buf. */
 const char *gi_json_path(char *buf, size_t n, const char *path, const char *key);

@@ -8,13 +8,12 @@
  *
  * Exit status: 0 success, 2 invalid input (job, scene, mesh, arguments),
  * 1 any other failure, 130 interrupted. */
+#include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "gi_args.h"
@@ -235,31 +234,36 @@ enum { FILE_JOB, FILE_SCENE, FILE_EMISSIONS };
 
 /* What gi validate was given: a scene (a bare mesh file, or JSON with
  * "objects"), an emissions file for gi relight, or a job. Told by the
- * top-level keys alone (gi_json_top_keys, on the file mapped), not by
- * parsing it: each kind has its own size limit (a job's 16 MiB, a scene's
- * 2 GiB), which its loader applies to the file's size before it parses,
- * so an oversized job is refused at once, naming its size and the limit. */
+ * top-level keys alone (gi_json_top_keys, on the file read in pieces: a
+ * map would fault if the file were truncated under it), not by parsing it:
+ * each kind has its own size limit (a job's 16 MiB, a scene's 2 GiB), which
+ * its loader applies to the file's size before it parses, so an oversized
+ * job is refused at once, naming its size and the limit. */
 static int file_kind(const char *path)
 {
     const char *dot = strrchr(path, '.');
     if (!dot || strcmp(dot, ".json") != 0)
         return FILE_SCENE;
-    struct stat st;
-    int fd = gi_open_regular(path, O_RDONLY, &st, NULL);
+    int fd = gi_open_regular(path, O_RDONLY, NULL, NULL);
     if (fd < 0)
         return FILE_JOB; /* its loader says why */
-    int kind = FILE_JOB;
-    void *map = st.st_size > 0 ? mmap(NULL, (size_t)st.st_size, PROT_READ, MAP_PRIVATE, fd, 0)
-                               : MAP_FAILED;
-    close(fd);
     static const char *const keys[] = {"method", "objects", "emissions", NULL};
+    gi_json_top_keys_scan scan;
+    gi_json_top_keys_begin(&scan, keys);
+    char buf[1 << 16];
+    ssize_t n;
+    /* Until the object closes, or names "method": a job, whatever follows. */
+    while (!(scan.found & 1) && (n = read(fd, buf, sizeof buf)) != 0) {
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 || gi_json_top_keys_feed(&scan, buf, (size_t)n) != 1)
+            break;
+    }
+    close(fd);
     unsigned found;
-    if (map != MAP_FAILED &&
-        gi_json_top_keys(map, (size_t)st.st_size, keys, &found) == 0 && !(found & 1))
-        kind = found & 2 ? FILE_SCENE : found & 4 ? FILE_EMISSIONS : FILE_JOB;
-    if (map != MAP_FAILED)
-        munmap(map, (size_t)st.st_size);
-    return kind;
+    if (gi_json_top_keys_end(&scan, &found) != 0 || (found & 1))
+        return FILE_JOB;
+    return found & 2 ? FILE_SCENE : found & 4 ? FILE_EMISSIONS : FILE_JOB;
 }
 
 /* gi validate SCENE: the scene alone, as every method loads it. */

@@ -23,6 +23,13 @@ grep -q "warning: coarse: detp: the discs' radius is .*: a coarse bake; set detp
     fail "validate a bare mesh"
 "$GI" validate "$SRC/scenes/cornell-box/scene.json" | grep -q "ok (scene: 8 objects, 32 triangles, 2 emissive)" ||
     fail "validate a scene"
+# Told a scene from a job when its keys lie past gi validate's first read
+# (64 KiB), "objects" across the boundary: the file is read in pieces.
+at=$(grep -bo '"objects"' "$SRC/scenes/cornell-box/scene.json" | head -n 1 | cut -d: -f1)
+{ printf '{'; head -c $((65533 - at)) /dev/zero | tr '\0' ' '; tail -c +2 "$SRC/scenes/cornell-box/scene.json"; } \
+    >"$TMP/padded-scene.json"
+"$GI" validate "$TMP/padded-scene.json" | grep -q "ok (scene: 8 objects, 32 triangles, 2 emissive)" ||
+    fail "validate a scene whose keys are past 64 KiB"
 printf '{"objects": [{"name": "a", "material": "x", "quad": {"size": [1, 1]}}]}' >"$TMP/bad-scene.json"
 set +e
 "$GI" validate "$TMP/bad-scene.json" 2>"$TMP/bad-scene.log"
