@@ -14,6 +14,8 @@ echo "== detp_tree: thesis Tables A.2-A.4 on a generated tree scene (one core; m
 TREE=$(mktemp -d "${TMPDIR:-/tmp}/detp-tree.XXXXXX")
 "$BIN/scenes/gi_scenegen" tree "$TREE"
 "$BIN/bench/detp_tree" "$TREE/scene.json" 409600 3
+echo "== detp_disc_order: Embree Disc Indexing with the discs numbered as the mesh, along a Hilbert curve, shuffled"
+"$BIN/bench/detp_disc_order" scenes/cornell-box/scene.json 4 0 1000000 5
 echo "== anim_rt: moving the tree scene's torus (update_object, one incremental frame vs full retrace)"
 "$BIN/bench/anim_rt" "$TREE/scene.json" 400000 21
 rm -rf "$TREE"
