@@ -203,6 +203,9 @@ rm -f "$TMP/release"
 python3 - "$API" "$(cat "$TMP/token")" "$TMP/release" >"$TMP/uploads.out" 2>&1 <<'PY' &
 import os, select, socket, sys, time
 host, port = sys.argv[1].rsplit(":", 1)
+# A connect or send that gi-farmd never takes raises (its traceback in
+# uploads.out says which), rather than hanging the client unexplained.
+socket.setdefaulttimeout(30)
 def upload():
     s = socket.create_connection((host, int(port)))
     s.sendall(b"PUT /api/v1/assets/%s HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
@@ -218,7 +221,9 @@ def stall(conns):
 # A 64th coming while the others' heads are not read yet (they are idle)
 # would shed one of them: it comes once they are under way, not behind.
 conns = [upload() for _ in range(63)]
+print("63 heads sent", flush=True)
 stall(conns)
+print("63 bodies sent", flush=True)
 conns.append(upload())
 stall(conns[-1:])
 if select.select(conns, [], [], 0)[0]:
