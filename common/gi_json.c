@@ -65,12 +65,12 @@ static int scan_byte(gi_json_top_keys_scan *s, unsigned char c)
 {
     int space = c <= ' ';
     switch (s->state) {
-    case TK_BOM: /* "\xef\xbb\xbf" at the start, as cJSON skips it */
+    case TK_BOM: /* "\xef\xbb\xbf" at the start, as cJSON skips it; without one, c opens */
         if (c == (unsigned char)"\xef\xbb\xbf"[s->bom])
             return ++s->bom < 3 ? TK_BOM : TK_OPEN;
         if (s->bom > 0)
             return TK_FAILED;
-        return space ? TK_OPEN : c == '{' ? TK_FIRST : TK_FAILED; /* no BOM */
+        /* fall through */
     case TK_OPEN:
         return space ? TK_OPEN : c == '{' ? TK_FIRST : TK_FAILED;
     case TK_FIRST:
