@@ -17,7 +17,7 @@
 #include <stdint.h>
 
 #include "detp.h"
-#include "detp_anim_params.h"
+#include "detp_params.h"
 
 /* ---- Batch store (detp_store.c) ------------------------------------- */
 
@@ -109,7 +109,7 @@ typedef struct gi_detp_anim_update_in {
     /* Time tests and retraces apart (the stats' seconds_*): two clock
      * reads per retrace, about 1% of a small mobile's frame. */
     int timed;
-    /* The mobile did not move (gi_detp_anim_still): every segment stays. */
+    /* The mobile did not move (gi_anim_still): every segment stays. */
     int still;
 } gi_detp_anim_update_in;
 

@@ -226,7 +226,7 @@ int detp_anim_fill(gi_job *job, detp_state *st, gi_error *err)
     const detp_anim_state *a = st->anim;
     /* The mobile where this frame has it, for the PLY. */
     gi_mat4 m;
-    gi_detp_anim_pose(&p->anim, a->frame, &m);
+    gi_anim_pose(&p->anim, a->frame, &m);
     if (gi_scene_pose_object(&job->scene, p->anim.object_index, a->base_pos, a->base_nrm, &m,
                              err))
         return -1;
@@ -260,7 +260,7 @@ int detp_anim_next_frame(gi_job *job, detp_state *st, gi_task_queue *q)
      * them with "update": "full"). */
     const gi_object *o = &job->scene.objects[p->anim.object_index];
     uint32_t v0 = o->first_vertex, nv = o->vertex_count;
-    if (p->anim.update == GI_DETP_UPDATE_FULL) {
+    if (p->anim_update == GI_DETP_UPDATE_FULL) {
         v0 = 0;
         nv = st->nv;
     }
@@ -285,7 +285,7 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     /* The mobile's pose: rows of the 3x4 matrix applied to its vertices
      * as loaded. */
     gi_mat4 m;
-    gi_detp_anim_pose(&p->anim, a->frame, &m);
+    gi_anim_pose(&p->anim, a->frame, &m);
     cJSON *pose = cJSON_AddArrayToObject(o, "pose");
     for (int r = 0; r < 3; r++)
         cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));

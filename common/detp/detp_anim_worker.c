@@ -124,7 +124,7 @@ static void grid_spec(const gi_detp_params *p, gi_detp_mobile_pose as_loaded, fl
     gi_vec3 lo = gi_v3(INFINITY, INFINITY, INFINITY), hi = gi_scale(lo, -1.0f);
     for (uint32_t f = 0; f < p->anim.frames; f++) {
         gi_mat4 m;
-        gi_detp_anim_pose(&p->anim, f, &m);
+        gi_anim_pose(&p->anim, f, &m);
         double scale = sqrt(m.m[0][0] * m.m[0][0] + m.m[1][0] * m.m[1][0] +
                             m.m[2][0] * m.m[2][0]);
         float r = (float)(as_loaded.r * scale * 1.02) + radius + 1e-3f * (float)p->scene_size;
@@ -169,7 +169,7 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
      * estimate needs the mobile's; later frames recompute the mobile's
      * vertices on their own and use only the static discs' entries. */
     if (pose_scene(ctx, a, 0, err) || detp_worker_discs(ctx, w, err) ||
-        gi_detp_anim_mobile_order(s, a->object, p->anim.mobile_estimator, &p->sc,
+        gi_detp_anim_mobile_order(s, a->object, p->mobile_estimator, &p->sc,
                                   &a->mobile_order, err))
         return -1;
     gi_detp_discs *sd = &a->static_discs;
@@ -321,7 +321,7 @@ static int pose_scene(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame, g
         return 0;
     const gi_detp_params *p = ctx->job.params;
     gi_mat4 m;
-    gi_detp_anim_pose(&p->anim, frame, &m);
+    gi_anim_pose(&p->anim, frame, &m);
     if (gi_scene_pose_object(&ctx->job.scene, a->object, a->base_pos, a->base_nrm, &m, err))
         return -1;
     a->scene_posed = 1;
@@ -477,7 +477,7 @@ static int update_in(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t f,
     in->mobile_scene = gi_rt_object_scene(&ctx->rt, a->object, err);
     in->artifact = p->artifact;
     in->eps = p->extent_eps;
-    in->still = gi_detp_anim_still(&p->anim, f);
+    in->still = gi_anim_still(&p->anim, f);
     return in->mobile_scene ? 0 : -1;
 }
 
@@ -530,7 +530,7 @@ static int mobile_vertices(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker 
 {
     const gi_detp_params *p = ctx->job.params;
     return gi_detp_anim_mobile_estimate(&ctx->job.scene, a->object, w->discs.radius, segs,
-                                        p->anim.mobile_estimator, &p->sc, a->mobile_order,
+                                        p->mobile_estimator, &p->sc, a->mobile_order,
                                         ctx->rt.device, &w->acc, st, err);
 }
 
@@ -559,7 +559,7 @@ static void keep_for_frame1(gi_worker_ctx *ctx, detp_anim_worker *a, const char 
     const gi_detp_params *p = ctx->job.params;
     mobile_frame next;
     gi_error ignored;
-    if (p->anim.frames < 2 || p->anim.update == GI_DETP_UPDATE_FULL ||
+    if (p->anim.frames < 2 || p->anim_update == GI_DETP_UPDATE_FULL ||
         mobile_at(ctx, a, 1, &next, &ignored))
         return;
     /* A shelf already full of batches in use would not keep this one:
@@ -730,7 +730,7 @@ static int run_update(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker *a, c
     double t2 = gi_now();
     gi_detp_accum_clear(&w->acc);
     int rc = 0;
-    int full = p->anim.update == GI_DETP_UPDATE_FULL;
+    int full = p->anim_update == GI_DETP_UPDATE_FULL;
     if (full) {
         /* Every vertex from scratch over the frame's segments, the
          * mobile's too (the check of the incremental result, the grid's

@@ -48,7 +48,7 @@ static int detp_check_scene(gi_job *job, gi_error *err)
         return -1;
     if (job->on_worker)
         return 0;
-    gi_detp_anim_warn_keys(&p->anim, &job->scene, job->file);
+    gi_anim_warn_keys(&p->anim, &job->scene, job->file);
     /* "auto" discs are the mesh's own spacing: on an unsubdivided scene of
      * big faces that is a blurred, dark-edged bake, and nothing else says so.
      * Said at load, so that gi validate and gi submit say it before a run. */
@@ -550,7 +550,7 @@ static void detp_progress(const gi_job *job, gi_job_progress *out)
     out->frames = st->anim ? p->anim.frames : 1;
     out->cost_unplanned = st->phase == DETP_PHASE_BAKE ? tiles : 0;
     double share = st->anim ? detp_anim_from_mobile_share(st) : -1;
-    if (share >= 0 && p->anim.update != GI_DETP_UPDATE_FULL) {
+    if (share >= 0 && p->anim_update != GI_DETP_UPDATE_FULL) {
         double bake = (double)p->photon_count;
         out->first_frame_cost = bake + tiles;
         out->later_frame_cost = bake * (LATER_PER_SHARE * share + LATER_FIXED) + tiles;

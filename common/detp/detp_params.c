@@ -11,6 +11,9 @@
 const char *const gi_detp_estimator_names[] = {"impact_count", "photon_map", "basic",
                                                "sphere_cache", "multilist",  "octree",
                                                "embree",       NULL};
+const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", "lanes",
+                                                       NULL};
+const char *const gi_detp_anim_update_names[] = {"incremental", "full", NULL};
 
 static const char *const artifact_names[] = {"none", "second_hit", "visible_area", NULL};
 static const char *const order_names[] = {"none", "lebesgue", "hilbert", "shuffled", NULL};
@@ -242,9 +245,17 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
         p->reference_spp = (uint32_t)spp;
         p->reference_vertices = (uint32_t)nv;
     }
-    if (gi_detp_anim_parse(&p->anim, anim, v) || check_animation(p, v))
+    static const char *const anim_keys[] = {"mobile_estimator", "update", NULL};
+    int mest = GI_DETP_MOBILE_LANES, update = GI_DETP_UPDATE_INCREMENTAL;
+    if (gi_anim_parse(&p->anim, anim, "detp.animation", anim_keys, v) ||
+        (anim && (gi_jv_enum(v, anim, "detp.animation", "mobile_estimator", 0,
+                             gi_detp_mobile_estimator_names, &mest) ||
+                  gi_jv_enum(v, anim, "detp.animation", "update", 0, gi_detp_anim_update_names,
+                             &update))))
         return -1;
-    return 0;
+    p->mobile_estimator = (gi_detp_mobile_estimator)mest;
+    p->anim_update = (gi_detp_anim_update_mode)update;
+    return check_animation(p, v);
 }
 
 static double len_value(const gi_detp_len *l, double scene_size)
@@ -298,5 +309,5 @@ int gi_detp_resolve_params(gi_detp_params *p, gi_scene *scene, const char *file,
     }
     p->extent_eps = (float)(1e-5 * p->scene_size);
     /* After refinement: the pivot is the refined mobile's bounding-box centre. */
-    return gi_detp_anim_resolve(&p->anim, scene, file, err);
+    return gi_anim_resolve(&p->anim, scene, file, err);
 }

@@ -7,7 +7,7 @@
 #include <stdint.h>
 
 #include "detp.h"
-#include "detp_anim_params.h"
+#include "gi_anim.h"
 #include "gi_json.h"
 
 typedef enum {
@@ -21,6 +21,22 @@ typedef enum {
 } gi_detp_estimator;
 
 extern const char *const gi_detp_estimator_names[];
+
+/* How the mobile's own vertices are estimated each frame (thesis 1.12.4). */
+typedef enum {
+    GI_DETP_MOBILE_SPHERE_CACHE, /* Sphere Cache rooted at the mobile's bounding sphere */
+    GI_DETP_MOBILE_EMBREE,       /* Disc Indexing (Embree) over the mobile's discs only */
+    GI_DETP_MOBILE_LANES         /* every disc group near a segment, in vector lanes */
+} gi_detp_mobile_estimator;
+
+extern const char *const gi_detp_mobile_estimator_names[];
+
+/* How a frame after the first is computed. Both trace the same paths; "full"
+ * estimates every vertex from scratch over the frame's segments (for checks
+ * and benchmarks: the incremental result must equal it bit for bit). */
+typedef enum { GI_DETP_UPDATE_INCREMENTAL, GI_DETP_UPDATE_FULL } gi_detp_anim_update_mode;
+
+extern const char *const gi_detp_anim_update_names[];
 
 /* A length given as scene units, as a percentage of the scene size ("2%"),
  * or "auto". */
@@ -50,7 +66,9 @@ typedef struct gi_detp_params {
     uint32_t reference_spp;      /* 0: no path-traced reference */
     uint32_t reference_vertices; /* how many vertices get one (evenly spread) */
     int tile, image_spp;
-    gi_detp_anim_params anim; /* detp.animation; anim.enabled = 0 without one */
+    gi_anim anim; /* detp.animation; anim.enabled = 0 without one */
+    gi_detp_mobile_estimator mobile_estimator; /* detp.animation's */
+    gi_detp_anim_update_mode anim_update;      /* detp.animation.update */
 
     /* Derived from the (refined) scene in check_scene: the same on the
      * coordinator and on every worker. */

@@ -62,9 +62,9 @@ GI_TEST(test_detp_anim_parse_good)
     GI_CHECK(p->anim.enabled);
     GI_CHECK(strcmp(p->anim.object, "ball") == 0);
     GI_CHECK(p->anim.frames == 24);
-    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_EMBREE);
+    GI_CHECK(p->mobile_estimator == GI_DETP_MOBILE_EMBREE);
     GI_REQUIRE(p->anim.key_count == 2);
-    const gi_detp_anim_key *k0 = &p->anim.keys[0], *k1 = &p->anim.keys[1];
+    const gi_anim_key *k0 = &p->anim.keys[0], *k1 = &p->anim.keys[1];
     GI_CHECK(k0->frame == 0 && k1->frame == 23);
     GI_CHECK(k0->translate[0] == 0.0 && k0->scale == 1.0);
     GI_CHECK(k0->rotation[0] == 1.0 && k0->rotation[1] == 0.0 && k0->rotation[2] == 0.0 &&
@@ -79,12 +79,12 @@ GI_TEST(test_detp_anim_parse_good)
 
     /* The default mobile estimator, and a single key. */
     GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 5}]"), p, &err));
-    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_LANES);
+    GI_CHECK(p->mobile_estimator == GI_DETP_MOBILE_LANES);
     GI_CHECK(p->anim.key_count == 1);
     GI_REQUIRE_OK(parse_detp(
         ANIM("\"keyframes\": [{\"frame\": 0}], \"mobile_estimator\": \"sphere_cache\""), p,
         &err));
-    GI_CHECK(p->anim.mobile_estimator == GI_DETP_MOBILE_SPHERE_CACHE);
+    GI_CHECK(p->mobile_estimator == GI_DETP_MOBILE_SPHERE_CACHE);
     free(p);
 }
 
@@ -216,15 +216,15 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
         " {\"frame\": 20, \"rotate\": {\"axis\": [0, 1, 0], \"degrees\": 170}},"
         " {\"frame\": 24, \"rotate\": {\"axis\": [0, 3, 0], \"degrees\": 190}}]}}",
         p, &err));
-    gi_detp_anim_params *a = &p->anim;
+    gi_anim *a = &p->anim;
     a->pivot[0] = 100.0, a->pivot[1] = 50.0, a->pivot[2] = -20.0;
     gi_mat4 m, want;
 
     /* At the keys: the keys' poses. */
-    gi_detp_anim_pose(a, 4, &m);
+    gi_anim_pose(a, 4, &m);
     want = expected_pose(a->pivot, 10, 0, 0, 0, 1, 0, 0, 1);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
-    gi_detp_anim_pose(a, 14, &m);
+    gi_anim_pose(a, 14, &m);
     want = expected_pose(a->pivot, 30, 4, -2, 0, 1, 0, 90, 2);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
     /* The pivot stays where the key's translate puts it. */
@@ -235,7 +235,7 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
 
     /* Halfway between frames 4 and 14 (frame 9): translate (20, 2, -1),
      * scale 1.5, and the slerp of 0 and 90 degrees is 45 degrees. */
-    gi_detp_anim_pose(a, 9, &m);
+    gi_anim_pose(a, 9, &m);
     want = expected_pose(a->pivot, 20, 2, -1, 0, 1, 0, 45, 1.5);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
     /* By hand: x' = pivot + t + 1.5 R45 (p - pivot) for p - pivot = (1, 0, 0):
@@ -246,26 +246,26 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
     GI_CHECK_NEAR(q.z, -21.0 - 1.5 * sqrt(0.5), 1e-4);
     /* A quarter of the way (not a key): frame 6.5 does not exist, frame 6
      * is t = 0.2: 18 degrees. */
-    gi_detp_anim_pose(a, 6, &m);
+    gi_anim_pose(a, 6, &m);
     want = expected_pose(a->pivot, 14, 0.8, -0.4, 0, 1, 0, 18, 1.2);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
 
     /* 170 degrees to 190 (-170) about y: through 180, not back through 0
      * (written as 170 about -y, the keys would be 340 degrees apart as
      * written: refused, see test_detp_anim_parse_bad). */
-    gi_detp_anim_pose(a, 22, &m);
+    gi_anim_pose(a, 22, &m);
     want = expected_pose(a->pivot, 0, 0, 0, 0, 1, 0, 180, 1);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
 
     /* Hold before the first key and after the last. */
     gi_mat4 first, last;
-    gi_detp_anim_pose(a, 4, &first);
-    gi_detp_anim_pose(a, 24, &last);
-    gi_detp_anim_pose(a, 0, &m);
+    gi_anim_pose(a, 4, &first);
+    gi_anim_pose(a, 24, &last);
+    gi_anim_pose(a, 0, &m);
     GI_CHECK(memcmp(&m, &first, sizeof m) == 0);
-    gi_detp_anim_pose(a, 3, &m);
+    gi_anim_pose(a, 3, &m);
     GI_CHECK(memcmp(&m, &first, sizeof m) == 0);
-    gi_detp_anim_pose(a, 29, &m);
+    gi_anim_pose(a, 29, &m);
     GI_CHECK(memcmp(&m, &last, sizeof m) == 0);
     want = expected_pose(a->pivot, 0, 0, 0, 0, 1, 0, -170, 1);
     GI_CHECK_NEAR(mat_diff(&m, &want), 0.0, 1e-12);
@@ -276,7 +276,7 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
                                   " {\"frame\": 7, \"translate\": [7, -3.5, 1]}]"),
                              p, &err));
     a->pivot[0] = 3.25, a->pivot[1] = -1.0, a->pivot[2] = 0.5;
-    gi_detp_anim_pose(a, 3, &m);
+    gi_anim_pose(a, 3, &m);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             GI_CHECK(m.m[i][j] == (i == j ? 1.0 : 0.0));
@@ -291,7 +291,7 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
     a->pivot[0] = 278.25, a->pivot[1] = 0.1, a->pivot[2] = -1e-3;
     gi_mat4 id = gi_mat4_identity();
     for (uint32_t f = 0; f < 24; f++) {
-        gi_detp_anim_pose(a, f, &m);
+        gi_anim_pose(a, f, &m);
         GI_CHECK_MSG(memcmp(&m, &id, sizeof m) == 0, "frame %u is not the identity", f);
     }
 
@@ -305,10 +305,10 @@ GI_TEST(test_detp_anim_pose_keys_interpolation_and_hold)
     a->pivot[0] = 1.0 / 3.0, a->pivot[1] = 0.7, a->pivot[2] = -0.1;
     for (uint32_t f = 1; f < 24; f++) {
         int want_still = f <= 2 || (f > 9 && f <= 12) || f > 15;
-        GI_CHECK_MSG(gi_detp_anim_still(a, f) == want_still, "frame %u: still %d", f,
-                     gi_detp_anim_still(a, f));
+        GI_CHECK_MSG(gi_anim_still(a, f) == want_still, "frame %u: still %d", f,
+                     gi_anim_still(a, f));
     }
-    GI_CHECK(!gi_detp_anim_still(a, 0));
+    GI_CHECK(!gi_anim_still(a, 0));
     free(p);
 }
 
@@ -332,20 +332,20 @@ GI_TEST(test_detp_anim_resolve_against_the_scene)
     GI_REQUIRE_OK(gi_test_load_scene_text("pose.json", pose_scene, &s, &err));
     gi_detp_params *p = gi_xcalloc(1, sizeof *p);
     GI_REQUIRE_OK(parse_detp(ANIM("\"keyframes\": [{\"frame\": 0}]"), p, &err));
-    GI_REQUIRE_OK(gi_detp_anim_resolve(&p->anim, &s, "job.json", &err));
+    GI_REQUIRE_OK(gi_anim_resolve(&p->anim, &s, "job.json", &err));
     GI_CHECK(p->anim.object_index == (uint32_t)gi_scene_find_object(&s, "ball"));
     GI_CHECK_NEAR(p->anim.pivot[0], -1.0, 1e-6);
     GI_CHECK_NEAR(p->anim.pivot[1], 0.3, 1e-6);
     GI_CHECK_NEAR(p->anim.pivot[2], 0.0, 1e-6);
 
     strcpy(p->anim.object, "cube");
-    GI_CHECK(gi_detp_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
+    GI_CHECK(gi_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
     GI_CHECK(strstr(err.msg, "job.json: detp.animation.object: no object \"cube\"") != NULL);
     strcpy(p->anim.object, "floor");
-    GI_CHECK(gi_detp_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
+    GI_CHECK(gi_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
     GI_CHECK(strstr(err.msg, "detp.animation.object: object \"floor\" is not mobile") != NULL);
     strcpy(p->anim.object, "lamp");
-    GI_CHECK(gi_detp_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
+    GI_CHECK(gi_anim_resolve(&p->anim, &s, "job.json", &err) != 0);
     GI_CHECK(strstr(err.msg, "detp.animation.object: object \"lamp\" is emissive") != NULL);
 
     /* Through gi_detp_resolve_params, after refinement: the pivot of the
@@ -396,7 +396,7 @@ GI_TEST(test_scene_pose_object_moves_one_object)
      * along x. R_y(90) maps +x to -z and +z to +x. */
     double pivot[3] = {0.5, 1.0, -0.25}, tr[3] = {10, 0, 0};
     double q[4] = {sqrt(0.5), 0, sqrt(0.5), 0};
-    gi_mat4 m = gi_detp_anim_matrix(pivot, tr, q, 1.0);
+    gi_mat4 m = gi_anim_matrix(pivot, tr, q, 1.0);
     GI_REQUIRE_OK(gi_scene_pose_object(&s, (uint32_t)obj, bp, bn, &m, &err));
     for (uint32_t i = 0; i < o->vertex_count; i++) {
         gi_vec3 b = bp[i], p = s.positions[o->first_vertex + i];
@@ -469,7 +469,7 @@ GI_TEST(test_scene_pose_object_moves_one_object)
     GI_REQUIRE_OK(gi_scene_object_copy_base(&s, (uint32_t)ball, &sp, &sn, &err));
     double piv[3] = {-1, 0.3, 0}, zero[3] = {0, 0, 0};
     double q2[4] = {cos(0.3), sin(0.3) * 0.6, 0, sin(0.3) * 0.8};
-    gi_mat4 r = gi_detp_anim_matrix(piv, zero, q2, 0.5);
+    gi_mat4 r = gi_anim_matrix(piv, zero, q2, 0.5);
     GI_REQUIRE_OK(gi_scene_pose_object(&s, (uint32_t)ball, sp, sn, &r, &err));
     const gi_object *ob = &s.objects[ball];
     for (uint32_t i = 0; i < ob->vertex_count; i++) {

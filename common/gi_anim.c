@@ -1,17 +1,12 @@
-/* detp_anim_params: parsing, resolving and evaluating "detp.animation"
+/* gi_anim: parsing, resolving and evaluating a job's "animation" block
  * (the keyframed pose of one mobile object, thesis 1.12). */
-#include "detp_anim_params.h"
+#include "gi_anim.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "gi_log.h"
-
-const char *const gi_detp_mobile_estimator_names[] = {"sphere_cache", "embree", "lanes",
-                                                       NULL};
-const char *const gi_detp_anim_update_names[] = {"incremental", "full", NULL};
-
-#define ANIM_PATH "detp.animation"
 
 /* Unit quaternion of a rotation by `degrees` about `axis` (not zero), as
  * written: (cos(h), sin(h) * axis / |axis|), h = degrees / 2 (w < 0 past
@@ -33,7 +28,7 @@ static void axis_angle_quat(const double axis[3], double degrees, double q[4])
 
 /* The key's rotation from the quaternion as written, with w >= 0 so that
  * every rotation has one representative. */
-static void set_rotation(gi_detp_anim_key *k, const double written[4])
+static void set_rotation(gi_anim_key *k, const double written[4])
 {
     double sign = written[0] < 0.0 ? -1.0 : 1.0;
     for (int i = 0; i < 4; i++)
@@ -43,14 +38,16 @@ static void set_rotation(gi_detp_anim_key *k, const double written[4])
 /* Two consecutive keys' rotations, as written, must be at most 180 degrees
  * apart: slerp takes the short way, so a 270-degree turn would play as 90
  * degrees the other way, and 0 to 360 as no turn at all. */
-static int check_turn(const double prev[4], const double cur[4], int i, gi_jv *v)
+static int check_turn(const gi_anim *a, const double prev[4], const double cur[4], int i,
+                      gi_jv *v)
 {
     double d = prev[0] * cur[0] + prev[1] * cur[1] + prev[2] * cur[2] + prev[3] * cur[3];
     if (d >= 0.0)
         return 0;
     double apart = 360.0 / GI_PI * acos(d < -1.0 ? -1.0 : d);
-    char path[96], rpath[128];
-    gi_json_index_path(path, sizeof path, ANIM_PATH ".keyframes", i);
+    char kpath[64], path[96], rpath[128];
+    snprintf(kpath, sizeof kpath, "%s.keyframes", a->path);
+    gi_json_index_path(path, sizeof path, kpath, i);
     return gi_jv_fail(v, gi_json_path(rpath, sizeof rpath, path, "rotate"),
                       "%.1f degrees from keyframes[%d]'s rotation as written: the pose turns "
                       "the short way between keys, so it would turn %.1f degrees the other way; "
@@ -58,7 +55,7 @@ static int check_turn(const double prev[4], const double cur[4], int i, gi_jv *v
                       apart, i - 1, 360.0 - apart);
 }
 
-static int parse_rotate(gi_detp_anim_key *k, double written[4], const cJSON *obj,
+static int parse_rotate(gi_anim_key *k, double written[4], const cJSON *obj,
                         const char *path, gi_jv *v)
 {
     static const char *const keys[] = {"axis", "degrees", NULL};
@@ -84,13 +81,14 @@ static int parse_rotate(gi_detp_anim_key *k, double written[4], const cJSON *obj
 }
 
 /* Key i; written: its rotation as written (the identity without one). */
-static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, double written[4],
+static int parse_key(gi_anim *a, int i, const cJSON *obj, double written[4],
                      gi_jv *v)
 {
     static const char *const keys[] = {"frame", "translate", "rotate", "scale", NULL};
-    gi_detp_anim_key *k = &a->keys[i];
-    char path[96], fpath[128];
-    gi_json_index_path(path, sizeof path, ANIM_PATH ".keyframes", i);
+    gi_anim_key *k = &a->keys[i];
+    char kpath[64], path[96], fpath[128];
+    snprintf(kpath, sizeof kpath, "%s.keyframes", a->path);
+    gi_json_index_path(path, sizeof path, kpath, i);
     gi_json_path(fpath, sizeof fpath, path, "frame");
     memset(k, 0, sizeof *k);
     k->rotation[0] = 1.0;
@@ -99,11 +97,11 @@ static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, double wri
     k->scale = 1.0;
     int64_t frame = 0;
     if (gi_jv_object(v, obj, path) || gi_jv_keys(v, obj, path, keys) ||
-        gi_jv_int(v, obj, path, "frame", 1, 0, GI_DETP_ANIM_MAX_FRAMES - 1, &frame))
+        gi_jv_int(v, obj, path, "frame", 1, 0, GI_ANIM_MAX_FRAMES - 1, &frame))
         return -1;
     if (frame >= (int64_t)a->frames)
-        return gi_jv_fail(v, fpath, "%lld is not less than " ANIM_PATH ".frames (%u)",
-                          (long long)frame, a->frames);
+        return gi_jv_fail(v, fpath, "%lld is not less than %s.frames (%u)", (long long)frame,
+                          a->path, a->frames);
     if (i > 0 && frame <= (int64_t)a->keys[i - 1].frame)
         return gi_jv_fail(v, fpath,
                           "%lld is not after keyframes[%d].frame (%u): key frames must be "
@@ -123,47 +121,47 @@ static int parse_key(gi_detp_anim_params *a, int i, const cJSON *obj, double wri
     return 0;
 }
 
-int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
+int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *const *extra_keys,
+                  gi_jv *v)
 {
     memset(a, 0, sizeof *a);
+    snprintf(a->path, sizeof a->path, "%s", path);
     if (!b)
         return 0;
-    static const char *const keys[] = {"object", "frames", "keyframes", "mobile_estimator",
-                                       "update", NULL};
+    const char *keys[16] = {"object", "frames", "keyframes"};
+    size_t nk = 3;
+    for (size_t i = 0; extra_keys && extra_keys[i] && nk + 1 < sizeof keys / sizeof *keys; i++)
+        keys[nk++] = extra_keys[i];
+    keys[nk] = NULL;
     const char *object = NULL;
     int64_t frames = 0;
-    int est = GI_DETP_MOBILE_LANES, update = GI_DETP_UPDATE_INCREMENTAL;
     const cJSON *arr = NULL;
-    if (gi_jv_object(v, b, ANIM_PATH) || gi_jv_keys(v, b, ANIM_PATH, keys) ||
-        gi_jv_string(v, b, ANIM_PATH, "object", 1, &object))
+    char opath[GI_ANIM_PATH_MAX + 16], kpath[GI_ANIM_PATH_MAX + 16];
+    snprintf(opath, sizeof opath, "%s.object", a->path);
+    snprintf(kpath, sizeof kpath, "%s.keyframes", a->path);
+    if (gi_jv_object(v, b, a->path) || gi_jv_keys(v, b, a->path, keys) ||
+        gi_jv_string(v, b, a->path, "object", 1, &object))
         return -1;
     if (!object[0])
-        return gi_jv_fail(v, ANIM_PATH ".object", "the object name is empty");
-    if (strlen(object) >= GI_DETP_ANIM_NAME_MAX)
-        return gi_jv_fail(v, ANIM_PATH ".object", "the name is longer than %d bytes",
-                          GI_DETP_ANIM_NAME_MAX - 1);
-    if (gi_jv_int(v, b, ANIM_PATH, "frames", 1, 1, GI_DETP_ANIM_MAX_FRAMES, &frames) ||
-        gi_jv_enum(v, b, ANIM_PATH, "mobile_estimator", 0, gi_detp_mobile_estimator_names,
-                   &est) ||
-        gi_jv_enum(v, b, ANIM_PATH, "update", 0, gi_detp_anim_update_names, &update) ||
-        gi_jv_member_array(v, b, ANIM_PATH, "keyframes", 1, &arr))
+        return gi_jv_fail(v, opath, "the object name is empty");
+    if (strlen(object) >= GI_ANIM_NAME_MAX)
+        return gi_jv_fail(v, opath, "the name is longer than %d bytes", GI_ANIM_NAME_MAX - 1);
+    if (gi_jv_int(v, b, a->path, "frames", 1, 1, GI_ANIM_MAX_FRAMES, &frames) ||
+        gi_jv_member_array(v, b, a->path, "keyframes", 1, &arr))
         return -1;
     strcpy(a->object, object);
     a->frames = (uint32_t)frames;
-    a->mobile_estimator = (gi_detp_mobile_estimator)est;
-    a->update = (gi_detp_anim_update_mode)update;
     int n = cJSON_GetArraySize(arr);
     if (n < 1)
-        return gi_jv_fail(v, ANIM_PATH ".keyframes", "at least one key is needed");
-    if (n > GI_DETP_ANIM_MAX_KEYS)
-        return gi_jv_fail(v, ANIM_PATH ".keyframes", "%d keys (at most %d)", n,
-                          GI_DETP_ANIM_MAX_KEYS);
+        return gi_jv_fail(v, kpath, "at least one key is needed");
+    if (n > GI_ANIM_MAX_KEYS)
+        return gi_jv_fail(v, kpath, "%d keys (at most %d)", n, GI_ANIM_MAX_KEYS);
     int i = 0;
     const cJSON *it;
     double prev[4] = {1.0, 0.0, 0.0, 0.0}, cur[4];
     cJSON_ArrayForEach(it, arr)
     {
-        if (parse_key(a, i, it, cur, v) || (i > 0 && check_turn(prev, cur, i, v)))
+        if (parse_key(a, i, it, cur, v) || (i > 0 && check_turn(a, prev, cur, i, v)))
             return -1;
         memcpy(prev, cur, sizeof prev);
         i++;
@@ -173,27 +171,27 @@ int gi_detp_anim_parse(gi_detp_anim_params *a, const cJSON *b, gi_jv *v)
     return 0;
 }
 
-int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *file,
+int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file,
                          gi_error *err)
 {
     if (!a->enabled)
         return 0;
     int idx = gi_scene_find_object(s, a->object);
     if (idx < 0)
-        return gi_fail(err, GI_EINVAL, "%s: " ANIM_PATH ".object: no object \"%s\" in the scene",
-                       file, a->object);
+        return gi_fail(err, GI_EINVAL, "%s: %s.object: no object \"%s\" in the scene", file,
+                       a->path, a->object);
     const gi_object *o = &s->objects[idx];
     if (!o->mobile)
         return gi_fail(err, GI_EINVAL,
-                       "%s: " ANIM_PATH ".object: object \"%s\" is not mobile (give it "
+                       "%s: %s.object: object \"%s\" is not mobile (give it "
                        "\"mobile\": true in the scene)",
-                       file, a->object);
+                       file, a->path, a->object);
     for (uint32_t t = o->first_triangle; t < o->first_triangle + o->triangle_count; t++)
         if (!gi_is_black(gi_scene_tri_material(s, t)->emission))
             return gi_fail(err, GI_EINVAL,
-                           "%s: " ANIM_PATH ".object: object \"%s\" is emissive (moving "
+                           "%s: %s.object: object \"%s\" is emissive (moving "
                            "lights are not supported)",
-                           file, a->object);
+                           file, a->path, a->object);
     gi_vec3 lo = s->positions[o->first_vertex], hi = lo;
     for (uint32_t i = 1; i < o->vertex_count; i++) {
         lo = gi_min_v3(lo, s->positions[o->first_vertex + i]);
@@ -206,7 +204,7 @@ int gi_detp_anim_resolve(gi_detp_anim_params *a, const gi_scene *s, const char *
     return 0;
 }
 
-gi_mat4 gi_detp_anim_matrix(const double pivot[3], const double translate[3],
+gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3],
                             const double q[4], double scale)
 {
     double w = q[0], x = q[1], y = q[2], z = q[3];
@@ -261,24 +259,24 @@ static void slerp(const double a[4], const double b[4], double t, double out[4])
 
 /* (1 - t) a + t b, not a + t (b - a): exact at both ends; and a itself
  * when a == b, so that a pose held between equal keys is the very same
- * pose (a frame that does not move changes nothing, gi_detp_anim_still). */
+ * pose (a frame that does not move changes nothing, gi_anim_still). */
 static double mix(double a, double b, double t)
 {
     return a == b ? a : (1.0 - t) * a + t * b;
 }
 
-static gi_mat4 key_matrix(const gi_detp_anim_params *a, const gi_detp_anim_key *k)
+static gi_mat4 key_matrix(const gi_anim *a, const gi_anim_key *k)
 {
-    return gi_detp_anim_matrix(a->pivot, k->translate, k->rotation, k->scale);
+    return gi_anim_matrix(a->pivot, k->translate, k->rotation, k->scale);
 }
 
-void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *out)
+void gi_anim_pose(const gi_anim *a, uint32_t frame, gi_mat4 *out)
 {
     if (!a->enabled || a->key_count == 0) {
         *out = gi_mat4_identity();
         return;
     }
-    const gi_detp_anim_key *k = a->keys;
+    const gi_anim_key *k = a->keys;
     uint32_t n = a->key_count;
     if (frame <= k[0].frame) {
         *out = key_matrix(a, &k[0]);
@@ -301,27 +299,27 @@ void gi_detp_anim_pose(const gi_detp_anim_params *a, uint32_t frame, gi_mat4 *ou
         *out = key_matrix(a, &k[lo]);
         return;
     }
-    const gi_detp_anim_key *k0 = &k[lo], *k1 = &k[hi];
+    const gi_anim_key *k0 = &k[lo], *k1 = &k[hi];
     double t = (double)(frame - k0->frame) / (double)(k1->frame - k0->frame);
     double tr[3], q[4];
     for (int i = 0; i < 3; i++)
         tr[i] = mix(k0->translate[i], k1->translate[i], t);
     double s = mix(k0->scale, k1->scale, t);
     slerp(k0->rotation, k1->rotation, t, q);
-    *out = gi_detp_anim_matrix(a->pivot, tr, q, s);
+    *out = gi_anim_matrix(a->pivot, tr, q, s);
 }
 
-int gi_detp_anim_still(const gi_detp_anim_params *a, uint32_t frame)
+int gi_anim_still(const gi_anim *a, uint32_t frame)
 {
     if (frame == 0)
         return 0;
     gi_mat4 before, now;
-    gi_detp_anim_pose(a, frame - 1, &before);
-    gi_detp_anim_pose(a, frame, &now);
+    gi_anim_pose(a, frame - 1, &before);
+    gi_anim_pose(a, frame, &now);
     return memcmp(&before, &now, sizeof now) == 0;
 }
 
-void gi_detp_anim_warn_keys(const gi_detp_anim_params *a, const gi_scene *s, const char *file)
+void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file)
 {
     if (!a->enabled)
         return;
@@ -349,9 +347,9 @@ void gi_detp_anim_warn_keys(const gi_detp_anim_params *a, const gi_scene *s, con
         }
         if (phi.x < slo.x || plo.x > shi.x || phi.y < slo.y || plo.y > shi.y || phi.z < slo.z ||
             plo.z > shi.z) {
-            gi_warn("%s: " ANIM_PATH ".keyframes[%u]: at frame %u the mobile lies wholly "
+            gi_warn("%s: %s.keyframes[%u]: at frame %u the mobile lies wholly "
                     "outside the box of the scene's other objects ([%g, %g, %g] to [%g, %g, %g])",
-                    file, k, a->keys[k].frame, slo.x, slo.y, slo.z, shi.x, shi.y, shi.z);
+                    file, a->path, k, a->keys[k].frame, slo.x, slo.y, slo.z, shi.x, shi.y, shi.z);
             return; /* one is enough to look at the keys again */
         }
     }

@@ -1,0 +1,82 @@
+/* gi_anim: the "animation" block of a detp or pt job (docs/job-format.md,
+ * "### animation"): which mobile object moves, over how many frames, and
+ * its keyframed pose; parsed strictly, resolved against the scene, and
+ * evaluated per frame as an affine matrix.
+ *
+ * A key's pose maps the object's as-loaded (refined) world-space vertices p
+ * to  pivot + translate + R * (scale * (p - pivot)),  pivot = the centre of
+ * the object's as-loaded bounding box, so rotate and scale act in place.
+ * Between keys translate and scale are linear and R is the slerp of unit
+ * quaternions (the short way); before the first key and after the last the
+ * nearest key holds.
+ *
+ * Everything is stored inline (no heap): the methods free their params
+ * with a plain free(), and every parse or resolve error path stays
+ * leak-free without a destructor. */
+#ifndef GI_ANIM_H
+#define GI_ANIM_H
+
+#include <stdint.h>
+
+#include "gi_json.h"
+#include "gi_math.h"
+#include "gi_scene.h"
+
+#define GI_ANIM_MAX_FRAMES 100000
+#define GI_ANIM_MAX_KEYS 1024
+#define GI_ANIM_NAME_MAX 256 /* object name, with its NUL */
+#define GI_ANIM_PATH_MAX 32  /* the block's path in the job, with its NUL */
+
+typedef struct gi_anim_key {
+    uint32_t frame;
+    double translate[3];
+    double rotation[4]; /* unit quaternion (w, x, y, z), w >= 0 */
+    double scale;       /* uniform, > 0 */
+} gi_anim_key;
+
+typedef struct gi_anim {
+    int enabled; /* the job has an animation block */
+    char path[GI_ANIM_PATH_MAX]; /* "detp.animation": what errors name */
+    char object[GI_ANIM_NAME_MAX];
+    uint32_t frames; /* frames 0 .. frames-1 */
+    uint32_t key_count;
+    gi_anim_key keys[GI_ANIM_MAX_KEYS]; /* frames strictly increasing */
+
+    /* Resolved against the (refined) scene by gi_anim_resolve. */
+    uint32_t object_index;
+    double pivot[3]; /* centre of the object's as-loaded bounding box */
+} gi_anim;
+
+/* Parses the animation object `block` found at `path` ("detp.animation";
+ * NULL block: no animation, enabled = 0). The block may also hold the
+ * method's own `extra_keys` (NULL-terminated, or NULL), which the method
+ * parses. Errors name the field path, e.g. "detp.animation.keyframes[2].frame". */
+int gi_anim_parse(gi_anim *a, const cJSON *block, const char *path,
+                  const char *const *extra_keys, gi_jv *v);
+
+/* Finds the object in the scene (it must exist, be "mobile": true and not
+ * emissive) and takes the pivot from its current vertices. Call after any
+ * refinement; errors are "<file>: <path>.object: ...". */
+int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file,
+                         gi_error *err);
+
+/* The object-to-pose matrix of `frame` (applied to the as-loaded world-space
+ * vertices). At a key's frame it is exactly that key's pose; an all-default
+ * pose is exactly the identity. Frames past the last key hold it. */
+void gi_anim_pose(const gi_anim *a, uint32_t frame, gi_mat4 *out);
+/* 1 if the mobile does not move into `frame` (>= 1): its pose is the very
+ * same as at frame - 1 (a held shot, frames before the first key or after
+ * the last, equal keys), so nothing of the frame before changes. */
+int gi_anim_still(const gi_anim *a, uint32_t frame);
+/* Warns (gi_warn) when a key puts the mobile (resolved) wholly outside the
+ * box of the scene's other objects: most likely a slip, a translate in the
+ * wrong units or with the wrong sign; not refused, since an object may fly
+ * over an open scene. */
+void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file);
+
+/* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
+ * and scale about `pivot` (what gi_anim_pose builds; for tests). */
+gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3],
+                            const double q[4], double scale);
+
+#endif
