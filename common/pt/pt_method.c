@@ -1,6 +1,15 @@
 /* pt_method: the path tracer as a farm method. A task is an image tile and
  * a range of samples; its result is the tile's per-pixel sums; merge adds
- * them; finish divides by the sample count and writes the image. */
+ * them; finish divides by the sample count and writes the image.
+ *
+ * An animation (pt.animation: one mobile object keyframed, as detp's) is
+ * its frames one after another: a frame's tasks carry its number, the
+ * workers pose the mobile for it, and finish writes NAME.0003.exr and
+ * plans the next frame. Every frame draws the same random numbers (keyed
+ * by seed, pixel and sample, not frame), so a pixel whose paths never meet
+ * the mobile has the same value in every frame, bit for bit: the still
+ * parts of the picture do not flicker with noise, and a frame whose pose is
+ * the very same as the frame before's is written again without tasks. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -21,7 +30,8 @@
 #define PT_VALUES_PER_PIXEL 4
 
 typedef struct pt_state {
-    double *sum; /* width * height * PT_VALUES_PER_PIXEL */
+    double *sum;    /* width * height * PT_VALUES_PER_PIXEL */
+    uint32_t frame; /* an animation's frame being computed */
 } pt_state;
 
 void gi_pt_params_default(gi_pt_params *p)
@@ -36,24 +46,29 @@ void gi_pt_params_default(gi_pt_params *p)
 
 static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
-    gi_pt_params *p = gi_xcalloc(1, sizeof *p);
-    job->params = p;
+    gi_pt_job_params *jp = gi_xcalloc(1, sizeof *jp);
+    gi_pt_params *p = &jp->pt;
+    job->params = jp;
     gi_pt_params_default(p);
+    snprintf(jp->anim.path, sizeof jp->anim.path, "pt.animation");
     if (!params)
         return 0;
     static const char *const keys[] = {"spp", "max_bounces", "rr_depth", "tile",
-                                       "pass_spp", "strategy", NULL};
+                                       "pass_spp", "strategy", "animation", NULL};
     static const char *const strategies[] = {"mis", "bsdf", "light", NULL};
     int64_t spp = p->spp, maxb = p->max_bounces, rr = p->rr_depth, tile = p->tile,
             pass = -1;
     int strategy = 0;
+    const cJSON *anim;
     if (gi_jv_keys(v, params, "pt", keys) ||
         gi_jv_int(v, params, "pt", "spp", 0, 1, PT_MAX_SPP, &spp) ||
         gi_jv_int(v, params, "pt", "max_bounces", 0, -1, 100000, &maxb) ||
         gi_jv_int(v, params, "pt", "rr_depth", 0, 0, 100000, &rr) ||
         gi_jv_int(v, params, "pt", "tile", 0, 4, 4096, &tile) ||
         gi_jv_int(v, params, "pt", "pass_spp", 0, 1, PT_MAX_SPP, &pass) ||
-        gi_jv_enum(v, params, "pt", "strategy", 0, strategies, &strategy))
+        gi_jv_enum(v, params, "pt", "strategy", 0, strategies, &strategy) ||
+        gi_jv_member_object(v, params, "pt", "animation", 0, &anim) ||
+        gi_anim_parse(&jp->anim, anim, "pt.animation", NULL, v))
         return -1;
     p->spp = (int)spp;
     p->max_bounces = (int)maxb;
@@ -64,6 +79,8 @@ static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
         return gi_jv_fail(v, "pt.pass_spp", "%d is more than spp (%d)", p->pass_spp, p->spp);
     p->strategy = (gi_pt_strategy)strategy;
     int passes = (p->spp + p->pass_spp - 1) / p->pass_spp;
+    /* A frame's tasks are planned when the frame before is written: the
+     * most at once is one frame's. */
     return gi_job_check_tasks(v, "pt.tile",
                               gi_tiles_count(job->width, job->height, p->tile) * passes,
                               "%d x %d pixels in tiles of %d, %d passes of %d spp (raise pt.tile "
@@ -71,17 +88,34 @@ static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
                               job->width, job->height, p->tile, passes, p->pass_spp);
 }
 
-static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+/* An animation's mobile, found in the scene wherever the scene is loaded
+ * (coordinator and workers); its keys' warning is the coordinator's. */
+static int pt_check_scene(gi_job *job, gi_error *err)
 {
-    const gi_pt_params *p = job->params;
-    pt_state *st = gi_xcalloc(1, sizeof *st);
-    st->sum = gi_try_calloc((size_t)job->width * (size_t)job->height,
-                            PT_VALUES_PER_PIXEL * sizeof(double), err, "pt accumulator");
-    if (!st->sum) {
-        free(st);
+    gi_pt_job_params *jp = job->params;
+    if (gi_anim_resolve(&jp->anim, &job->scene, job->file, err))
         return -1;
-    }
-    job->state = st;
+    if (!job->on_worker)
+        gi_anim_warn_keys(&jp->anim, &job->scene, job->file);
+    return 0;
+}
+
+/* Output paths name the frame being computed (NAME.0003.exr). */
+static void set_frame(gi_job *job, const pt_state *st)
+{
+    const gi_pt_job_params *jp = job->params;
+    if (!jp->anim.enabled)
+        return;
+    job->in_frame = 1;
+    job->frame = st->frame;
+    job->frame_count = jp->anim.frames;
+}
+
+/* The tasks of the frame st->frame (a still's: its only ones). */
+static void plan_frame(gi_job *job, const pt_state *st, gi_task_queue *q)
+{
+    const gi_pt_job_params *jp = job->params;
+    const gi_pt_params *p = &jp->pt;
     /* Passes outermost: the first pass covers the whole image, so a
      * cancelled or previewed job has a complete (noisier) image early. */
     gi_buf extra;
@@ -91,31 +125,59 @@ static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
         gi_buf_reset(&extra);
         gi_buf_put_u32(&extra, (uint32_t)s0);
         gi_buf_put_u32(&extra, (uint32_t)s1);
+        if (jp->anim.enabled)
+            gi_buf_put_u32(&extra, st->frame); /* the workers pose the mobile */
         gi_tiles_plan(q, PT_TASK_TILE, job->width, job->height, p->tile, s1 - s0, &extra);
     }
     gi_buf_free(&extra);
+}
+
+static pt_state *state_new(const gi_job *job, gi_error *err)
+{
+    pt_state *st = gi_xcalloc(1, sizeof *st);
+    st->sum = gi_try_calloc((size_t)job->width * (size_t)job->height,
+                            PT_VALUES_PER_PIXEL * sizeof(double), err, "pt accumulator");
+    if (!st->sum) {
+        free(st);
+        return NULL;
+    }
+    return st;
+}
+
+static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    pt_state *st = state_new(job, err);
+    if (!st)
+        return -1;
+    job->state = st;
+    set_frame(job, st);
+    plan_frame(job, st, q);
     return 0;
 }
 
 int gi_pt_task_decode(const gi_job *job, const gi_task *t, gi_pt_task *tl, gi_error *err)
 {
+    const gi_pt_job_params *jp = job->params;
     gi_reader r;
     gi_reader_init(&r, t->payload.data, t->payload.len, "pt task");
     if (gi_tile_read(&r, job->width, job->height, &tl->tile, err))
         return -1;
     tl->s0 = gi_get_u32(&r);
     tl->s1 = gi_get_u32(&r);
+    tl->frame = jp->anim.enabled ? gi_get_u32(&r) : 0;
     if (gi_reader_finish(&r, err))
         return -1;
+    if (jp->anim.enabled && tl->frame >= jp->anim.frames)
+        return gi_fail(err, GI_EPROTO, "pt task %llu: frame %u past the animation's %u",
+                       (unsigned long long)t->id, tl->frame, jp->anim.frames);
     if (tl->s0 >= tl->s1)
         return gi_fail(err, GI_EPROTO, "pt task %llu: empty sample range",
                        (unsigned long long)t->id);
     /* Up to 2^32 samples a pixel would hold the worker until the task's
      * timeout, and be merged into pixels the job never asked for. */
-    const gi_pt_params *p = job->params;
-    if (tl->s1 > (uint32_t)p->spp)
+    if (tl->s1 > (uint32_t)jp->pt.spp)
         return gi_fail(err, GI_EPROTO, "pt task %llu: samples [%u, %u) past the job's %d",
-                       (unsigned long long)t->id, tl->s0, tl->s1, p->spp);
+                       (unsigned long long)t->id, tl->s0, tl->s1, jp->pt.spp);
     return 0;
 }
 
@@ -127,6 +189,11 @@ int gi_pt_task_decode(const gi_job *job, const gi_task *t, gi_pt_task *tl, gi_er
 typedef struct pt_worker {
     gi_pt_path *paths; /* PT_WAVEFRONT */
     gi_pt_wavefront wf;
+    /* An animation's mobile as loaded, and the frame the scene and the ray
+     * tracer are posed for (posed = 0: as loaded). */
+    gi_vec3 *base_pos, *base_nrm;
+    int posed;
+    uint32_t posed_frame;
 } pt_worker;
 
 static void pt_worker_free(void *state)
@@ -134,6 +201,8 @@ static void pt_worker_free(void *state)
     pt_worker *w = state;
     free(w->paths);
     gi_pt_wavefront_free(&w->wf);
+    free(w->base_pos);
+    free(w->base_nrm);
     free(w);
 }
 
@@ -148,12 +217,39 @@ static pt_worker *pt_worker_get(gi_worker_ctx *ctx)
     return ctx->method_state;
 }
 
+/* The scene and the ray tracer with the mobile at `frame`'s pose, always
+ * from its vertices as loaded: the same bits whatever frames came before. */
+static int pose(gi_worker_ctx *ctx, pt_worker *w, uint32_t frame, gi_error *err)
+{
+    const gi_anim *a = &((const gi_pt_job_params *)ctx->job.params)->anim;
+    if (w->posed && w->posed_frame == frame)
+        return 0;
+    if (!w->base_pos &&
+        gi_scene_object_copy_base(&ctx->job.scene, a->object_index, &w->base_pos, &w->base_nrm,
+                                  err))
+        return -1;
+    gi_mat4 m;
+    gi_anim_pose(a, frame, &m);
+    w->posed = 0;
+    if (gi_scene_pose_object(&ctx->job.scene, a->object_index, w->base_pos, w->base_nrm, &m,
+                             err) ||
+        gi_rt_update_object(&ctx->rt, a->object_index, err))
+        return -1;
+    w->posed = 1;
+    w->posed_frame = frame;
+    return 0;
+}
+
 static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_job *job = &ctx->job;
-    const gi_pt_params *p = job->params;
+    const gi_pt_job_params *jp = job->params;
+    const gi_pt_params *p = &jp->pt;
     gi_pt_task tl;
     if (gi_pt_task_decode(job, t, &tl, err))
+        return -1;
+    pt_worker *w = pt_worker_get(ctx);
+    if (jp->anim.enabled && pose(ctx, w, tl.frame, err))
         return -1;
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
@@ -161,7 +257,6 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     uint32_t tw = tl.tile.x1 - tl.tile.x0, ns = tl.s1 - tl.s0;
     size_t npix = (size_t)tw * (tl.tile.y1 - tl.tile.y0), total = npix * ns;
     double *acc = gi_xcalloc(npix * PT_VALUES_PER_PIXEL, sizeof *acc);
-    pt_worker *w = pt_worker_get(ctx);
     gi_pt_path *paths = w->paths;
     /* Path j is sample s0 + j % ns of pixel j / ns: each pixel's samples are
      * added in sample order whatever the chunking. */
@@ -247,6 +342,9 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
     gi_pt_task tl;
     if (gi_pt_task_decode(job, t, &tl, err))
         return -1;
+    if (tl.frame != st->frame) /* planned for this frame; merged before it ends */
+        return gi_fail(err, GI_EPROTO, "pt task %llu: a result of frame %u during frame %u",
+                       (unsigned long long)t->id, tl.frame, st->frame);
     size_t npix = (size_t)(tl.tile.x1 - tl.tile.x0) * (tl.tile.y1 - tl.tile.y0);
     if (result->len != npix * PT_VALUES_PER_PIXEL * 8)
         return gi_fail(err, GI_EPROTO, "pt task %llu: result has %zu bytes, expected %zu",
@@ -265,10 +363,11 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
     return gi_reader_finish(&r, err);
 }
 
-static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+/* The image of the sums so far (a frame's, once all its tasks merged). */
+static int write_image(gi_job *job, const pt_state *st, gi_error *err)
 {
-    const gi_pt_params *p = job->params;
-    pt_state *st = job->state;
+    const gi_pt_job_params *jp = job->params;
+    const gi_pt_params *p = &jp->pt;
     gi_image img;
     static const char *const names[] = {"R", "G", "B"};
     if (gi_image_init(&img, job->width, job->height, 3, names, err))
@@ -288,38 +387,91 @@ static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
             counted++;
         }
     }
-    gi_info("%s: mean relative standard error per pixel %.4f", job->name,
-            counted ? rel_err_sum / counted : 0.0);
+    if (jp->anim.enabled)
+        gi_info("%s: frame %u: mean relative standard error per pixel %.4f", job->name,
+                st->frame, counted ? rel_err_sum / counted : 0.0);
+    else
+        gi_info("%s: mean relative standard error per pixel %.4f", job->name,
+                counted ? rel_err_sum / counted : 0.0);
     int rc = gi_write_image_outputs(job, &img, err);
     gi_image_free(&img);
     return rc;
 }
 
+/* Writes the frame's image, then plans the next frame that moves; the
+ * frames between whose pose is the frame before's are the same image,
+ * written again. A failed write leaves the frame and its sums as they
+ * were, for finish again. */
+static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    const gi_pt_job_params *jp = job->params;
+    pt_state *st = job->state;
+    for (;;) {
+        set_frame(job, st);
+        if (write_image(job, st, err))
+            return -1;
+        if (!jp->anim.enabled || st->frame + 1 >= jp->anim.frames) {
+            job->in_frame = 0;
+            return 0;
+        }
+        st->frame++;
+        if (!gi_anim_still(&jp->anim, st->frame))
+            break;
+    }
+    memset(st->sum, 0,
+           (size_t)job->width * job->height * PT_VALUES_PER_PIXEL * sizeof *st->sum);
+    set_frame(job, st);
+    plan_frame(job, st, fq);
+    return 0;
+}
+
 static int pt_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
+    const gi_pt_job_params *jp = job->params;
     const pt_state *st = job->state;
+    (void)err;
+    if (jp->anim.enabled)
+        gi_buf_put_u32(out, st->frame);
     gi_buf_put_f64s(out, st->sum, (size_t)job->width * job->height * PT_VALUES_PER_PIXEL);
     return 0;
 }
 
 static int pt_load(gi_job *job, gi_reader *in, gi_error *err)
 {
-    pt_state *st = gi_xcalloc(1, sizeof *st);
-    size_t n = (size_t)job->width * job->height * PT_VALUES_PER_PIXEL;
-    st->sum = gi_try_calloc(n, sizeof(double), err, "pt accumulator");
-    job->state = st;
-    if (!st->sum)
+    const gi_pt_job_params *jp = job->params;
+    pt_state *st = state_new(job, err);
+    if (!st)
         return -1;
+    job->state = st;
+    if (jp->anim.enabled) {
+        st->frame = gi_get_u32(in);
+        if (!in->failed && st->frame >= jp->anim.frames)
+            return gi_fail(err, GI_EPROTO, "pt checkpoint: frame %u past the animation's %u",
+                           st->frame, jp->anim.frames);
+    }
+    size_t n = (size_t)job->width * job->height * PT_VALUES_PER_PIXEL;
     if (gi_get_f64s(in, st->sum, n))
         return gi_fail(err, GI_EPROTO, "pt checkpoint: truncated accumulator");
+    set_frame(job, st);
     return 0;
 }
 
-/* finish only reads the sums: it can always write the image again. */
+/* finish only reads the sums (and moves to the next frame only once the
+ * frame is written): it can always write the image again. */
 static int pt_can_finish_again(const gi_job *job)
 {
     (void)job;
     return 1;
+}
+
+/* An animation's frame. Its frames count alike (a held frame, which costs
+ * nothing, too). */
+static void pt_progress(const gi_job *job, gi_job_progress *out)
+{
+    const gi_pt_job_params *jp = job->params;
+    const pt_state *st = job->state;
+    out->frame = jp->anim.enabled ? st->frame : 0;
+    out->frames = jp->anim.enabled ? jp->anim.frames : 1;
 }
 
 static void pt_release(gi_job *job)
@@ -342,7 +494,7 @@ const gi_method gi_method_pt = {
     .output_kinds = pt_outputs,
     .default_outputs = pt_outputs,
     .parse = pt_parse,
-    .check_scene = NULL,
+    .check_scene = pt_check_scene,
     .plan = pt_plan,
     .run = pt_run,
     .check_result = pt_check_result,
@@ -352,5 +504,6 @@ const gi_method gi_method_pt = {
     .save = pt_save,
     .load = pt_load,
     .can_finish_again = pt_can_finish_again,
+    .progress = pt_progress,
     .release = pt_release,
 };

@@ -5,9 +5,9 @@
  * Quadrature's task payloads are in fuzz_quad.
  *
  * The first byte picks the decoder (% 10: 0 pt, 1..7 detp's task kinds,
- * 8 radiosity FF, 9 radiosity tile); its bit 7 takes the detp job without
- * an animation, and radiosity tiles as a worker reads them (emissions
- * unknown). The rest is the payload, read against a fixed small job.
+ * 8 radiosity FF, 9 radiosity tile); its bit 7 takes the pt job with an
+ * animation, the detp job without one, and radiosity tiles as a worker
+ * reads them (emissions unknown). The rest is the payload, read against a fixed small job.
  *
  * Any payload must decode or fail with GI_EPROTO and a one-line message,
  * never crash, leak or hang. One that decodes must be in the job's range
@@ -40,7 +40,7 @@
 
 static const char HASH[] = "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef";
 
-static gi_pt_params pt_params;
+static gi_pt_job_params pt_params, pt_anim_params;
 static gi_detp_params detp_params, detp_still_params;
 
 static void jobs_init(gi_job *job, int still)
@@ -48,8 +48,12 @@ static void jobs_init(gi_job *job, int still)
     memset(job, 0, sizeof *job);
     job->width = WIDTH;
     job->height = HEIGHT;
-    gi_pt_params_default(&pt_params);
-    pt_params.spp = SPP;
+    memset(&pt_params, 0, sizeof pt_params);
+    gi_pt_params_default(&pt_params.pt);
+    pt_params.pt.spp = SPP;
+    pt_anim_params = pt_params;
+    pt_anim_params.anim.enabled = 1;
+    pt_anim_params.anim.frames = FRAMES;
     memset(&detp_params, 0, sizeof detp_params);
     detp_params.photon_count = PHOTONS;
     detp_params.batch = BATCH;
@@ -95,7 +99,7 @@ static int one(gi_job *job, int which, int flag, gi_task *t)
     const uint8_t *in = t->payload.data;
     size_t n = t->payload.len;
     if (which == 0) {
-        job->params = &pt_params;
+        job->params = flag ? &pt_anim_params : &pt_params;
         t->kind = PT_TASK_TILE;
         gi_pt_task pt;
         rc = gi_pt_task_decode(job, t, &pt, &err);
@@ -103,11 +107,13 @@ static int one(gi_job *job, int which, int flag, gi_task *t)
             check_error(rc, &err);
         } else {
             tile_in_image(&pt.tile);
-            if (pt.s0 >= pt.s1 || pt.s1 > SPP)
+            if (pt.s0 >= pt.s1 || pt.s1 > SPP || pt.frame >= (flag ? FRAMES : 1))
                 abort();
             put_tile(&out, &pt.tile);
             gi_buf_put_u32(&out, pt.s0);
             gi_buf_put_u32(&out, pt.s1);
+            if (flag)
+                gi_buf_put_u32(&out, pt.frame);
             same(&out, in, n);
         }
     } else if (which <= 7) {
@@ -225,6 +231,8 @@ static void write_seeds(const char *dir)
     gi_buf_put_u32(&b, 8);
     gi_buf_put_u32(&b, SPP);
     seed_tiles(dir, 0, &b, &count);
+    gi_buf_put_u32(&b, FRAMES - 1); /* an animation's frame */
+    seed_tiles(dir, 0x80, &b, &count);
     detp_task_in d = {.p0 = 300, .p1 = 400, .a = 10, .b = LIM, .frame = 2, .batch = 3};
     memcpy(d.hash, HASH, sizeof HASH);
     for (uint32_t kind = DETP_TASK_BATCH; kind <= DETP_TASK_ANIM_UPDATE; kind++) {

@@ -5,6 +5,7 @@
  *   check-mean FILE VALUE REL       mean radiance (RGB average) within REL of VALUE
  *   compare-mean A B REL            means of A and B within REL of each other
  *   rmse A B                        relative RMSE of A against B (RGB)
+ *   same-pixels A B                 how many pixels are the same bits in both (RGB)
  *
  * Exit status: 0 pass, 1 check failed, 2 usage or unreadable file. */
 #include <math.h>
@@ -50,7 +51,8 @@ static double image_mean(const gi_image *img, const int ch[3], double mean[3])
 int main(int argc, char **argv)
 {
     if (argc < 3) {
-        fprintf(stderr, "usage: gi-imgtool stats|check-const|check-mean|compare-mean|rmse ...\n");
+        fprintf(stderr, "usage: gi-imgtool stats|check-const|check-mean|compare-mean|rmse|"
+                        "same-pixels ...\n");
         return 2;
     }
     const char *cmd = argv[1];
@@ -85,7 +87,8 @@ int main(int argc, char **argv)
         printf("mean %.9g expected %.9g relative error %.6f\n", all, v, fabs(all - v) / v);
         status = fabs(all - v) <= rel * v ? 0 : 1;
     } else if ((strcmp(cmd, "compare-mean") == 0 && argc == 5) ||
-               (strcmp(cmd, "rmse") == 0 && argc == 4)) {
+               (strcmp(cmd, "rmse") == 0 && argc == 4) ||
+               (strcmp(cmd, "same-pixels") == 0 && argc == 4)) {
         if (load(argv[3], &b, cb)) {
             gi_image_free(&a);
             return 2;
@@ -93,6 +96,16 @@ int main(int argc, char **argv)
         if (a.width != b.width || a.height != b.height) {
             fprintf(stderr, "gi-imgtool: images differ in size\n");
             status = 2;
+        } else if (cmd[0] == 's') {
+            size_t same = 0;
+            for (size_t i = 0; i < n; i++) {
+                int c = 0;
+                while (c < 3 && memcmp(&a.pixels[i * a.channels + ca[c]],
+                                       &b.pixels[i * b.channels + cb[c]], sizeof *a.pixels) == 0)
+                    c++;
+                same += c == 3;
+            }
+            printf("%zu of %zu pixels the same\n", same, n);
         } else if (cmd[0] == 'c') {
             double ma[3], mb[3], rel = atof(argv[4]);
             double x = image_mean(&a, ca, ma), y = image_mean(&b, cb, mb);
