@@ -354,3 +354,51 @@ void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file)
         }
     }
 }
+
+int gi_anim_check_scene(gi_anim *a, gi_job *job, gi_error *err)
+{
+    if (gi_anim_resolve(a, &job->scene, job->file, err))
+        return -1;
+    if (!job->on_worker)
+        gi_anim_warn_keys(a, &job->scene, job->file);
+    return 0;
+}
+
+void gi_anim_set_frame(const gi_anim *a, gi_job *job, uint32_t frame)
+{
+    if (!a->enabled)
+        return;
+    job->in_frame = 1;
+    job->frame = frame;
+    job->frame_count = a->frames;
+}
+
+int gi_anim_write_frames(const gi_anim *a, gi_job *job, uint32_t *frame,
+                         int (*write)(gi_job *job, void *ctx, gi_error *err), void *ctx,
+                         gi_error *err)
+{
+    for (;;) {
+        gi_anim_set_frame(a, job, *frame);
+        if (write(job, ctx, err))
+            return -1;
+        if (!a->enabled || *frame + 1 >= a->frames) {
+            job->in_frame = 0;
+            return 0;
+        }
+        ++*frame;
+        if (!gi_anim_still(a, *frame)) {
+            gi_anim_set_frame(a, job, *frame);
+            return 1;
+        }
+    }
+}
+
+cJSON *gi_anim_pose_json(const gi_anim *a, uint32_t frame)
+{
+    gi_mat4 m;
+    gi_anim_pose(a, frame, &m);
+    cJSON *pose = cJSON_CreateArray();
+    for (int r = 0; r < 3; r++)
+        cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));
+    return pose;
+}

@@ -18,6 +18,7 @@
 
 #include <stdint.h>
 
+#include "gi_job.h"
 #include "gi_json.h"
 #include "gi_math.h"
 #include "gi_scene.h"
@@ -73,6 +74,26 @@ int gi_anim_still(const gi_anim *a, uint32_t frame);
  * wrong units or with the wrong sign; not refused, since an object may fly
  * over an open scene. */
 void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file);
+
+/* ---- A method's animation, frame by frame (pt and quadrature). ---- */
+
+/* check_scene's part: resolves a against the job's scene (on the
+ * coordinator and in every worker) and, on the coordinator, warns about
+ * its keys. */
+int gi_anim_check_scene(gi_anim *a, gi_job *job, gi_error *err);
+/* While a is enabled, the job's output paths name `frame` (NAME.0003.exr). */
+void gi_anim_set_frame(const gi_anim *a, gi_job *job, uint32_t frame);
+/* Writes the outputs of *frame with write(job, ctx, err), then those of the
+ * frames after it whose pose is the very same (the same outputs, written
+ * again), moving *frame along. 1: *frame is the next frame that moves (its
+ * tasks to plan); 0: the last frame (or a still's outputs) is written; -1:
+ * writing *frame failed. */
+int gi_anim_write_frames(const gi_anim *a, gi_job *job, uint32_t *frame,
+                         int (*write)(gi_job *job, void *ctx, gi_error *err), void *ctx,
+                         gi_error *err);
+/* The pose of `frame` for a report: the rows of the 3 x 4 matrix applied to
+ * the mobile's vertices as loaded. */
+cJSON *gi_anim_pose_json(const gi_anim *a, uint32_t frame);
 
 /* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
  * and scale about `pivot` (what gi_anim_pose builds; for tests). */

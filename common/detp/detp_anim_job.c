@@ -284,11 +284,7 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     cJSON_AddStringToObject(o, "object", p->anim.object);
     /* The mobile's pose: rows of the 3x4 matrix applied to its vertices
      * as loaded. */
-    gi_mat4 m;
-    gi_anim_pose(&p->anim, a->frame, &m);
-    cJSON *pose = cJSON_AddArrayToObject(o, "pose");
-    for (int r = 0; r < 3; r++)
-        cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));
+    cJSON_AddItemToObject(o, "pose", gi_anim_pose_json(&p->anim, a->frame));
     add_num(o, "paths_tested", (double)s->photons);
     add_num(o, "paths_examined", (double)s->paths_examined);
     add_num(o, "paths_retraced", (double)s->paths_retraced);

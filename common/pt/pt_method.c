@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_anim_pose.h"
 #include "gi_camera.h"
 #include "gi_job.h"
 #include "gi_log.h"
@@ -93,22 +94,7 @@ static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
 static int pt_check_scene(gi_job *job, gi_error *err)
 {
     gi_pt_job_params *jp = job->params;
-    if (gi_anim_resolve(&jp->anim, &job->scene, job->file, err))
-        return -1;
-    if (!job->on_worker)
-        gi_anim_warn_keys(&jp->anim, &job->scene, job->file);
-    return 0;
-}
-
-/* Output paths name the frame being computed (NAME.0003.exr). */
-static void set_frame(gi_job *job, const pt_state *st)
-{
-    const gi_pt_job_params *jp = job->params;
-    if (!jp->anim.enabled)
-        return;
-    job->in_frame = 1;
-    job->frame = st->frame;
-    job->frame_count = jp->anim.frames;
+    return gi_anim_check_scene(&jp->anim, job, err);
 }
 
 /* The tasks of the frame st->frame (a still's: its only ones). */
@@ -146,11 +132,12 @@ static pt_state *state_new(const gi_job *job, gi_error *err)
 
 static int pt_plan(gi_job *job, gi_task_queue *q, gi_error *err)
 {
+    const gi_pt_job_params *jp = job->params;
     pt_state *st = state_new(job, err);
     if (!st)
         return -1;
     job->state = st;
-    set_frame(job, st);
+    gi_anim_set_frame(&jp->anim, job, 0);
     plan_frame(job, st, q);
     return 0;
 }
@@ -189,11 +176,7 @@ int gi_pt_task_decode(const gi_job *job, const gi_task *t, gi_pt_task *tl, gi_er
 typedef struct pt_worker {
     gi_pt_path *paths; /* PT_WAVEFRONT */
     gi_pt_wavefront wf;
-    /* An animation's mobile as loaded, and the frame the scene and the ray
-     * tracer are posed for (posed = 0: as loaded). */
-    gi_vec3 *base_pos, *base_nrm;
-    int posed;
-    uint32_t posed_frame;
+    gi_anim_poser poser; /* an animation's scene and ray tracer, posed */
 } pt_worker;
 
 static void pt_worker_free(void *state)
@@ -201,8 +184,7 @@ static void pt_worker_free(void *state)
     pt_worker *w = state;
     free(w->paths);
     gi_pt_wavefront_free(&w->wf);
-    free(w->base_pos);
-    free(w->base_nrm);
+    gi_anim_poser_free(&w->poser);
     free(w);
 }
 
@@ -217,29 +199,6 @@ static pt_worker *pt_worker_get(gi_worker_ctx *ctx)
     return ctx->method_state;
 }
 
-/* The scene and the ray tracer with the mobile at `frame`'s pose, always
- * from its vertices as loaded: the same bits whatever frames came before. */
-static int pose(gi_worker_ctx *ctx, pt_worker *w, uint32_t frame, gi_error *err)
-{
-    const gi_anim *a = &((const gi_pt_job_params *)ctx->job.params)->anim;
-    if (w->posed && w->posed_frame == frame)
-        return 0;
-    if (!w->base_pos &&
-        gi_scene_object_copy_base(&ctx->job.scene, a->object_index, &w->base_pos, &w->base_nrm,
-                                  err))
-        return -1;
-    gi_mat4 m;
-    gi_anim_pose(a, frame, &m);
-    w->posed = 0;
-    if (gi_scene_pose_object(&ctx->job.scene, a->object_index, w->base_pos, w->base_nrm, &m,
-                             err) ||
-        gi_rt_update_object(&ctx->rt, a->object_index, err))
-        return -1;
-    w->posed = 1;
-    w->posed_frame = frame;
-    return 0;
-}
-
 static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error *err)
 {
     const gi_job *job = &ctx->job;
@@ -249,7 +208,8 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     if (gi_pt_task_decode(job, t, &tl, err))
         return -1;
     pt_worker *w = pt_worker_get(ctx);
-    if (jp->anim.enabled && pose(ctx, w, tl.frame, err))
+    if (jp->anim.enabled &&
+        gi_anim_poser_pose(&w->poser, &jp->anim, &ctx->job.scene, &ctx->rt, tl.frame, err))
         return -1;
     gi_camera_frame cam;
     gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
@@ -363,9 +323,11 @@ static int pt_merge(gi_job *job, const gi_task *t, const gi_buf *result, gi_task
     return gi_reader_finish(&r, err);
 }
 
-/* The image of the sums so far (a frame's, once all its tasks merged). */
-static int write_image(gi_job *job, const pt_state *st, gi_error *err)
+/* The image of the sums so far (a frame's, once all its tasks merged);
+ * st: the pt_state. */
+static int write_image(gi_job *job, void *state, gi_error *err)
 {
+    const pt_state *st = state;
     const gi_pt_job_params *jp = job->params;
     const gi_pt_params *p = &jp->pt;
     gi_image img;
@@ -406,21 +368,11 @@ static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
 {
     const gi_pt_job_params *jp = job->params;
     pt_state *st = job->state;
-    for (;;) {
-        set_frame(job, st);
-        if (write_image(job, st, err))
-            return -1;
-        if (!jp->anim.enabled || st->frame + 1 >= jp->anim.frames) {
-            job->in_frame = 0;
-            return 0;
-        }
-        st->frame++;
-        if (!gi_anim_still(&jp->anim, st->frame))
-            break;
-    }
+    int rc = gi_anim_write_frames(&jp->anim, job, &st->frame, write_image, st, err);
+    if (rc <= 0)
+        return rc;
     memset(st->sum, 0,
            (size_t)job->width * job->height * PT_VALUES_PER_PIXEL * sizeof *st->sum);
-    set_frame(job, st);
     plan_frame(job, st, fq);
     return 0;
 }
@@ -452,7 +404,7 @@ static int pt_load(gi_job *job, gi_reader *in, gi_error *err)
     size_t n = (size_t)job->width * job->height * PT_VALUES_PER_PIXEL;
     if (gi_get_f64s(in, st->sum, n))
         return gi_fail(err, GI_EPROTO, "pt checkpoint: truncated accumulator");
-    set_frame(job, st);
+    gi_anim_set_frame(&jp->anim, job, st->frame);
     return 0;
 }
 

@@ -1,6 +1,12 @@
 /* quad_coord: the coordinator side of the quadrature method - the global
  * heap of open regions, the image accumulator, the rounds (plan, merge,
- * finish), checkpoints, and the report. Never calls Embree. */
+ * finish), checkpoints, and the report. Never calls Embree.
+ *
+ * An animation (quadrature.animation) renders its frames one after
+ * another, each a whole adaptive run from round 0 with a state of its own:
+ * its tasks carry the frame (the workers pose the mobile), finish writes
+ * NAME.0003.exr and the frame's report, then plans the next frame that
+ * moves (a held frame is the same image, written again). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,6 +42,7 @@ typedef struct quad_state {
     uint64_t evals, reevals, splits, closed, mc_samples, nonfinite;
     uint64_t open_final; /* regions open when the refinement stopped */
     double err_final;    /* and the sum of every region's error estimate then */
+    uint32_t frame;  /* an animation's frame being computed (0 for a still) */
     uint32_t round;  /* the round whose tasks are out (0: the initial regions) */
     int phase;
     double threshold_abs;
@@ -111,21 +118,29 @@ static double total_error(const quad_state *st)
     return e;
 }
 
-static void add_task(gi_task_queue *q, quad_state *st, const gi_quad_task_in *t, double cost)
+static void add_task(gi_task_queue *q, const gi_job *job, quad_state *st,
+                     const gi_quad_task_in *t, double cost)
 {
+    const gi_quad_params *p = job->params;
+    gi_quad_task_in framed = *t;
+    framed.animated = p->anim.enabled;
+    framed.frame = st->frame;
     gi_task *task = gi_task_queue_add(q, t->kind, cost);
-    gi_quad_task_encode(&task->payload, t, &st->rule);
+    gi_quad_task_encode(&task->payload, &framed, &st->rule);
     st->budget_planned += cost;
 }
 
-/* Round 0: the initial regions (initial[0] x initial[1] image tiles, each
- * path axis cut in initial_path), dealt out in order. */
-int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+/* Round 0 of `frame` (a still's: 0), in a new state: the initial regions
+ * (initial[0] x initial[1] image tiles, each path axis cut in
+ * initial_path), dealt out in order. */
+static int plan_frame(gi_job *job, uint32_t frame, gi_task_queue *q, gi_error *err)
 {
     const gi_quad_params *p = job->params;
     quad_state *st = state_new(job, err);
     if (!st)
         return -1;
+    st->frame = frame;
+    gi_anim_set_frame(&p->anim, job, frame);
     int n = p->dims;
     uint64_t splits[GI_QUAD_MAX_DIMS], count = 1;
     for (int d = 0; d < n; d++) {
@@ -135,7 +150,7 @@ int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     uint64_t per = (count + p->round_tasks - 1) / p->round_tasks;
     if (per > MAX_TASK_REGIONS)
         per = MAX_TASK_REGIONS;
-    gi_quad_task_in t = {GI_QUAD_TASK_REFINE, 0, 0.0, 0, 0, NULL, NULL};
+    gi_quad_task_in t = {.kind = GI_QUAD_TASK_REFINE};
     t.is_new = gi_xcalloc(per, 1);
     t.regions = gi_xcalloc(per, sizeof *t.regions);
     memset(t.is_new, 1, per);
@@ -152,12 +167,17 @@ int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
         s->id = gi_quad_box_id(s->lo, s->hi, n);
         s->axis = -1;
         if (t.count == per || i + 1 == count) {
-            add_task(q, st, &t, (double)t.count * (double)st->rule.points);
+            add_task(q, job, st, &t, (double)t.count * (double)st->rule.points);
             t.count = 0;
         }
     }
     gi_quad_task_in_free(&t);
     return 0;
+}
+
+int gi_quad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
+{
+    return plan_frame(job, 0, q, err);
 }
 
 /* The next refinement round: the regions with the largest errors (above
@@ -180,7 +200,8 @@ static int plan_refine_round(gi_job *job, quad_state *st, gi_task_queue *q)
         pop_leaf(st, &picked[k++]);
     uint64_t ntasks = k < (uint64_t)p->round_tasks ? k : (uint64_t)p->round_tasks;
     uint64_t per_task = ntasks ? left / ntasks : 0;
-    gi_quad_task_in t = {GI_QUAD_TASK_REFINE, st->round, st->threshold_abs, 0, 0, NULL, NULL};
+    gi_quad_task_in t = {
+        .kind = GI_QUAD_TASK_REFINE, .round = st->round, .threshold = st->threshold_abs};
     t.is_new = gi_xcalloc(p->task_regions, 1);
     t.regions = gi_xcalloc(p->task_regions, sizeof *t.regions);
     int added = 0;
@@ -201,7 +222,7 @@ static int plan_refine_round(gi_job *job, quad_state *st, gi_task_queue *q)
         if (budget == 0)
             continue;
         t.max_splits = budget;
-        add_task(q, st, &t, (double)(reeval + budget * split_cost));
+        add_task(q, job, st, &t, (double)(reeval + budget * split_cost));
         added++;
     }
     gi_quad_task_in_free(&t);
@@ -222,7 +243,7 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
         samples += gi_quad_hybrid_samples(&all[i], job->width, job->height, p->mc_spp);
     }
     uint64_t per = samples / (uint64_t)p->round_tasks + 1, acc = 0;
-    gi_quad_task_in t = {GI_QUAD_TASK_MC, 0, 0.0, 0, 0, NULL, all};
+    gi_quad_task_in t = {.kind = GI_QUAD_TASK_MC, .regions = all};
     size_t first = 0;
     int added = 0;
     for (size_t i = 0; i < n; i++) {
@@ -230,7 +251,7 @@ static int plan_mc_round(gi_job *job, quad_state *st, gi_task_queue *q)
         if (acc >= per || i + 1 - first == MAX_TASK_REGIONS || i + 1 == n) {
             t.regions = all + first;
             t.count = (uint32_t)(i + 1 - first);
-            add_task(q, st, &t, (double)acc);
+            add_task(q, job, st, &t, (double)acc);
             added++;
             first = i + 1;
             acc = 0;
@@ -374,9 +395,11 @@ static double splat_check(const gi_job *job, const quad_state *st)
     return t > 0 ? diff / t : diff;
 }
 
-static int write_outputs(gi_job *job, quad_state *st, gi_error *err)
+/* The image and the report of the state (a frame's); st: the quad_state. */
+static int write_outputs(gi_job *job, void *state, gi_error *err)
 {
     const gi_quad_params *p = job->params;
+    const quad_state *st = state;
     gi_image img;
     static const char *const names[] = {"R", "G", "B"};
     if (gi_image_init(&img, job->width, job->height, 3, names, err))
@@ -420,9 +443,48 @@ static int write_outputs(gi_job *job, quad_state *st, gi_error *err)
     cJSON_AddNumberToObject(doc, "mc_samples", (double)st->mc_samples);
     cJSON_AddNumberToObject(doc, "nonfinite_samples", (double)st->nonfinite);
     cJSON_AddNumberToObject(doc, "seconds", seconds);
+    if (p->anim.enabled) {
+        /* The frame, and the mobile's pose: rows of the 3 x 4 matrix applied
+         * to its vertices as loaded. */
+        cJSON *a = cJSON_AddObjectToObject(doc, "animation");
+        cJSON_AddNumberToObject(a, "frame", st->frame);
+        cJSON_AddNumberToObject(a, "frames", p->anim.frames);
+        cJSON_AddStringToObject(a, "object", p->anim.object);
+        cJSON_AddItemToObject(a, "pose", gi_anim_pose_json(&p->anim, st->frame));
+    }
     rc = gi_write_json_output(job, "report", doc, err);
     cJSON_Delete(doc);
     return rc;
+}
+
+static void state_free(quad_state *st)
+{
+    if (!st)
+        return;
+    gi_quad_rule_free(&st->rule);
+    free(st->image);
+    free(st->leaf);
+    free(st->leaf_free);
+    free(st->leaf_live);
+    gi_qheap_free(st->heap);
+    free(st);
+}
+
+/* The frame's outputs (a still's), then an animation's next frame that
+ * moves, in a state of its own; the frames between, whose pose is the frame
+ * before's, are the same image and report, written again. A failed write
+ * leaves the frame's state DONE as it was, for finish again. */
+static int write_frames(gi_job *job, gi_task_queue *fq, gi_error *err)
+{
+    const gi_quad_params *p = job->params;
+    quad_state *st = job->state;
+    int rc = gi_anim_write_frames(&p->anim, job, &st->frame, write_outputs, st, err);
+    if (rc <= 0)
+        return rc;
+    uint32_t next = st->frame;
+    state_free(st);
+    job->state = NULL;
+    return plan_frame(job, next, fq, err);
 }
 
 int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
@@ -458,7 +520,7 @@ int gi_quad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     } else if (st->phase == PHASE_MC) {
         st->phase = PHASE_DONE;
     }
-    return write_outputs(job, st, err);
+    return write_frames(job, fq, err);
 }
 
 /* The outputs are written once the phase is DONE, from the image and the
@@ -476,16 +538,20 @@ void gi_quad_progress(const gi_job *job, gi_job_progress *out)
     const quad_state *st = job->state;
     double left = (double)p->max_evals - st->budget_planned;
     out->cost_unplanned = st->phase == PHASE_REFINE && left > 0 ? left : 0;
+    out->frame = p->anim.enabled ? st->frame : 0;
+    out->frames = p->anim.enabled ? p->anim.frames : 1;
 }
 
 /* ---- checkpoints ---- */
 
-#define QUAD_STATE_VERSION 1u
+/* 2: the frame being computed (1: a still's, frame 0). */
+#define QUAD_STATE_VERSION 2u
 
 int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
     const quad_state *st = job->state;
     gi_buf_put_u32(out, QUAD_STATE_VERSION);
+    gi_buf_put_u32(out, st->frame);
     gi_buf_put_u32(out, st->round);
     gi_buf_put_u32(out, (uint32_t)st->phase);
     gi_buf_put_f64(out, st->threshold_abs);
@@ -514,10 +580,12 @@ int gi_quad_save(const gi_job *job, gi_buf *out, gi_error *err)
 
 int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
 {
+    const gi_quad_params *p = job->params;
     quad_state *st = state_new(job, err);
     if (!st)
         return -1;
     uint32_t version = gi_get_u32(in);
+    st->frame = version >= 2 ? gi_get_u32(in) : 0;
     st->round = gi_get_u32(in);
     st->phase = (int)gi_get_u32(in);
     st->threshold_abs = gi_get_f64(in);
@@ -535,9 +603,11 @@ int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
     st->closed = gi_get_u64(in);
     st->mc_samples = gi_get_u64(in);
     st->nonfinite = gi_get_u64(in);
-    if (in->failed || version != QUAD_STATE_VERSION || st->phase < PHASE_REFINE ||
-        st->phase > PHASE_DONE || !(st->threshold_abs >= 0))
+    if (in->failed || version < 1 || version > QUAD_STATE_VERSION || st->phase < PHASE_REFINE ||
+        st->phase > PHASE_DONE || !(st->threshold_abs >= 0) ||
+        st->frame >= (p->anim.enabled ? p->anim.frames : 1))
         return gi_fail(err, GI_EPROTO, "quadrature checkpoint: bad header");
+    gi_anim_set_frame(&p->anim, job, st->frame);
     if (gi_get_f64s(in, st->image, (size_t)job->width * job->height * GI_QUAD_CHANNELS))
         return gi_fail(err, GI_EPROTO, "quadrature checkpoint: truncated image");
     uint32_t n = gi_get_u32(in);
@@ -554,16 +624,7 @@ int gi_quad_load(gi_job *job, gi_reader *in, gi_error *err)
 
 void gi_quad_release(gi_job *job)
 {
-    quad_state *st = job->state;
-    if (st) {
-        gi_quad_rule_free(&st->rule);
-        free(st->image);
-        free(st->leaf);
-        free(st->leaf_free);
-        free(st->leaf_live);
-        gi_qheap_free(st->heap);
-        free(st);
-    }
+    state_free(job->state);
     free(job->params);
     job->state = job->params = NULL;
 }

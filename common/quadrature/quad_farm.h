@@ -34,6 +34,10 @@ typedef struct gi_quad_task_in {
     uint32_t count;
     uint8_t *is_new;
     gi_quad_summary *regions;
+    /* An animation's tasks end with their frame (the workers pose the
+     * mobile); a still's carry none. */
+    int animated;
+    uint32_t frame;
 } gi_quad_task_in;
 
 typedef struct gi_quad_result {
@@ -45,10 +49,11 @@ typedef struct gi_quad_result {
     uint32_t open_count; /* the open regions' summaries follow (decode_open) */
 } gi_quad_result;
 
-/* Task payloads. */
+/* Task payloads. decode reads a frame below `frames` after the regions
+ * when frames > 0 (an animation's task), none when 0. */
 void gi_quad_task_encode(gi_buf *b, const gi_quad_task_in *t, const gi_quad_rule *rule);
-int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task_in *out,
-                        gi_error *err);
+int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, uint32_t frames,
+                        gi_quad_task_in *out, gi_error *err);
 void gi_quad_task_in_free(gi_quad_task_in *t);
 
 /* The most a value of task `id`'s image delta may be in magnitude. The

@@ -9,6 +9,14 @@ static int quad_parse(gi_job *job, const cJSON *params, gi_jv *v)
     return gi_quad_params_parse(p, params, job->width, job->height, v);
 }
 
+/* An animation's mobile, found in the scene wherever the scene is loaded
+ * (coordinator and workers); its keys' warning is the coordinator's. */
+static int quad_check_scene(gi_job *job, gi_error *err)
+{
+    gi_quad_params *p = job->params;
+    return gi_anim_check_scene(&p->anim, job, err);
+}
+
 static const char *const quad_outputs[] = {"exr", "png", "report", NULL};
 
 const gi_method gi_method_quadrature = {
@@ -19,7 +27,7 @@ const gi_method gi_method_quadrature = {
     .output_kinds = quad_outputs,
     .default_outputs = quad_outputs,
     .parse = quad_parse,
-    .check_scene = NULL,
+    .check_scene = quad_check_scene,
     .plan = gi_quad_plan,
     .run = gi_quad_run,
     .check_result = gi_quad_check_result,

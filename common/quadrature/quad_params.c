@@ -1,6 +1,7 @@
 /* quad_params: the "quadrature" block of a job, validated strictly (every
  * key, type and range; docs/job-format.md). */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "quadrature.h"
@@ -26,6 +27,7 @@ void gi_quad_params_default(gi_quad_params *p)
     p->mc_spp = 8;
     p->max_bounces = -1;
     p->rr_depth = 3;
+    snprintf(p->anim.path, sizeof p->anim.path, "quadrature.animation");
 }
 
 static int power_of_two(int64_t v) { return v > 0 && (v & (v - 1)) == 0; }
@@ -59,7 +61,7 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
     static const char *const keys[] = {"dims", "rule", "axis", "heap", "threshold", "tolerance",
                                        "max_evals", "initial", "initial_path", "round_tasks",
                                        "task_regions", "task_splits", "hybrid", "mc_spp",
-                                       "max_bounces", "rr_depth", NULL};
+                                       "max_bounces", "rr_depth", "animation", NULL};
     static const char *const rules[] = {"boole", "genz-malik", NULL};
     static const char *const axes[] = {"marginal", "centre", NULL};
     static const char *const heaps[] = {"bucketed", "binary", "pairing", NULL};
@@ -67,7 +69,7 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
             rtasks = p->round_tasks, tregions = p->task_regions, tsplits = p->task_splits,
             spp = -1, maxb = p->max_bounces, rr = -1;
     int rule = (int)p->rule, axis = (int)p->axis_rule, heap = (int)p->heap;
-    const cJSON *initial = NULL;
+    const cJSON *initial = NULL, *anim = NULL;
     if (gi_jv_keys(v, params, "quadrature", keys) ||
         gi_jv_int(v, params, "quadrature", "dims", 0, 4, GI_QUAD_MAX_DIMS, &dims) ||
         gi_jv_enum(v, params, "quadrature", "rule", 0, rules, &rule) ||
@@ -84,7 +86,9 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
         gi_jv_bool(v, params, "quadrature", "hybrid", 0, &p->hybrid) ||
         gi_jv_int(v, params, "quadrature", "mc_spp", 0, 1, 1 << 16, &spp) ||
         gi_jv_int(v, params, "quadrature", "max_bounces", 0, -1, 100000, &maxb) ||
-        gi_jv_int(v, params, "quadrature", "rr_depth", 0, 0, 100000, &rr))
+        gi_jv_int(v, params, "quadrature", "rr_depth", 0, 0, 100000, &rr) ||
+        gi_jv_member_object(v, params, "quadrature", "animation", 0, &anim) ||
+        gi_anim_parse(&p->anim, anim, "quadrature.animation", NULL, v))
         return -1;
     if (dims % 2)
         return gi_jv_fail(v, "quadrature.dims",

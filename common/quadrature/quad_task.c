@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_anim_pose.h"
 #include "gi_job.h"
 #include "gi_worker_ctx.h"
 #include "quad_farm.h"
@@ -30,6 +31,8 @@ void gi_quad_task_encode(gi_buf *b, const gi_quad_task_in *t, const gi_quad_rule
             gi_buf_put_u8(b, t->is_new[i]);
         gi_quad_summary_put(b, &t->regions[i], rule);
     }
+    if (t->animated)
+        gi_buf_put_u32(b, t->frame);
 }
 
 void gi_quad_task_in_free(gi_quad_task_in *t)
@@ -39,8 +42,8 @@ void gi_quad_task_in_free(gi_quad_task_in *t)
     memset(t, 0, sizeof *t);
 }
 
-int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task_in *out,
-                        gi_error *err)
+int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, uint32_t frames,
+                        gi_quad_task_in *out, gi_error *err)
 {
     memset(out, 0, sizeof *out);
     if (t->kind != GI_QUAD_TASK_REFINE && t->kind != GI_QUAD_TASK_MC)
@@ -75,9 +78,17 @@ int gi_quad_task_decode(const gi_task *t, const gi_quad_rule *rule, gi_quad_task
                            (unsigned long long)t->id, i);
         }
     }
+    out->animated = frames > 0;
+    if (out->animated)
+        out->frame = gi_get_u32(&r);
     if (gi_reader_finish(&r, err)) {
         gi_quad_task_in_free(out);
         return -1;
+    }
+    if (out->animated && out->frame >= frames) {
+        gi_quad_task_in_free(out);
+        return gi_fail(err, GI_EPROTO, "quadrature task %llu: frame %u past the animation's %u",
+                       (unsigned long long)t->id, out->frame, frames);
     }
     return 0;
 }
@@ -148,6 +159,7 @@ typedef struct quad_worker {
      * the one in the image), or NULL for regions made here. */
     const gi_quad_summary **root;
     size_t root_cap;
+    gi_anim_poser poser; /* an animation's scene and ray tracer, posed */
 } quad_worker;
 
 static void worker_free(void *state)
@@ -161,6 +173,7 @@ static void worker_free(void *state)
     gi_quad_path_free(&w->path);
     gi_quad_rule_free(&w->rule);
     free(w->root);
+    gi_anim_poser_free(&w->poser);
     free(w);
 }
 
@@ -346,9 +359,15 @@ int gi_quad_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_erro
     quad_worker *w = worker_get(ctx, err);
     if (!w)
         return -1;
+    const gi_quad_params *p = ctx->job.params;
     gi_quad_task_in t;
-    if (gi_quad_task_decode(task, &w->rule, &t, err))
+    if (gi_quad_task_decode(task, &w->rule, p->anim.enabled ? p->anim.frames : 0, &t, err))
         return -1;
+    if (t.animated &&
+        gi_anim_poser_pose(&w->poser, &p->anim, &ctx->job.scene, &ctx->rt, t.frame, err)) {
+        gi_quad_task_in_free(&t);
+        return -1;
+    }
     int rc = t.kind == GI_QUAD_TASK_REFINE ? run_refine(ctx, w, &t, result, err)
                                            : run_mc(ctx, w, &t, result);
     gi_quad_task_in_free(&t);

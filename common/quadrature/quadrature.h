@@ -26,6 +26,7 @@
 
 #include <stdint.h>
 
+#include "gi_anim.h"
 #include "gi_method.h"
 #include "quad_heap.h"
 #include "quad_rule.h"
@@ -47,6 +48,7 @@ typedef struct gi_quad_params {
     int mc_spp;                   /* its samples per pixel */
     int max_bounces;              /* scattering events; -1: unlimited */
     int rr_depth;                 /* Russian roulette start (hybrid) */
+    gi_anim anim;                 /* quadrature.animation; anim.enabled = 0 without one */
 } gi_quad_params;
 
 void gi_quad_params_default(gi_quad_params *p);

@@ -1,9 +1,10 @@
 /* fuzz_quad: libFuzzer target for the quadrature method's decoders: task
  * payloads, worker results (with the image delta; the coordinator's check
  * and the merge of what it decoded), and checkpoints. The
- * first byte picks the decoder and the rule; the rest is the input. Any
- * input must decode or fail with a message; a task that decodes must encode
- * back to the same bytes. */
+ * first byte picks the decoder (bits 0-1), the rule (bit 2) and a job
+ * animated over 5 frames (bit 3: task payloads and checkpoints carry a
+ * frame); the rest is the input. Any input must decode or fail with a
+ * message; a task that decodes must encode back to the same bytes. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +20,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gi_quad_params p;
     gi_quad_params_default(&p);
     p.rule = data[0] & 4 ? GI_QUAD_GM : GI_QUAD_BOOLE;
+    if (data[0] & 8) {
+        p.anim.enabled = 1;
+        p.anim.frames = 5;
+    }
     gi_quad_rule rule;
     if (gi_quad_job_rule(&p, &rule, &err))
         abort();
@@ -33,7 +38,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         gi_buf_init(&t.payload);
         gi_buf_put(&t.payload, in, n);
         gi_quad_task_in q;
-        if (gi_quad_task_decode(&t, &rule, &q, &err) == 0) {
+        if (gi_quad_task_decode(&t, &rule, p.anim.frames, &q, &err) == 0) {
+            if (q.animated != p.anim.enabled || q.frame >= (q.animated ? 5u : 1u))
+                abort();
             gi_buf out;
             gi_buf_init(&out);
             gi_quad_task_encode(&out, &q, &rule);

@@ -1,7 +1,7 @@
 /* Unit tests: the quadrature method through the job state machine in one
  * process (coordinator and a worker context side by side): checkpoints
- * taken between rounds resume to the same bits, damaged results and tasks
- * are refused, and the parameter block is validated. */
+ * taken between rounds (and frames) resume to the same bits, damaged
+ * results and tasks are refused, and the parameter block is validated. */
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -17,19 +17,26 @@
 #include "quadrature/quad_farm.h"
 #include "test_drive.h"
 
-static const char *job_text(int hybrid)
+/* The test job: mode 0 refinement only, 1 hybrid, 2 refinement over the
+ * 3 frames of an animation (outputs img.0000.exr ...). */
+static const char *job_text(int mode)
 {
     static char buf[2048];
     char src[1024];
     if (!realpath(gi_test_srcdir(), src))
         snprintf(src, sizeof src, "%s", gi_test_srcdir());
     snprintf(buf, sizeof buf,
-             "{\"scene\": \"%s/scenes/cornell-box/scene.json\", \"method\": \"quadrature\","
+             "{\"scene\": \"%s/scenes/cornell-box/%s\", \"method\": \"quadrature\","
              " \"seed\": 3, \"image\": {\"width\": 24, \"height\": 20},"
              " \"quadrature\": {\"rule\": \"genz-malik\", \"max_evals\": 30000, \"round_tasks\": 3,"
              " \"task_regions\": 2, \"task_splits\": 8, \"threshold\": 1e-6%s},"
              " \"outputs\": {\"exr\": \"img.exr\"}}",
-             src, hybrid ? ", \"hybrid\": true, \"mc_spp\": 1" : "");
+             src, mode == 2 ? "scene-mobile.json" : "scene.json",
+             mode == 1   ? ", \"hybrid\": true, \"mc_spp\": 1"
+             : mode == 2 ? ", \"animation\": {\"object\": \"mobile\", \"frames\": 3, \"keyframes\":"
+                           " [{\"frame\": 0, \"translate\": [340, -338.9, -90]},"
+                           " {\"frame\": 2, \"translate\": [200, -338.9, 35]}]}"
+                         : "");
     return buf;
 }
 
@@ -70,10 +77,10 @@ static int start_job(gi_job *job, gi_worker_ctx *ctx, gi_jobrun *jr, int hybrid,
     return 0;
 }
 
-static int read_file(const char *dir, gi_buf *out)
+static int read_file(const char *dir, const char *name, gi_buf *out)
 {
     char path[1024];
-    snprintf(path, sizeof path, "%s/%s/img.exr", gi_test_tmpdir(), dir);
+    snprintf(path, sizeof path, "%s/%s/%s", gi_test_tmpdir(), dir, name);
     FILE *f = fopen(path, "rb");
     if (!f)
         return -1;
@@ -87,7 +94,11 @@ static int read_file(const char *dir, gi_buf *out)
 
 GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
 {
-    for (int hybrid = 0; hybrid < 2; hybrid++) {
+    static const char *const frame_names[] = {"img.0000.exr", "img.0001.exr", "img.0002.exr"};
+    static const char *const still_name[] = {"img.exr"};
+    for (int hybrid = 0; hybrid < 3; hybrid++) {
+        const char *const *names = hybrid == 2 ? frame_names : still_name;
+        int nfiles = hybrid == 2 ? 3 : 1;
         gi_error err;
         gi_job job;
         GI_REQUIRE_OK(load_job(&job, hybrid, "ref", &err));
@@ -102,9 +113,11 @@ GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
         GI_CHECK_MSG(tasks > 12, "only %llu tasks", (unsigned long long)tasks);
         gi_jobrun_free(&jr);
         gi_job_free(&job);
-        gi_buf ref;
-        gi_buf_init(&ref);
-        GI_REQUIRE(read_file("ref", &ref) == 0);
+        gi_buf ref[3];
+        for (int k = 0; k < nfiles; k++) {
+            gi_buf_init(&ref[k]);
+            GI_REQUIRE(read_file("ref", names[k], &ref[k]) == 0);
+        }
 
         /* Stop after k tasks (inside round 0, between rounds, in the Monte
          * Carlo round), checkpoint, drop everything, restore, finish. */
@@ -127,15 +140,20 @@ GI_TEST(test_quad_checkpoint_restore_gives_the_same_image)
             GI_CHECK(jr.finished && jr.task_count == tasks);
             gi_jobrun_free(&jr);
             gi_job_free(&job);
-            gi_buf img;
-            gi_buf_init(&img);
-            GI_REQUIRE(read_file(out, &img) == 0);
-            GI_CHECK_MSG(img.len == ref.len && memcmp(img.data, ref.data, ref.len) == 0,
-                         "hybrid %d: stop after %d tasks: the image differs", hybrid, stops[s]);
-            gi_buf_free(&img);
+            for (int k = 0; k < nfiles; k++) {
+                gi_buf img;
+                gi_buf_init(&img);
+                GI_REQUIRE(read_file(out, names[k], &img) == 0);
+                GI_CHECK_MSG(img.len == ref[k].len &&
+                                 memcmp(img.data, ref[k].data, ref[k].len) == 0,
+                             "mode %d: stop after %d tasks: %s differs", hybrid, stops[s],
+                             names[k]);
+                gi_buf_free(&img);
+            }
             gi_buf_free(&ck);
         }
-        gi_buf_free(&ref);
+        for (int k = 0; k < nfiles; k++)
+            gi_buf_free(&ref[k]);
         gi_worker_ctx_free(&ctx);
     }
 }
@@ -334,7 +352,7 @@ GI_TEST(test_quad_outputs_are_the_same_merged_from_the_checks_decoding)
             gi_job_free(&job);
             gi_worker_ctx_free(&ctx);
             gi_buf_init(&img[checked]);
-            GI_REQUIRE(read_file(out, &img[checked]) == 0);
+            GI_REQUIRE(read_file(out, "img.exr", &img[checked]) == 0);
         }
         GI_CHECK_MSG(img[0].len == img[1].len && memcmp(img[0].data, img[1].data, img[0].len) == 0,
                      "hybrid %d: the images differ", hybrid);
