@@ -1,31 +1,31 @@
 #!/bin/sh
-# pt_anim: what an animation costs the path tracer against its stills.
-# Renders scenes/cornell-box/pt-animation.json (24 frames, 256 x 256, 32
-# spp; its 24 frames all move) and the same job without its animation block
-# (one still), ROUNDS times each, alternated, with `gi render --workers
-# WORKERS`; prints the medians: the animation's wall time per frame and the
-# still's (a frame costs what a still does if frames add nothing: each
-# frame's tail, its tasks' last wave, and its image write are the extra).
-# Then how many pixels are the same bits in consecutive frames (the same
-# random numbers each frame: what the sphere does not touch is unchanged).
-#   bench/pt_anim.sh BUILD_DIR [ROUNDS] [WORKERS]
+# anim_vs_still: what an animation of a pt or quadrature job costs against
+# its stills. Renders JOB (an animation whose frames all move, e.g.
+# scenes/cornell-box/pt-animation.json) and the same job without its
+# animation block (one still, the mobile as loaded), ROUNDS times each,
+# alternated, with `gi render --workers WORKERS`; prints the medians: the
+# animation's wall time per frame and the still's (a frame costs what a
+# still does if frames add nothing: each frame's tail, its tasks' last
+# wave, and its output writes are the extra). Then how many pixels are the
+# same bits in consecutive frames (pt draws the same random numbers each
+# frame: what the mobile does not touch is unchanged).
+#   bench/anim_vs_still.sh BUILD_DIR JOB [ROUNDS] [WORKERS]
 set -eu
 BIN=${1:-build/release}
-ROUNDS=${2:-3}
-WORKERS=${3:-2}
-SRC=$(cd "$(dirname "$0")/.." && pwd)
-OUT=$(mktemp -d "${TMPDIR:-/tmp}/gi-pt-anim.XXXXXX")
+JOB=$2
+ROUNDS=${3:-3}
+WORKERS=${4:-2}
+OUT=$(mktemp -d "${TMPDIR:-/tmp}/gi-anim-still.XXXXXX")
 trap 'rm -rf "$OUT"' EXIT
-JOB="$SRC/scenes/cornell-box/pt-animation.json"
-python3 - "$JOB" "$OUT/still.json" "$SRC/scenes/cornell-box" <<'PY'
-import json, sys
+frames=$(python3 - "$JOB" "$OUT/still.json" <<'PY'
+import json, os, sys
 j = json.load(open(sys.argv[1]))
-j["scene"] = sys.argv[3] + "/" + j["scene"]
-del j["pt"]["animation"]
+j["scene"] = os.path.join(os.path.dirname(os.path.abspath(sys.argv[1])), j["scene"])
+print(j[j["method"]].pop("animation")["frames"])
 j["name"] = "still"
 json.dump(j, open(sys.argv[2], "w"))
 PY
-frames=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['pt']['animation']['frames'])" "$JOB")
+)
 timed() { # timed JOB DIR: wall seconds of gi render
     t0=$(date +%s.%N)
     "$BIN/gi" render "$1" --workers "$WORKERS" --out "$2" --progress none >/dev/null
