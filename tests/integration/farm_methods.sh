@@ -1,7 +1,7 @@
 # Every method runs on the farm unchanged: a detp, a quadrature, a
-# radiosity job and a pt animation through gi-farmd + one gi-worker (2
-# processes, loopback) give byte-identical outputs to `gi render` (the
-# animation's every frame). This also carries the data methods
+# radiosity job and pt and quadrature animations through gi-farmd + one
+# gi-worker (2 processes, loopback) give byte-identical outputs to `gi
+# render` (the animations' every frame, reports' timings aside). This also carries the data methods
 # publish for their image tiles (detp's per-vertex radiance, radiosity's
 # element radiosity) through the worker's asset fetch, and detp's across a
 # kill -9 and restart of the coordinator (re-published after the restore).
@@ -33,15 +33,25 @@ write_job "$TMP/ptanim.json" <<JOB
                                     {"frame": 3, "translate": [248, -338.9, -0.4]}]}},
  "outputs": {"exr": "anim.exr"}}
 JOB
-render_refs detp quad rad ptanim
+write_job "$TMP/quadanim.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene-mobile.json", "method": "quadrature",
+ "image": {"width": 32, "height": 32},
+ "quadrature": {"dims": 4, "max_evals": 300000,
+                "animation": {"object": "mobile", "frames": 3,
+                              "keyframes": [{"frame": 0, "translate": [340, -338.9, -90]},
+                                            {"frame": 2, "translate": [248, -338.9, -0.4]}]}},
+ "outputs": {"exr": "qanim.exr"}}
+JOB
+render_refs detp quad rad ptanim quadanim
 [ "$(ls "$TMP/ref-ptanim" | wc -l)" = 4 ] || fail "the pt animation did not write 4 frames"
+[ "$(ls "$TMP/ref-quadanim" | wc -l)" = 3 ] || fail "the quadrature animation did not write 3 frames"
 
 OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
 # shellcheck disable=SC2086
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
 PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
-for j in quad rad ptanim; do
+for j in quad rad ptanim quadanim; do
     "$GI" submit "$TMP/$j.json" --wait --out "$TMP/farm-$j" --progress none >"$TMP/$j.log" 2>&1 ||
         { cat "$TMP/$j.log"; fail "farm $j"; }
     for f in "$TMP/ref-$j"/*; do
@@ -66,4 +76,4 @@ for f in "$TMP/ref-detp"/*; do
     cmp "$f" "$TMP/farm-detp/$(basename "$f")" || fail "detp: $(basename "$f") differs from gi render"
 done
 stop_farmd "$TMP/farmd.log"
-echo "detp, quadrature, radiosity and pt animation outputs identical on the farm (detp across a coordinator restart)"
+echo "detp, quadrature, radiosity, pt and quadrature animation outputs identical on the farm (detp across a coordinator restart)"
