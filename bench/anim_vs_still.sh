@@ -41,8 +41,8 @@ median() { sort -n "$1" | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }
 a=$(median "$OUT/anim.t")
 s=$(median "$OUT/still.t")
 awk -v a="$a" -v s="$s" -v f="$frames" -v w="$WORKERS" 'BEGIN {
-    printf "%d frames, %d workers: animation %.3f s (%.3f s a frame); still %.3f s; frame / still %.3f\n",
-        f, w, a, a / f, s, a / f / s }'
+    printf "%d frames, %d workers: animation %.3f s (%.3f s a frame); ", f, w, a, a / f
+    printf "still %.3f s; frame / still %.3f\n", s, a / f / s }'
 total=0
 same=0
 prev=

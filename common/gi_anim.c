@@ -81,8 +81,7 @@ static int parse_rotate(gi_anim_key *k, double written[4], const cJSON *obj,
 }
 
 /* Key i; written: its rotation as written (the identity without one). */
-static int parse_key(gi_anim *a, int i, const cJSON *obj, double written[4],
-                     gi_jv *v)
+static int parse_key(gi_anim *a, int i, const cJSON *obj, double written[4], gi_jv *v)
 {
     static const char *const keys[] = {"frame", "translate", "rotate", "scale", NULL};
     gi_anim_key *k = &a->keys[i];
@@ -171,8 +170,7 @@ int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *cons
     return 0;
 }
 
-int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file,
-                         gi_error *err)
+int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file, gi_error *err)
 {
     if (!a->enabled)
         return 0;
@@ -204,8 +202,8 @@ int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file,
     return 0;
 }
 
-gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3],
-                            const double q[4], double scale)
+gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3], const double q[4],
+                       double scale)
 {
     double w = q[0], x = q[1], y = q[2], z = q[3];
     double r[3][3] = {

@@ -58,8 +58,7 @@ int gi_anim_parse(gi_anim *a, const cJSON *block, const char *path,
 /* Finds the object in the scene (it must exist, be "mobile": true and not
  * emissive) and takes the pivot from its current vertices. Call after any
  * refinement; errors are "<file>: <path>.object: ...". */
-int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file,
-                         gi_error *err);
+int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file, gi_error *err);
 
 /* The object-to-pose matrix of `frame` (applied to the as-loaded world-space
  * vertices). At a key's frame it is exactly that key's pose; an all-default
@@ -97,7 +96,7 @@ cJSON *gi_anim_pose_json(const gi_anim *a, uint32_t frame);
 
 /* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
  * and scale about `pivot` (what gi_anim_pose builds; for tests). */
-gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3],
-                            const double q[4], double scale);
+gi_mat4 gi_anim_matrix(const double pivot[3], const double translate[3], const double q[4],
+                       double scale);
 
 #endif

@@ -46,10 +46,13 @@ refused static 's/"object": "mobile"/"object": "tall_block"/' \
     'pt.animation.object: object "tall_block" is not mobile'
 refused missing 's/"object": "mobile"/"object": "ghost"/' 'pt.animation.object: no object "ghost"'
 refused frames 's/"frames": 5,/"frames": 0,/' 'pt.animation.frames'
-refused key 's/{"frame": 3,/{"frame": 5,/' 'pt.animation.keyframes\[1\].frame: 5 is not less than pt.animation.frames (5)'
-refused detp_key 's/"frames": 5,/"frames": 5, "update": "full",/' 'pt.animation.update: unknown key (expected one of: object, frames, keyframes)'
+refused key 's/{"frame": 3,/{"frame": 5,/' \
+    'pt.animation.keyframes\[1\].frame: 5 is not less than pt.animation.frames (5)'
+refused detp_key 's/"frames": 5,/"frames": 5, "update": "full",/' \
+    'pt.animation.update: unknown key (expected one of: object, frames, keyframes)'
 for j in "$TMP/job.json" "$SRC/scenes/cornell-box/pt-animation.json"; do
-    "$GI" validate "$j" >"$TMP/validate.out" 2>&1 || { cat "$TMP/validate.out"; fail "validate $j"; }
+    "$GI" validate "$j" >"$TMP/validate.out" 2>&1 ||
+        { cat "$TMP/validate.out"; fail "validate $j"; }
 done
 
 render "$TMP/job.json" "$TMP/w1" 1
@@ -59,7 +62,8 @@ grep -q '"event":"progress".*"frame":4,"frames":5' "$TMP/w3.log" ||
     { cat "$TMP/w3.log"; fail "progress did not count the frames"; }
 # 8 tasks a frame (4 tiles, 2 passes); frame 4 holds frame 3's pose.
 GI_FAULT_CRASH_TASK="3:0,9:0,20:0,20:1" render "$TMP/job.json" "$TMP/crash" 2
-grep -q "retried (4 worker crashes)" "$TMP/crash.log" || { cat "$TMP/crash.log"; fail "crashes not reported"; }
+grep -q "retried (4 worker crashes)" "$TMP/crash.log" ||
+    { cat "$TMP/crash.log"; fail "crashes not reported"; }
 same_frames "$TMP/w1" "$TMP/crash" "after injected crashes"
 
 # Frame 3 is the still of its key's pose.
@@ -68,7 +72,8 @@ sed -e 's/"frames": 5,/"frames": 1,/' -e 's/{"frame": 0, "translate": \[340, -33
 render "$TMP/pose3.json" "$TMP/pose3" 2
 cmp "$TMP/pose3/img.0000.exr" "$TMP/w1/img.0003.exr" || fail "frame 3 is not the still of its pose"
 cmp "$TMP/w1/img.0003.exr" "$TMP/w1/img.0004.exr" || fail "the held frame 4 differs from frame 3"
-grep -q "^  32 tasks$" "$TMP/w1.log" || { cat "$TMP/w1.log"; fail "not 8 tasks a frame, none for the held one"; }
+grep -q "^  32 tasks$" "$TMP/w1.log" ||
+    { cat "$TMP/w1.log"; fail "not 8 tasks a frame, none for the held one"; }
 # The frames differ where the mobile is met, and only there.
 for f in 0001 0003; do
     same=$("$IMGTOOL" same-pixels "$TMP/w1/img.0000.exr" "$TMP/w1/img.$f.exr") ||

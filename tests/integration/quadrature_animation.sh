@@ -37,7 +37,8 @@ same_frames() { # same_frames DIR_A DIR_B WHAT
 sed 's/"object": "mobile"/"object": "tall_block"/' "$TMP/job.json" >"$TMP/static.json"
 st=0
 "$GI" validate "$TMP/static.json" >"$TMP/static.out" 2>&1 || st=$?
-[ $st -ne 0 ] && grep -q 'quadrature.animation.object: object "tall_block" is not mobile' "$TMP/static.out" ||
+[ $st -ne 0 ] &&
+    grep -q 'quadrature.animation.object: object "tall_block" is not mobile' "$TMP/static.out" ||
     { cat "$TMP/static.out"; fail "a static object was animated: exit $st"; }
 
 "$GI" validate "$SRC/scenes/cornell-box/quadrature-animation.json" >"$TMP/example.out" 2>&1 ||
@@ -48,11 +49,13 @@ same_frames "$TMP/w1" "$TMP/w3" "1 vs 3 workers"
 # Round 0 is 4 tasks (256 regions); a crash in frame 0's round 0 and one
 # in a later round.
 GI_FAULT_CRASH_TASK="1:0,6:0" render "$TMP/job.json" "$TMP/crash" 2
-grep -q "retried (2 worker crashes)" "$TMP/crash.log" || { cat "$TMP/crash.log"; fail "crashes not reported"; }
+grep -q "retried (2 worker crashes)" "$TMP/crash.log" ||
+    { cat "$TMP/crash.log"; fail "crashes not reported"; }
 same_frames "$TMP/w1" "$TMP/crash" "after injected crashes"
 for f in 0000 0001 0003; do
     grep -q "\"frame\":[[:space:]]*${f#000}," "$TMP/w1/r.$f.json" || fail "r.$f.json: no frame"
-    grep -q '"rounds":[[:space:]]*[2-9]' "$TMP/w1/r.$f.json" || fail "r.$f.json: refined no round past 0"
+    grep -q '"rounds":[[:space:]]*\([2-9]\|[1-9][0-9]\)' "$TMP/w1/r.$f.json" ||
+        fail "r.$f.json: refined no round past 0"
 done
 grep -q '"pose":' "$TMP/w1/r.0002.json" || fail "no pose in the report"
 
