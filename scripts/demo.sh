@@ -20,5 +20,13 @@ echo "== relight: radiosity.json emissions.json"
 box="$SRC/scenes/cornell-box"
 "$BIN/gi" relight "$box/radiosity.json" "$box/emissions.json" --out "$OUT"
 echo
-echo "Outputs are in $OUT/:"
-ls -1 "$OUT" | sed "s|^|  $OUT/|"
+echo "Outputs are in $OUT/ (an animation's frames as one line):"
+# NAME.0003.EXT files of one sequence as NAME.####.EXT (N frames).
+ls -1 "$OUT" | awk -v out="$OUT" '
+    { key = $0; seq = sub(/\.[0-9][0-9][0-9][0-9]+\./, ".####.", key)
+      if (!(key in n)) { order[++k] = key; isseq[key] = seq }
+      n[key]++ }
+    END { for (i = 1; i <= k; i++) {
+            key = order[i]
+            if (!isseq[key]) printf "  %s/%s\n", out, key
+            else printf "  %s/%s (%d frame%s)\n", out, key, n[key], n[key] == 1 ? "" : "s" } }'
