@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "gi_camera.h"
 #include "gi_log.h"
 
 /* Unit quaternion of a rotation by `degrees` about `axis` (not zero), as
@@ -80,33 +81,46 @@ static int parse_rotate(gi_anim_key *k, double written[4], const cJSON *obj,
     return 0;
 }
 
+/* The frame of key i of the list `list` ("keyframes", "camera") at `path`:
+ * given, below the animation's frames, and after the key before's (prev,
+ * when i > 0). */
+static int parse_key_frame(const gi_anim *a, const cJSON *obj, const char *path,
+                           const char *list, int i, uint32_t prev, uint32_t *out, gi_jv *v)
+{
+    char fpath[128];
+    gi_json_path(fpath, sizeof fpath, path, "frame");
+    int64_t frame = 0;
+    if (gi_jv_int(v, obj, path, "frame", 1, 0, GI_ANIM_MAX_FRAMES - 1, &frame))
+        return -1;
+    if (frame >= (int64_t)a->frames)
+        return gi_jv_fail(v, fpath, "%lld is not less than %s.frames (%u)", (long long)frame,
+                          a->path, a->frames);
+    if (i > 0 && frame <= (int64_t)prev)
+        return gi_jv_fail(v, fpath,
+                          "%lld is not after %s[%d].frame (%u): key frames must be strictly "
+                          "increasing",
+                          (long long)frame, list, i - 1, prev);
+    *out = (uint32_t)frame;
+    return 0;
+}
+
 /* Key i; written: its rotation as written (the identity without one). */
 static int parse_key(gi_anim *a, int i, const cJSON *obj, double written[4], gi_jv *v)
 {
     static const char *const keys[] = {"frame", "translate", "rotate", "scale", NULL};
     gi_anim_key *k = &a->keys[i];
-    char kpath[64], path[96], fpath[128];
+    char kpath[64], path[96];
     snprintf(kpath, sizeof kpath, "%s.keyframes", a->path);
     gi_json_index_path(path, sizeof path, kpath, i);
-    gi_json_path(fpath, sizeof fpath, path, "frame");
     memset(k, 0, sizeof *k);
     k->rotation[0] = 1.0;
     written[0] = 1.0;
     written[1] = written[2] = written[3] = 0.0;
     k->scale = 1.0;
-    int64_t frame = 0;
     if (gi_jv_object(v, obj, path) || gi_jv_keys(v, obj, path, keys) ||
-        gi_jv_int(v, obj, path, "frame", 1, 0, GI_ANIM_MAX_FRAMES - 1, &frame))
+        parse_key_frame(a, obj, path, "keyframes", i, i > 0 ? a->keys[i - 1].frame : 0,
+                        &k->frame, v))
         return -1;
-    if (frame >= (int64_t)a->frames)
-        return gi_jv_fail(v, fpath, "%lld is not less than %s.frames (%u)", (long long)frame,
-                          a->path, a->frames);
-    if (i > 0 && frame <= (int64_t)a->keys[i - 1].frame)
-        return gi_jv_fail(v, fpath,
-                          "%lld is not after keyframes[%d].frame (%u): key frames must be "
-                          "strictly increasing",
-                          (long long)frame, i - 1, a->keys[i - 1].frame);
-    k->frame = (uint32_t)frame;
     char spath[128];
     gi_json_path(spath, sizeof spath, path, "scale");
     if (gi_jv_vec3d(v, obj, path, "translate", 0, -1e15, 1e15, k->translate) ||
@@ -120,8 +134,60 @@ static int parse_key(gi_anim *a, int i, const cJSON *obj, double written[4], gi_
     return 0;
 }
 
+/* Camera key i of `arr`: {"frame", "position", "look_at", "up", "fov_y"}
+ * (gi_camera_parse's keys and checks, plus the frame). */
+static int parse_camera_key(gi_anim *a, int i, const cJSON *obj, gi_jv *v)
+{
+    char kpath[64], path[96];
+    snprintf(kpath, sizeof kpath, "%s.camera", a->path);
+    gi_json_index_path(path, sizeof path, kpath, i);
+    static const char *const keys[] = {"frame", "position", "look_at", "up", "fov_y", NULL};
+    if (gi_jv_object(v, obj, path) || gi_jv_keys(v, obj, path, keys) ||
+        parse_key_frame(a, obj, path, "camera", i, i > 0 ? a->cameras[i - 1].frame : 0,
+                        &a->cameras[i].frame, v))
+        return -1;
+    cJSON *rest = cJSON_Duplicate(obj, 1);
+    cJSON_DeleteItemFromObjectCaseSensitive(rest, "frame");
+    int rc = gi_camera_parse(v, rest, path, &a->cameras[i].camera);
+    cJSON_Delete(rest);
+    return rc;
+}
+
+/* The camera path, and every frame's camera along it a camera: its
+ * position off its look_at point, its up off the view direction. */
+static int parse_cameras(gi_anim *a, const cJSON *arr, gi_jv *v)
+{
+    char cpath[GI_ANIM_PATH_MAX + 16];
+    snprintf(cpath, sizeof cpath, "%s.camera", a->path);
+    int n = cJSON_GetArraySize(arr);
+    if (n < 1)
+        return gi_jv_fail(v, cpath, "at least one key is needed");
+    if (n > GI_ANIM_MAX_KEYS)
+        return gi_jv_fail(v, cpath, "%d keys (at most %d)", n, GI_ANIM_MAX_KEYS);
+    int i = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, arr)
+    {
+        if (parse_camera_key(a, i, it, v))
+            return -1;
+        a->camera_count = (uint32_t)++i;
+    }
+    for (uint32_t f = 0; f < a->frames; f++) {
+        gi_camera c;
+        gi_anim_camera(a, &c, f, &c);
+        gi_vec3 dir = gi_sub(c.look_at, c.position);
+        if (!(gi_length(dir) > 0.0f) ||
+            !(gi_length(gi_cross(gi_normalize(dir), gi_normalize(c.up))) >= 1e-6f))
+            return gi_jv_fail(v, cpath,
+                              "at frame %u, between keys, the position meets the look_at point "
+                              "or the up vector lies along the view: add a key in between",
+                              f);
+    }
+    return 0;
+}
+
 int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *const *extra_keys,
-                  gi_jv *v)
+                  int flags, gi_jv *v)
 {
     memset(a, 0, sizeof *a);
     snprintf(a->path, sizeof a->path, "%s", path);
@@ -129,27 +195,40 @@ int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *cons
         return 0;
     const char *keys[16] = {"object", "frames", "keyframes"};
     size_t nk = 3;
+    if (flags & GI_ANIM_CAMERA)
+        keys[nk++] = "camera";
     for (size_t i = 0; extra_keys && extra_keys[i] && nk + 1 < sizeof keys / sizeof *keys; i++)
         keys[nk++] = extra_keys[i];
     keys[nk] = NULL;
     const char *object = NULL;
     int64_t frames = 0;
-    const cJSON *arr = NULL;
+    const cJSON *arr = NULL, *cams = NULL;
     char opath[GI_ANIM_PATH_MAX + 16], kpath[GI_ANIM_PATH_MAX + 16];
     snprintf(opath, sizeof opath, "%s.object", a->path);
     snprintf(kpath, sizeof kpath, "%s.keyframes", a->path);
+    /* The object is optional only beside a camera path. */
+    int camera = flags & GI_ANIM_CAMERA;
     if (gi_jv_object(v, b, a->path) || gi_jv_keys(v, b, a->path, keys) ||
-        gi_jv_string(v, b, a->path, "object", 1, &object))
+        (camera && gi_jv_member_array(v, b, a->path, "camera", 0, &cams)) ||
+        gi_jv_string(v, b, a->path, "object", !cams, &object) ||
+        gi_jv_int(v, b, a->path, "frames", 1, 1, GI_ANIM_MAX_FRAMES, &frames))
         return -1;
+    a->frames = (uint32_t)frames;
+    if (cams && parse_cameras(a, cams, v))
+        return -1;
+    if (!object) {
+        if (cJSON_GetObjectItemCaseSensitive(b, "keyframes"))
+            return gi_jv_fail(v, kpath, "keys for no object: give %s.object too", a->path);
+        a->enabled = 1;
+        return 0;
+    }
     if (!object[0])
         return gi_jv_fail(v, opath, "the object name is empty");
     if (strlen(object) >= GI_ANIM_NAME_MAX)
         return gi_jv_fail(v, opath, "the name is longer than %d bytes", GI_ANIM_NAME_MAX - 1);
-    if (gi_jv_int(v, b, a->path, "frames", 1, 1, GI_ANIM_MAX_FRAMES, &frames) ||
-        gi_jv_member_array(v, b, a->path, "keyframes", 1, &arr))
+    if (gi_jv_member_array(v, b, a->path, "keyframes", 1, &arr))
         return -1;
     strcpy(a->object, object);
-    a->frames = (uint32_t)frames;
     int n = cJSON_GetArraySize(arr);
     if (n < 1)
         return gi_jv_fail(v, kpath, "at least one key is needed");
@@ -172,7 +251,7 @@ int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *cons
 
 int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file, gi_error *err)
 {
-    if (!a->enabled)
+    if (!gi_anim_moves_object(a))
         return 0;
     int idx = gi_scene_find_object(s, a->object);
     if (idx < 0)
@@ -263,6 +342,43 @@ static double mix(double a, double b, double t)
     return a == b ? a : (1.0 - t) * a + t * b;
 }
 
+static uint32_t key_frame(const void *keys, size_t stride, uint32_t i)
+{
+    uint32_t f;
+    memcpy(&f, (const char *)keys + (size_t)i * stride, sizeof f);
+    return f;
+}
+
+/* Where `frame` falls among n >= 1 keys (each holding its frame first,
+ * `stride` bytes apart, frames strictly increasing): 1 with *lo the key
+ * that holds it (at or before the first key, at a key, at or after the
+ * last); 0 with key *lo's frame < frame < key *lo + 1's and *t the
+ * fraction of the way. */
+static int key_find(const void *keys, size_t stride, uint32_t n, uint32_t frame, uint32_t *lo,
+                    double *t)
+{
+    if (frame <= key_frame(keys, stride, 0)) {
+        *lo = 0;
+        return 1;
+    }
+    uint32_t l = 0, h = n - 1;
+    if (frame >= key_frame(keys, stride, h)) {
+        *lo = h;
+        return 1;
+    }
+    while (h - l > 1) { /* key l's frame <= frame < key h's */
+        uint32_t mid = l + (h - l) / 2;
+        if (key_frame(keys, stride, mid) <= frame)
+            l = mid;
+        else
+            h = mid;
+    }
+    *lo = l;
+    uint32_t f0 = key_frame(keys, stride, l), f1 = key_frame(keys, stride, h);
+    *t = (double)(frame - f0) / (double)(f1 - f0);
+    return f0 == frame;
+}
+
 static gi_mat4 key_matrix(const gi_anim *a, const gi_anim_key *k)
 {
     return gi_anim_matrix(a->pivot, k->translate, k->rotation, k->scale);
@@ -275,30 +391,13 @@ void gi_anim_pose(const gi_anim *a, uint32_t frame, gi_mat4 *out)
         return;
     }
     const gi_anim_key *k = a->keys;
-    uint32_t n = a->key_count;
-    if (frame <= k[0].frame) {
-        *out = key_matrix(a, &k[0]);
-        return;
-    }
-    if (frame >= k[n - 1].frame) {
-        *out = key_matrix(a, &k[n - 1]);
-        return;
-    }
-    /* k[lo].frame <= frame < k[hi].frame */
-    uint32_t lo = 0, hi = n - 1;
-    while (hi - lo > 1) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (k[mid].frame <= frame)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    if (k[lo].frame == frame) {
+    uint32_t lo;
+    double t;
+    if (key_find(k, sizeof *k, a->key_count, frame, &lo, &t)) {
         *out = key_matrix(a, &k[lo]);
         return;
     }
-    const gi_anim_key *k0 = &k[lo], *k1 = &k[hi];
-    double t = (double)(frame - k0->frame) / (double)(k1->frame - k0->frame);
+    const gi_anim_key *k0 = &k[lo], *k1 = &k[lo + 1];
     double tr[3], q[4];
     for (int i = 0; i < 3; i++)
         tr[i] = mix(k0->translate[i], k1->translate[i], t);
@@ -314,12 +413,49 @@ int gi_anim_still(const gi_anim *a, uint32_t frame)
     gi_mat4 before, now;
     gi_anim_pose(a, frame - 1, &before);
     gi_anim_pose(a, frame, &now);
-    return memcmp(&before, &now, sizeof now) == 0;
+    gi_camera cb, cn, base;
+    memset(&base, 0, sizeof base);
+    gi_anim_camera(a, &base, frame - 1, &cb);
+    gi_anim_camera(a, &base, frame, &cn);
+    return memcmp(&before, &now, sizeof now) == 0 &&
+           memcmp(&cb.position, &cn.position, sizeof cn.position) == 0 &&
+           memcmp(&cb.look_at, &cn.look_at, sizeof cn.look_at) == 0 &&
+           memcmp(&cb.up, &cn.up, sizeof cn.up) == 0 && cb.fov_y_deg == cn.fov_y_deg;
+}
+
+static float mixf(float a, float b, double t)
+{
+    return a == b ? a : (float)((1.0 - t) * (double)a + t * (double)b);
+}
+
+static gi_vec3 mix3(gi_vec3 a, gi_vec3 b, double t)
+{
+    return gi_v3(mixf(a.x, b.x, t), mixf(a.y, b.y, t), mixf(a.z, b.z, t));
+}
+
+void gi_anim_camera(const gi_anim *a, const gi_camera *base, uint32_t frame, gi_camera *out)
+{
+    const gi_anim_camera_key *k = a->cameras;
+    uint32_t lo;
+    double t;
+    if (a->camera_count == 0) {
+        *out = *base;
+        return;
+    }
+    if (key_find(k, sizeof *k, a->camera_count, frame, &lo, &t)) {
+        *out = k[lo].camera;
+        return;
+    }
+    const gi_camera *c0 = &k[lo].camera, *c1 = &k[lo + 1].camera;
+    out->position = mix3(c0->position, c1->position, t);
+    out->look_at = mix3(c0->look_at, c1->look_at, t);
+    out->up = mix3(c0->up, c1->up, t);
+    out->fov_y_deg = mixf(c0->fov_y_deg, c1->fov_y_deg, t);
 }
 
 void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file)
 {
-    if (!a->enabled)
+    if (!gi_anim_moves_object(a))
         return;
     const gi_object *mob = &s->objects[a->object_index];
     gi_vec3 lo = s->positions[mob->first_vertex], hi = lo;

@@ -35,29 +35,52 @@ typedef struct gi_anim_key {
     double scale;       /* uniform, > 0 */
 } gi_anim_key;
 
+typedef struct gi_anim_camera_key {
+    uint32_t frame;
+    gi_camera camera;
+} gi_anim_camera_key;
+
 typedef struct gi_anim {
     int enabled; /* the job has an animation block */
     char path[GI_ANIM_PATH_MAX]; /* "detp.animation": what errors name */
-    char object[GI_ANIM_NAME_MAX];
+    char object[GI_ANIM_NAME_MAX]; /* "": no object moves (a camera path alone) */
     uint32_t frames; /* frames 0 .. frames-1 */
     uint32_t key_count;
     gi_anim_key keys[GI_ANIM_MAX_KEYS]; /* frames strictly increasing */
+    /* The camera path (GI_ANIM_CAMERA): keys strictly increasing in frame;
+     * none: the job's camera in every frame. */
+    uint32_t camera_count;
+    gi_anim_camera_key cameras[GI_ANIM_MAX_KEYS];
 
     /* Resolved against the (refined) scene by gi_anim_resolve. */
     uint32_t object_index;
     double pivot[3]; /* centre of the object's as-loaded bounding box */
 } gi_anim;
 
+/* gi_anim_parse's flags: the block may hold a camera path ("camera"), and
+ * then the moving object is optional. */
+#define GI_ANIM_CAMERA 1
+
 /* Parses the animation object `block` found at `path` ("detp.animation";
  * NULL block: no animation, enabled = 0). The block may also hold the
  * method's own `extra_keys` (NULL-terminated, or NULL), which the method
  * parses. Errors name the field path, e.g. "detp.animation.keyframes[2].frame". */
 int gi_anim_parse(gi_anim *a, const cJSON *block, const char *path,
-                  const char *const *extra_keys, gi_jv *v);
+                  const char *const *extra_keys, int flags, gi_jv *v);
+/* 1 if an object moves (the block names one). */
+static inline int gi_anim_moves_object(const gi_anim *a)
+{
+    return a->enabled && a->object[0] != '\0';
+}
+/* The camera of `frame`: the path's (positions, look_at points, up vectors
+ * and fields of view linear between keys, held before the first and after
+ * the last; exactly a key's at its frame), or *base without a path. */
+void gi_anim_camera(const gi_anim *a, const gi_camera *base, uint32_t frame, gi_camera *out);
 
 /* Finds the object in the scene (it must exist, be "mobile": true and not
- * emissive) and takes the pivot from its current vertices. Call after any
- * refinement; errors are "<file>: <path>.object: ...". */
+ * emissive) and takes the pivot from its current vertices (nothing without
+ * an object). Call after any refinement; errors are
+ * "<file>: <path>.object: ...". */
 int gi_anim_resolve(gi_anim *a, const gi_scene *s, const char *file, gi_error *err);
 
 /* The object-to-pose matrix of `frame` (applied to the as-loaded world-space

@@ -8,7 +8,7 @@
 int gi_anim_poser_pose(gi_anim_poser *ps, const gi_anim *a, gi_scene *scene, gi_rt *rt,
                        uint32_t frame, gi_error *err)
 {
-    if (ps->posed && ps->frame == frame)
+    if (!gi_anim_moves_object(a) || (ps->posed && ps->frame == frame))
         return 0;
     if (!ps->base_pos &&
         gi_scene_object_copy_base(scene, a->object_index, &ps->base_pos, &ps->base_nrm, err))

@@ -247,7 +247,7 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
     }
     static const char *const anim_keys[] = {"mobile_estimator", "update", NULL};
     int mest = GI_DETP_MOBILE_LANES, update = GI_DETP_UPDATE_INCREMENTAL;
-    if (gi_anim_parse(&p->anim, anim, "detp.animation", anim_keys, v) ||
+    if (gi_anim_parse(&p->anim, anim, "detp.animation", anim_keys, 0, v) ||
         (anim && (gi_jv_enum(v, anim, "detp.animation", "mobile_estimator", 0,
                              gi_detp_mobile_estimator_names, &mest) ||
                   gi_jv_enum(v, anim, "detp.animation", "update", 0, gi_detp_anim_update_names,

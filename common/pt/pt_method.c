@@ -69,7 +69,7 @@ static int pt_parse(gi_job *job, const cJSON *params, gi_jv *v)
         gi_jv_int(v, params, "pt", "pass_spp", 0, 1, PT_MAX_SPP, &pass) ||
         gi_jv_enum(v, params, "pt", "strategy", 0, strategies, &strategy) ||
         gi_jv_member_object(v, params, "pt", "animation", 0, &anim) ||
-        gi_anim_parse(&jp->anim, anim, "pt.animation", NULL, v))
+        gi_anim_parse(&jp->anim, anim, "pt.animation", NULL, GI_ANIM_CAMERA, v))
         return -1;
     p->spp = (int)spp;
     p->max_bounces = (int)maxb;
@@ -211,8 +211,10 @@ static int pt_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_error
     if (jp->anim.enabled &&
         gi_anim_poser_pose(&w->poser, &jp->anim, &ctx->job.scene, &ctx->rt, tl.frame, err))
         return -1;
+    gi_camera frame_cam;
+    gi_anim_camera(&jp->anim, gi_job_camera(job), tl.frame, &frame_cam);
     gi_camera_frame cam;
-    gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
+    gi_camera_frame_init(&cam, &frame_cam, job->width, job->height);
     gi_pt_tracer tr = {&ctx->rt, &job->scene, p, NULL};
     uint32_t tw = tl.tile.x1 - tl.tile.x0, ns = tl.s1 - tl.s0;
     size_t npix = (size_t)tw * (tl.tile.y1 - tl.tile.y0), total = npix * ns;

@@ -88,7 +88,7 @@ int gi_quad_params_parse(gi_quad_params *p, const cJSON *params, int width, int 
         gi_jv_int(v, params, "quadrature", "max_bounces", 0, -1, 100000, &maxb) ||
         gi_jv_int(v, params, "quadrature", "rr_depth", 0, 0, 100000, &rr) ||
         gi_jv_member_object(v, params, "quadrature", "animation", 0, &anim) ||
-        gi_anim_parse(&p->anim, anim, "quadrature.animation", NULL, v))
+        gi_anim_parse(&p->anim, anim, "quadrature.animation", NULL, GI_ANIM_CAMERA, v))
         return -1;
     if (dims % 2)
         return gi_jv_fail(v, "quadrature.dims",

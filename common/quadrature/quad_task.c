@@ -368,6 +368,14 @@ int gi_quad_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_erro
         gi_quad_task_in_free(&t);
         return -1;
     }
+    if (t.animated) {
+        /* The frame's camera (its path's, or the job's in every frame), and
+         * no camera vertex kept from a task of another frame. */
+        gi_camera cam;
+        gi_anim_camera(&p->anim, gi_job_camera(&ctx->job), t.frame, &cam);
+        gi_camera_frame_init(&w->path.cam, &cam, ctx->job.width, ctx->job.height);
+        w->path.cache_valid = 0;
+    }
     int rc = t.kind == GI_QUAD_TASK_REFINE ? run_refine(ctx, w, &t, result, err)
                                            : run_mc(ctx, w, &t, result);
     gi_quad_task_in_free(&t);

@@ -5,8 +5,8 @@
 # bytes; pixels whose paths never meet the mobile are the same bits in
 # every frame (the same random numbers each frame), the others are not.
 # A render stopped between frames, and one whose frame image could not be
-# written, resume to the same frames. Bad animation blocks are refused
-# naming the field.
+# written, resume to the same frames. A camera path's frame is the still
+# from its camera. Bad animation blocks are refused naming the field.
 . "$(dirname "$0")/lib.sh"
 write_job "$TMP/job.json" <<JOB
 {
@@ -49,7 +49,7 @@ refused frames 's/"frames": 5,/"frames": 0,/' 'pt.animation.frames'
 refused key 's/{"frame": 3,/{"frame": 5,/' \
     'pt.animation.keyframes\[1\].frame: 5 is not less than pt.animation.frames (5)'
 refused detp_key 's/"frames": 5,/"frames": 5, "update": "full",/' \
-    'pt.animation.update: unknown key (expected one of: object, frames, keyframes)'
+    'pt.animation.update: unknown key (expected one of: object, frames, keyframes, camera)'
 for j in "$TMP/job.json" "$SRC/scenes/cornell-box/pt-animation.json"; do
     "$GI" validate "$j" >"$TMP/validate.out" 2>&1 ||
         { cat "$TMP/validate.out"; fail "validate $j"; }
@@ -125,4 +125,38 @@ rmdir "$TMP/blocked/img.0002.exr"
 for f in $FRAMES; do
     cmp "$TMP/w1/img.$f.exr" "$TMP/blocked/img.$f.exr" || fail "unblocked: img.$f.exr differs"
 done
-echo "pt animation frames identical: 1/3 workers, crashes, still of the pose, held, resumed"
+# A camera path, nothing moving (the plain Cornell box): frame 2, at its
+# key, is the still seen from that key's camera (the job's "camera"), bit
+# for bit; frame 3 holds it; frame 1, between the keys, is neither end.
+write_job "$TMP/cam.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 4,
+ "image": {"width": 32, "height": 32},
+ "pt": {"spp": 4, "tile": 16,
+        "animation": {"frames": 4, "camera": [
+          {"frame": 0, "position": [278, 273, -800], "look_at": [278, 273, 0], "fov_y": 39.3},
+          {"frame": 2, "position": [100, 300, -600], "look_at": [278, 200, 300],
+           "up": [0, 1, 0], "fov_y": 50}]}},
+ "outputs": {"exr": "img.exr"}}
+JOB
+write_job "$TMP/cam-still.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "pt", "seed": 4,
+ "image": {"width": 32, "height": 32},
+ "camera": {"position": [100, 300, -600], "look_at": [278, 200, 300], "up": [0, 1, 0],
+            "fov_y": 50},
+ "pt": {"spp": 4, "tile": 16}, "outputs": {"exr": "still.exr"}}
+JOB
+render "$TMP/cam.json" "$TMP/cam" 2
+render "$TMP/cam-still.json" "$TMP/cam-still" 1
+cmp "$TMP/cam/img.0002.exr" "$TMP/cam-still/still.exr" ||
+    fail "the camera path's frame 2 is not the still from its key's camera"
+cmp "$TMP/cam/img.0002.exr" "$TMP/cam/img.0003.exr" || fail "the camera's held frame 3 differs"
+for f in 0000 0002; do
+    if cmp -s "$TMP/cam/img.0001.exr" "$TMP/cam/img.$f.exr"; then fail "frame 1 is frame $f"; fi
+done
+sed 's/"frames": 4, "camera"/"frames": 4, "keyframes": [{"frame": 0}], "camera"/' "$TMP/cam.json" \
+    >"$TMP/cam-keys.json"
+st=0
+"$GI" validate "$TMP/cam-keys.json" >"$TMP/cam-keys.out" 2>&1 || st=$?
+[ $st -ne 0 ] && grep -q "pt.animation.keyframes: keys for no object" "$TMP/cam-keys.out" ||
+    { cat "$TMP/cam-keys.out"; fail "keys without an object: exit $st"; }
+echo "pt animation frames identical: 1/3 workers, crashes, still of the pose, held, resumed; camera path"

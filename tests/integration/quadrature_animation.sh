@@ -5,7 +5,8 @@
 # bit; a held frame is the frame before's image; each frame's report names
 # its frame and pose, and refines from round 0. A render whose frame image
 # could not be written resumes from its checkpoint (the frame's whole
-# result) to the same frames.
+# result) to the same frames. A camera path's frame is the still from its
+# camera.
 . "$(dirname "$0")/lib.sh"
 write_job "$TMP/job.json" <<JOB
 {
@@ -80,4 +81,26 @@ rmdir "$TMP/blocked/img.0002.exr"
 "$GI_RELEASE" render "$TMP/job.json" --workers 2 --out "$TMP/blocked" --progress none --resume \
     >"$TMP/unblocked.log" 2>&1 || { cat "$TMP/unblocked.log"; fail "resume, unblocked"; }
 same_frames "$TMP/w1" "$TMP/blocked" "resumed after a blocked write"
-echo "quadrature animation frames identical: 1/3 workers, crashes, still of the pose, held, resumed"
+# A camera path, nothing moving: frame 1, at its key, is the still seen
+# from that key's camera (the job's "camera"), image and report.
+write_job "$TMP/cam.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "quadrature",
+ "image": {"width": 32, "height": 32},
+ "quadrature": {"dims": 4, "max_evals": 300000,
+                "animation": {"frames": 2, "camera": [
+                  {"frame": 1, "position": [100, 300, -600], "look_at": [278, 200, 300],
+                   "fov_y": 50}]}},
+ "outputs": {"exr": "img.exr", "report": "r.json"}}
+JOB
+write_job "$TMP/cam-still.json" <<JOB
+{"scene": "$SRC/scenes/cornell-box/scene.json", "method": "quadrature",
+ "image": {"width": 32, "height": 32},
+ "camera": {"position": [100, 300, -600], "look_at": [278, 200, 300], "fov_y": 50},
+ "quadrature": {"dims": 4, "max_evals": 300000}, "outputs": {"exr": "still.exr"}}
+JOB
+render "$TMP/cam.json" "$TMP/cam" 2
+render "$TMP/cam-still.json" "$TMP/cam-still" 1
+cmp "$TMP/cam/img.0001.exr" "$TMP/cam-still/still.exr" ||
+    fail "the camera path's frame 1 is not the still from its key's camera"
+cmp "$TMP/cam/img.0000.exr" "$TMP/cam/img.0001.exr" || fail "frame 0 does not hold the first key"
+echo "quadrature animation frames identical: 1/3 workers, crashes, still of the pose, held, resumed; camera path"
