@@ -612,9 +612,10 @@ static void flush(worker *w, double seconds)
 
 /* ---- handshake ---------------------------------------------------------------- */
 
-/* A handshake that heard nothing: the usual cause is a --connect naming
- * the API port (HTTP waits for a request, says nothing, and closes when
- * its --api-head-seconds run out). */
+/* A handshake that heard nothing, or HTTP: the usual cause is a --connect
+ * naming the API port (HTTP waits for a request, says nothing, and closes
+ * when its --api-head-seconds run out; or it takes the HELLO for a
+ * malformed request and answers 400). */
 static int silent_peer(const char *what, gi_error *err)
 {
     return gi_fail(err, GI_EIO,
@@ -653,6 +654,10 @@ static int recv_frame(worker *w, double deadline, gi_frame *fr, gi_error *err)
         }
         if (n <= 0)
             return gi_fail(err, GI_EIO, "the coordinator closed the connection during the handshake");
+        if (!w->heard && n >= 5 && memcmp(buf, "HTTP/", 5) == 0) {
+            snprintf(what, sizeof what, "the coordinator at %s answered in HTTP", w->o->connect);
+            return silent_peer(what, err);
+        }
         w->heard = 1;
         gi_frame_decoder_feed(&w->dec, buf, (size_t)n);
     }

@@ -108,9 +108,11 @@ rc=0
     { cat "$TMP/second.err"; fail "a second gi-farmd on the API port (exit $rc)"; }
 rc=0
 wait "$wrongport" || rc=$?
-# (gi-farmd may close the silent connection first: its --api-head-seconds is 10 s too.)
+# (gi-farmd may close the silent connection first: its --api-head-seconds is 10 s too; or
+# answer 400 at once when the HELLO's bytes happen to end a malformed request line.)
 [ $rc != 0 ] && grep -Eq "(no answer from the coordinator at $API within 10 s|the coordinator at \
-$API closed the connection during the handshake without a word): is that" "$TMP/wrongport.log" &&
+$API closed the connection during the handshake without a word|the coordinator at $API \
+answered in HTTP): is that" "$TMP/wrongport.log" &&
     grep -qF "is that gi-farmd's worker port (its --listen-workers, 7071 by default), not its \
 API port (--listen-api, 7070)?" "$TMP/wrongport.log" || { cat "$TMP/wrongport.log"; fail "gi-worker on the API port (exit $rc)"; }
 stop_farmd "$LOG"
