@@ -493,6 +493,8 @@ int gi_anim_check_scene(gi_anim *a, gi_job *job, gi_error *err)
 {
     if (gi_anim_resolve(a, &job->scene, job->file, err))
         return -1;
+    if (a->enabled)
+        job->frame_count = a->frames; /* gi validate says how many */
     if (!job->on_worker)
         gi_anim_warn_keys(a, &job->scene, job->file);
     return 0;

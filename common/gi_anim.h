@@ -100,8 +100,8 @@ void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file);
 /* ---- A method's animation, frame by frame (pt and quadrature). ---- */
 
 /* check_scene's part: resolves a against the job's scene (on the
- * coordinator and in every worker) and, on the coordinator, warns about
- * its keys. */
+ * coordinator and in every worker), sets the job's frame_count and, on the
+ * coordinator, warns about its keys. */
 int gi_anim_check_scene(gi_anim *a, gi_job *job, gi_error *err);
 /* While a is enabled, the job's output paths name `frame` (NAME.0003.exr). */
 void gi_anim_set_frame(const gi_anim *a, gi_job *job, uint32_t frame);

@@ -53,7 +53,7 @@ struct gi_job {
      * (NAME.0003.exr), zero-padded to 4 digits or as many as the last of
      * frame_count frames has, so that the names sort in frame order. */
     int in_frame;
-    uint32_t frame, frame_count;
+    uint32_t frame, frame_count; /* frame_count: set by check_scene (0: a still) */
 
     /* Its tasks keep files in the worker host's batch directory (an
      * animation's photon batches), which the host removes when told the

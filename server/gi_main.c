@@ -316,11 +316,15 @@ static int cmd_validate(int argc, char **argv)
     gi_error err;
     gi_job job;
     int rc = gi_job_load(argv[2], &job, &err);
+    char frames[32] = ""; /* an animation's */
+    if (rc == 0 && job.frame_count)
+        snprintf(frames, sizeof frames, ", %u frame%s", job.frame_count,
+                 job.frame_count == 1 ? "" : "s");
     if (rc)
         fprintf(stderr, "gi: %s\n", err.msg);
     else
-        printf("%s: ok (%s, scene %s: %u objects, %u triangles, %u emissive)\n", argv[2],
-               job.method->name, job.scene_name, job.scene.object_count,
+        printf("%s: ok (%s%s, scene %s: %u objects, %u triangles, %u emissive)\n", argv[2],
+               job.method->name, frames, job.scene_name, job.scene.object_count,
                job.scene.triangle_count, job.scene.light_count);
     gi_job_free(&job);
     return rc ? gi_error_exit_status(&err) : 0;

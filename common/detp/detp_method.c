@@ -46,6 +46,8 @@ static int detp_check_scene(gi_job *job, gi_error *err)
     gi_detp_params *p = job->params;
     if (gi_detp_resolve_params(p, &job->scene, job->file, err))
         return -1;
+    if (p->anim.enabled)
+        job->frame_count = p->anim.frames; /* gi validate says how many */
     if (job->on_worker)
         return 0;
     gi_anim_warn_keys(&p->anim, &job->scene, job->file);

@@ -50,10 +50,12 @@ refused key 's/{"frame": 3,/{"frame": 5,/' \
     'pt.animation.keyframes\[1\].frame: 5 is not less than pt.animation.frames (5)'
 refused detp_key 's/"frames": 5,/"frames": 5, "update": "full",/' \
     'pt.animation.update: unknown key (expected one of: object, frames, keyframes, camera)'
-for j in "$TMP/job.json" "$SRC/scenes/cornell-box/pt-animation.json"; do
+for j in "$SRC/scenes/cornell-box/pt-animation.json" "$TMP/job.json"; do
     "$GI" validate "$j" >"$TMP/validate.out" 2>&1 ||
         { cat "$TMP/validate.out"; fail "validate $j"; }
 done
+grep -q "^$TMP/job.json: ok (pt, 5 frames, scene " "$TMP/validate.out" ||
+    { cat "$TMP/validate.out"; fail "gi validate did not say the animation's frames"; }
 
 render "$TMP/job.json" "$TMP/w1" 1
 render "$TMP/job.json" "$TMP/w3" 3 json
