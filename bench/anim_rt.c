@@ -14,7 +14,6 @@
 
 #include "bench_util.h"
 #include "detp/detp_anim.h"
-#include "gi_assets.h"
 #include "gi_rng.h"
 #include "gi_rt.h"
 
@@ -36,11 +35,8 @@ int main(int argc, char **argv)
     if (updates < 1 || updates > 10000)
         updates = 21;
     gi_error err;
-    gi_dir_source ds;
-    gi_dir_source_init(&ds, ".");
-    gi_asset_source src = gi_dir_source_as_source(&ds);
     gi_scene s;
-    if (gi_scene_load(&src, argv[1], &s, &err)) {
+    if (gi_bench_load_scene(argv[1], &s, &err)) {
         fprintf(stderr, "anim_rt: %s\n", err.msg);
         return 1;
     }

@@ -20,7 +20,6 @@
 
 #include "bench_util.h"
 #include "detp/detp.h"
-#include "gi_assets.h"
 #include "gi_rt.h"
 
 enum { MESH, HILBERT, SHUFFLED, ORDERS, MAX_ROUNDS = 99 };
@@ -46,11 +45,8 @@ int main(int argc, char **argv)
     if (rounds < 1 || rounds > MAX_ROUNDS)
         rounds = 5;
     gi_error err;
-    gi_dir_source ds;
-    gi_dir_source_init(&ds, ".");
-    gi_asset_source src = gi_dir_source_as_source(&ds);
     gi_scene scene;
-    if (gi_scene_load(&src, argv[1], &scene, &err))
+    if (gi_bench_load_scene(argv[1], &scene, &err))
         return fail(&err);
     double size = gi_detp_scene_size(&scene);
     if (subdivide > 0 && gi_detp_refine_scene(&scene, subdivide, &err))
@@ -127,6 +123,5 @@ int main(int argc, char **argv)
     gi_detp_segments_free(&segs);
     gi_rt_free(&rt);
     gi_scene_free(&scene);
-    gi_dir_source_free(&ds);
     return 0;
 }

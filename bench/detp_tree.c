@@ -21,8 +21,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_util.h"
 #include "detp/detp.h"
-#include "gi_assets.h"
 #include "gi_rt.h"
 
 static double now(void)
@@ -69,11 +69,8 @@ int main(int argc, char **argv)
             break;
     }
     gi_error err;
-    gi_dir_source ds;
-    gi_dir_source_init(&ds, ".");
-    gi_asset_source src = gi_dir_source_as_source(&ds);
     gi_scene scene;
-    if (gi_scene_load(&src, argv[1], &scene, &err)) {
+    if (gi_bench_load_scene(argv[1], &scene, &err)) {
         fprintf(stderr, "detp_tree: %s\n", err.msg);
         return 1;
     }
@@ -168,6 +165,5 @@ int main(int argc, char **argv)
     gi_detp_segments_free(&segs);
     gi_rt_free(&rt);
     gi_scene_free(&scene);
-    gi_dir_source_free(&ds);
     return 0;
 }

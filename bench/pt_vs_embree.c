@@ -16,7 +16,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "gi_assets.h"
+#include "bench_util.h"
 #include "gi_blas_threads.h"
 #include "gi_camera.h"
 #include "gi_rt.h"
@@ -121,11 +121,8 @@ int main(int argc, char **argv)
     int repeats = argc > 4 ? atoi(argv[4]) : 9;
     gi_blas_single_thread(); /* its idle threads would share the machine with both loops */
     gi_error err;
-    gi_dir_source ds;
-    gi_dir_source_init(&ds, ".");
-    gi_asset_source src = gi_dir_source_as_source(&ds);
     gi_scene scene;
-    if (gi_scene_load(&src, scene_path, &scene, &err)) {
+    if (gi_bench_load_scene(scene_path, &scene, &err)) {
         fprintf(stderr, "pt_vs_embree: %s\n", err.msg);
         return 2;
     }
@@ -192,6 +189,5 @@ int main(int argc, char **argv)
     free(st.rays);
     gi_rt_free(&rt);
     gi_scene_free(&scene);
-    gi_dir_source_free(&ds);
     return 0;
 }

@@ -153,17 +153,24 @@ static int parse_camera_key(gi_anim *a, int i, const cJSON *obj, gi_jv *v)
     return rc;
 }
 
+/* A key list's length at `path`: 1 to GI_ANIM_MAX_KEYS. */
+static int check_key_count(const char *path, int n, gi_jv *v)
+{
+    if (n < 1)
+        return gi_jv_fail(v, path, "at least one key is needed");
+    if (n > GI_ANIM_MAX_KEYS)
+        return gi_jv_fail(v, path, "%d keys (at most %d)", n, GI_ANIM_MAX_KEYS);
+    return 0;
+}
+
 /* The camera path, and every frame's camera along it a camera: its
  * position off its look_at point, its up off the view direction. */
 static int parse_cameras(gi_anim *a, const cJSON *arr, gi_jv *v)
 {
     char cpath[GI_ANIM_PATH_MAX + 16];
     snprintf(cpath, sizeof cpath, "%s.camera", a->path);
-    int n = cJSON_GetArraySize(arr);
-    if (n < 1)
-        return gi_jv_fail(v, cpath, "at least one key is needed");
-    if (n > GI_ANIM_MAX_KEYS)
-        return gi_jv_fail(v, cpath, "%d keys (at most %d)", n, GI_ANIM_MAX_KEYS);
+    if (check_key_count(cpath, cJSON_GetArraySize(arr), v))
+        return -1;
     int i = 0;
     const cJSON *it;
     cJSON_ArrayForEach(it, arr)
@@ -230,10 +237,8 @@ int gi_anim_parse(gi_anim *a, const cJSON *b, const char *path, const char *cons
         return -1;
     strcpy(a->object, object);
     int n = cJSON_GetArraySize(arr);
-    if (n < 1)
-        return gi_jv_fail(v, kpath, "at least one key is needed");
-    if (n > GI_ANIM_MAX_KEYS)
-        return gi_jv_fail(v, kpath, "%d keys (at most %d)", n, GI_ANIM_MAX_KEYS);
+    if (check_key_count(kpath, n, v))
+        return -1;
     int i = 0;
     const cJSON *it;
     double prev[4] = {1.0, 0.0, 0.0, 0.0}, cur[4];

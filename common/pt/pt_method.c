@@ -118,11 +118,16 @@ static void plan_frame(gi_job *job, const pt_state *st, gi_task_queue *q)
     gi_buf_free(&extra);
 }
 
+/* Values in the accumulator: PT_VALUES_PER_PIXEL per pixel. */
+static size_t sum_count(const gi_job *job)
+{
+    return (size_t)job->width * (size_t)job->height * PT_VALUES_PER_PIXEL;
+}
+
 static pt_state *state_new(const gi_job *job, gi_error *err)
 {
     pt_state *st = gi_xcalloc(1, sizeof *st);
-    st->sum = gi_try_calloc((size_t)job->width * (size_t)job->height,
-                            PT_VALUES_PER_PIXEL * sizeof(double), err, "pt accumulator");
+    st->sum = gi_try_calloc(sum_count(job), sizeof(double), err, "pt accumulator");
     if (!st->sum) {
         free(st);
         return NULL;
@@ -373,8 +378,7 @@ static int pt_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
     int rc = gi_anim_write_frames(&jp->anim, job, &st->frame, write_image, st, err);
     if (rc <= 0)
         return rc;
-    memset(st->sum, 0,
-           (size_t)job->width * job->height * PT_VALUES_PER_PIXEL * sizeof *st->sum);
+    memset(st->sum, 0, sum_count(job) * sizeof *st->sum);
     plan_frame(job, st, fq);
     return 0;
 }
@@ -383,10 +387,9 @@ static int pt_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
     const gi_pt_job_params *jp = job->params;
     const pt_state *st = job->state;
-    (void)err;
     if (jp->anim.enabled)
         gi_buf_put_u32(out, st->frame);
-    gi_buf_put_f64s(out, st->sum, (size_t)job->width * job->height * PT_VALUES_PER_PIXEL);
+    gi_buf_put_f64s(out, st->sum, sum_count(job));
     return 0;
 }
 
@@ -403,8 +406,7 @@ static int pt_load(gi_job *job, gi_reader *in, gi_error *err)
             return gi_fail(err, GI_EPROTO, "pt checkpoint: frame %u past the animation's %u",
                            st->frame, jp->anim.frames);
     }
-    size_t n = (size_t)job->width * job->height * PT_VALUES_PER_PIXEL;
-    if (gi_get_f64s(in, st->sum, n))
+    if (gi_get_f64s(in, st->sum, sum_count(job)))
         return gi_fail(err, GI_EPROTO, "pt checkpoint: truncated accumulator");
     gi_anim_set_frame(&jp->anim, job, st->frame);
     return 0;
