@@ -121,6 +121,7 @@ typedef struct gi_api_conn {
     double full_at; /* its credit was last whole (for logs: since when it is behind) */
     uint64_t moved_at_full;
     double deadline; /* looked_at + credit: when it is spent if no byte moves */
+    double peer_checked_at; /* when wake_if_peer_closed last looked */
     struct gi_api_conn *prev, *next;
 } gi_api_conn;
 
@@ -386,14 +387,42 @@ static void on_connection(void *cls, struct MHD_Connection *conn, void **socket_
     }
 }
 
+/* The kernel's TCP state "close wait" (include/net/tcp_states.h: not in
+ * the headers a program includes): the client sent its FIN. */
+#define API_TCP_CLOSE_WAIT 8
+
+/* MHD reads its sockets edge-triggered and, when a read returns less than
+ * it asked for, takes the socket for drained without reading again. A
+ * client's FIN that came with its last bytes (a request head sent and the
+ * client gone at once: killed, or a script that closes after writing) is
+ * then never read: the connection sat in close-wait holding its slot until
+ * its deadline. Every API_LOOK_S, a connection whose client closed is shut
+ * for reading (again: a wake before MHD's last read is spent), which wakes
+ * MHD up on it: it reads the end and closes the connection, or, if the
+ * request is complete, sends its answer first as it would have. */
+static void wake_if_peer_closed(gi_api_conn *c, double now)
+{
+    if (now - c->peer_checked_at < API_LOOK_S)
+        return;
+    c->peer_checked_at = now;
+    struct tcp_info ti;
+    socklen_t n = sizeof ti;
+    memset(&ti, 0, sizeof ti);
+    if (getsockopt(c->fd, IPPROTO_TCP, TCP_INFO, &ti, &n) == 0 &&
+        ti.tcpi_state == API_TCP_CLOSE_WAIT)
+        shutdown(c->fd, SHUT_RD);
+}
+
 /* Shuts down the connections past their time for a request head, or
- * their request's deadline (MHD closes them when it next runs). */
+ * their request's deadline (MHD closes them when it next runs), and wakes
+ * MHD up on those whose client left (wake_if_peer_closed). */
 static void cut_slow_connections(gi_farm *f)
 {
     double now = gi_now();
     for (gi_api_conn *c = f->api_conns; c; c = c->next) {
         if (c->cut || c->fd < 0)
             continue;
+        wake_if_peer_closed(c, now);
         char why[400];
         if (!c->in_request && now - c->since > f->cfg.api_head_s) {
             snprintf(why, sizeof why, "no request head within --api-head-seconds (%g s)",

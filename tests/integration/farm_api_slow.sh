@@ -198,6 +198,9 @@ grep -q "closed the connection of 127.0.0.1:[0-9]*: its request (POST /api/v1/jo
 # Uploads that sent 100 KB (at 1 KiB/s, 100 s of credit if averaged since
 # the head) and then stopped hold every slot of 127.0.0.1: a second after
 # they stopped they are behind, and a new client is let in for one.
+# The holder's connections all closed first: a slot still held by one would
+# take the place of an upload below (which one is shed is then up to timing).
+wait_api_conns 0
 shed=$(metric gi_farm_api_conns_shed_total)
 rm -f "$TMP/release"
 python3 - "$API" "$(cat "$TMP/token")" "$TMP/release" >"$TMP/uploads.out" 2>&1 <<'PY' &

@@ -134,6 +134,25 @@ metric() {
     api /metrics | awk -v m="$1" '$1 == m {print $2}'
 }
 
+# api_conns [STATE]: gi-farmd's API connections (local port that of $API)
+# in the kernel's TCP STATE, hex as /proc/net/tcp has it (default: 01,
+# established, and 08, close-wait: the client sent its end).
+api_conns() {
+    port=$(printf '%04X' "${API##*:}")
+    awk -v p=":$port" -v st="${1:-01 08}" 'NR > 1 && substr($2, length($2) - 4) == p &&
+        index(" " st " ", " " $4 " ") {n++} END {print n + 0}' /proc/net/tcp
+}
+
+# wait_api_conns N: until gi-farmd has N API connections open at most (10 s).
+wait_api_conns() {
+    n=0
+    until [ "$(api_conns)" -le "$1" ]; do
+        n=$((n + 1))
+        [ $n -lt 200 ] || fail "gi-farmd still has $(api_conns) API connections open ($1 expected)"
+        sleep 0.05
+    done
+}
+
 # stop_farmd LOG: SIGTERM, a clean exit (status 0) and, under ASan, no leaks.
 stop_farmd() {
     kill -TERM "$FARMD_PID"
