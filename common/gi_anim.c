@@ -543,3 +543,19 @@ cJSON *gi_anim_pose_json(const gi_anim *a, uint32_t frame)
         cJSON_AddItemToArray(pose, cJSON_CreateDoubleArray(m.m[r], 4));
     return pose;
 }
+
+void gi_anim_report_camera(const gi_anim *a, const gi_camera *base, uint32_t frame, cJSON *o)
+{
+    if (!a->camera_count)
+        return;
+    gi_camera c;
+    gi_anim_camera(a, base, frame, &c);
+    cJSON *cam = cJSON_AddObjectToObject(o, "camera");
+    float v[3][3] = {{c.position.x, c.position.y, c.position.z},
+                     {c.look_at.x, c.look_at.y, c.look_at.z},
+                     {c.up.x, c.up.y, c.up.z}};
+    static const char *const vecs[] = {"position", "look_at", "up"};
+    for (int i = 0; i < 3; i++)
+        cJSON_AddItemToObject(cam, vecs[i], cJSON_CreateFloatArray(v[i], 3));
+    cJSON_AddNumberToObject(cam, "fov_y", c.fov_y_deg);
+}

@@ -116,6 +116,9 @@ int gi_anim_write_frames(const gi_anim *a, gi_job *job, uint32_t *frame,
 /* The pose of `frame` for a report: the rows of the 3 x 4 matrix applied to
  * the mobile's vertices as loaded. */
 cJSON *gi_anim_pose_json(const gi_anim *a, uint32_t frame);
+/* With a camera path, adds the camera of `frame` to a report's object o
+ * ("camera": position, look_at, up, fov_y); nothing without one. */
+void gi_anim_report_camera(const gi_anim *a, const gi_camera *base, uint32_t frame, cJSON *o);
 
 /* The matrix of one pose given as translate, unit quaternion (w, x, y, z)
  * and scale about `pivot` (what gi_anim_pose builds; for tests). */

@@ -86,11 +86,11 @@ static int primary_hit(gi_rt *rt, split_ctx *sp, gi_tile_hit *rest, gi_vec3 org,
     return any;
 }
 
-static void render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp, split_ctx *sp,
-                   gi_surface_shader shade, void *user, gi_buf *result)
+static void render(gi_rt *rt, const gi_job *job, const gi_camera *camera, const gi_tile *t,
+                   int spp, split_ctx *sp, gi_surface_shader shade, void *user, gi_buf *result)
 {
     gi_camera_frame cam;
-    gi_camera_frame_init(&cam, gi_job_camera(job), job->width, job->height);
+    gi_camera_frame_init(&cam, camera, job->width, job->height);
     size_t npix = (size_t)(t->x1 - t->x0) * (t->y1 - t->y0);
     float *px = gi_xcalloc(npix * 3, sizeof *px);
     size_t k = 0;
@@ -122,16 +122,17 @@ static void render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp, spli
     free(px);
 }
 
-int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_camera *cam, const gi_tile *t, int spp,
                    gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
 {
     (void)err;
-    render(rt, job, t, spp, NULL, shade, user, result);
+    render(rt, job, cam, t, spp, NULL, shade, user, result);
     return 0;
 }
 
-int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
-                         uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest, int rest_known,
+int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_camera *cam, const gi_tile *t,
+                         int spp, uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest,
+                         int rest_known,
                          gi_surface_shader shade, void *user, gi_buf *result, gi_error *err)
 {
     if (!gi_rt_splits(rt, object))
@@ -140,7 +141,7 @@ int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp
     /* Grown well past rounding: a false pass only costs a ray. */
     float rr = r * 1.001f + 1e-4f * (1.0f + gi_length(c));
     split_ctx sp = {object, c, rr * rr, rest, rest_known};
-    render(rt, job, t, spp, &sp, shade, user, result);
+    render(rt, job, cam, t, spp, &sp, shade, user, result);
     return 0;
 }
 

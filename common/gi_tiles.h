@@ -46,9 +46,9 @@ int gi_tile_read(gi_reader *r, int width, int height, gi_tile *out, gi_error *er
  * camera) for the method. */
 typedef gi_vec3 (*gi_surface_shader)(void *user, const gi_hit *hit, gi_vec3 p, gi_vec3 wo);
 
-/* Renders a tile on a worker: result = per-pixel RGB means as f32. Misses
- * are black. */
-int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
+/* Renders a tile on a worker as seen from cam (the job's, or an animation
+ * frame's): result = per-pixel RGB means as f32. Misses are black. */
+int gi_tile_render(gi_rt *rt, const gi_job *job, const gi_camera *cam, const gi_tile *t, int spp,
                    gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
 /* A primary ray's closest hit among all but the moving object
  * (gi_tile_render_split); tri GI_TILE_HIT_NONE: none. */
@@ -64,13 +64,14 @@ typedef struct gi_tile_hit {
  * taken from `rest` if rest_known, else traced and stored there; the
  * object is traced alone, behind its bounding sphere (c, r), up to that
  * hit, and wins if it is as near. The rest's hits stay valid as long as
- * only the object moves (the camera and all else stand still), and the
+ * only the object moves (cam and all else stand still), and the
  * hit shaded is the one the whole scene gives, bit for bit (the top scene
  * holds identity instances of the same BVHs), except where the object and
  * something else lie at exactly the same distance. The shader gets hits of
  * the rest with a zero ng. */
-int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_tile *t, int spp,
-                         uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest, int rest_known,
+int gi_tile_render_split(gi_rt *rt, const gi_job *job, const gi_camera *cam, const gi_tile *t,
+                         int spp, uint32_t object, gi_vec3 c, float r, gi_tile_hit *rest,
+                         int rest_known,
                          gi_surface_shader shade, void *user, gi_buf *result, gi_error *err);
 /* Puts a tile result into img (RGB; coordinator side). */
 int gi_tile_merge(gi_image *img, const gi_tile *t, const gi_buf *result, gi_error *err);

@@ -285,6 +285,7 @@ cJSON *detp_anim_report(const gi_job *job, const detp_state *st)
     /* The mobile's pose: rows of the 3x4 matrix applied to its vertices
      * as loaded. */
     cJSON_AddItemToObject(o, "pose", gi_anim_pose_json(&p->anim, a->frame));
+    gi_anim_report_camera(&p->anim, gi_job_camera(job), a->frame, o);
     add_num(o, "paths_tested", (double)s->photons);
     add_num(o, "paths_examined", (double)s->paths_examined);
     add_num(o, "paths_retraced", (double)s->paths_retraced);

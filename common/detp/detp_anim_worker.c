@@ -143,8 +143,8 @@ static int anim_state(gi_worker_ctx *ctx, detp_worker *w, detp_anim_worker **out
                       gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
-    if (!p->anim.enabled)
-        return gi_fail(err, GI_EPROTO, "detp: animation task for a job without animation");
+    if (!gi_anim_moves_object(&p->anim))
+        return gi_fail(err, GI_EPROTO, "detp: animation task for a job with no moving object");
     if (w->anim) {
         *out = w->anim;
         return 0;
@@ -371,10 +371,14 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
         return -1;
     /* All but the mobile stands still: its hits are traced once per host
      * and tile (gi_tile_hits.h), the mobile's every frame; unless the
-     * whole image's would take more disk than TILE_HITS_MAX_BYTES, then
-     * every frame traces them again. */
-    int keep = (uint64_t)ctx->job.width * (uint64_t)ctx->job.height *
-                   (uint64_t)p->image_spp * sizeof *rest <= TILE_HITS_MAX_BYTES;
+     * whole image's would take more disk than TILE_HITS_MAX_BYTES, or the
+     * camera moves along a path, then every frame traces them again. */
+    int keep = p->anim.camera_count == 0 &&
+               (uint64_t)ctx->job.width * (uint64_t)ctx->job.height * (uint64_t)p->image_spp *
+                       sizeof *rest <=
+                   TILE_HITS_MAX_BYTES;
+    gi_camera cam;
+    gi_anim_camera(&p->anim, gi_job_camera(&ctx->job), frame, &cam);
     gi_error miss;
     gi_error_clear(&miss);
     int known = keep ? gi_tile_hits_read(dir, tile, p->image_spp,
@@ -382,7 +386,7 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
                      : 0;
     int rc = known < 0 ? gi_fail(err, miss.code, "%s", miss.msg) : 0;
     if (rc == 0)
-        rc = gi_tile_render_split(&ctx->rt, &ctx->job, tile, p->image_spp, a->object,
+        rc = gi_tile_render_split(&ctx->rt, &ctx->job, &cam, tile, p->image_spp, a->object,
                                   m.sphere.c, m.sphere.r, rest, known, shade, user, px, err);
     if (rc == 0 && keep && !known)
         rc = gi_tile_hits_write(dir, tile, p->image_spp, rest, err);

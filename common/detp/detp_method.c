@@ -23,13 +23,28 @@
 #include "gi_worker_ctx.h"
 #include "pt/pt.h"
 
+static int wants_image(const gi_job *job)
+{
+    return gi_job_output(job, "exr") || gi_job_output(job, "png");
+}
+
+/* A camera path with nothing moving: the lighting is baked once (a still
+ * bake) and seen from each frame's camera. */
+static int camera_only(const gi_detp_params *p)
+{
+    return p->anim.enabled && !gi_anim_moves_object(&p->anim);
+}
+
 static int detp_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
     gi_detp_params *p = gi_xcalloc(1, sizeof *p);
     job->params = p;
     if (gi_detp_parse_params(p, params, v))
         return -1;
-    job->keeps_batches = p->anim.enabled;
+    if (p->anim.camera_count && !wants_image(job))
+        return gi_jv_fail(v, "detp.animation.camera",
+                          "a camera path needs an image output (\"exr\" or \"png\")");
+    job->keeps_batches = gi_anim_moves_object(&p->anim);
     /* "auto" photons: their batches are counted once the scene says how many. */
     double batches = p->photons > 0 ? ceil((double)p->photons / (double)p->batch) : 0;
     return gi_job_check_tasks(v, "detp.batch", batches, "%lld photons in batches of %lld",
@@ -61,11 +76,6 @@ static int detp_check_scene(gi_job *job, gi_error *err)
                 job->name, (double)p->disc_radius, 100.0 * p->disc_radius / p->scene_size,
                 job->scene.vertex_count);
     return 0;
-}
-
-static int wants_image(const gi_job *job)
-{
-    return gi_job_output(job, "exr") || gi_job_output(job, "png");
 }
 
 static uint32_t reference_count(const gi_job *job)
@@ -122,8 +132,9 @@ static int detp_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     if (state_new(job, &st, err))
         return -1;
     job->state = st;
-    if (p->anim.enabled)
+    if (gi_anim_moves_object(&p->anim))
         return detp_anim_plan(job, st, q, err);
+    gi_anim_set_frame(&p->anim, job, 0); /* a camera path's: its outputs name the frame */
     for (uint64_t p0 = 0; p0 < p->photon_count; p0 += (uint64_t)p->batch) {
         uint64_t p1 = p0 + (uint64_t)p->batch;
         if (p1 > p->photon_count)
@@ -346,10 +357,10 @@ static void plan_tiles(gi_job *job, detp_state *st, gi_task_queue *fq)
     gi_buf extra;
     gi_buf_init(&extra);
     gi_buf_put_str(&extra, st->hash);
-    if (st->anim)
-        gi_buf_put_u32(&extra, job->frame); /* the workers pose the mobile */
-    gi_tiles_plan(fq, st->anim ? DETP_TASK_ANIM_TILE : DETP_TASK_TILE, job->width, job->height,
-                  p->tile, p->image_spp, &extra);
+    if (p->anim.enabled) /* the workers pose the mobile, and take the frame's camera */
+        gi_buf_put_u32(&extra, job->frame);
+    gi_tiles_plan(fq, p->anim.enabled ? DETP_TASK_ANIM_TILE : DETP_TASK_TILE, job->width,
+                  job->height, p->tile, p->image_spp, &extra);
     gi_buf_free(&extra);
 }
 
@@ -363,6 +374,43 @@ static void frame_written(gi_job *job, detp_state *st, gi_task_queue *fq)
     }
     job->in_frame = 0;
     st->phase = DETP_PHASE_DONE;
+}
+
+/* A camera path's frame (camera_only): its image and vertex outputs, the
+ * same vertex outputs each frame (the light does not change), then those
+ * of the frames after it whose camera holds, written again; then the next
+ * frame whose camera moves gets its tiles, from the same radiance. A failed
+ * write keeps the frame, its image and the phase, to be written again. */
+typedef struct camera_frame {
+    const detp_state *st;
+    const detp_vertex_data *v;
+} camera_frame;
+
+static int write_camera_frame(gi_job *job, void *ctx, gi_error *err)
+{
+    const camera_frame *c = ctx;
+    if (gi_write_image_outputs(job, &c->st->img, err))
+        return -1;
+    return detp_write_outputs(job, c->st, c->v, err);
+}
+
+static int write_camera_frames(gi_job *job, detp_state *st, const detp_vertex_data *v,
+                               gi_task_queue *fq, gi_error *err)
+{
+    const gi_detp_params *p = job->params;
+    uint32_t frame = job->frame;
+    camera_frame c = {st, v};
+    int rc = gi_anim_write_frames(&p->anim, job, &frame, write_camera_frame, &c, err);
+    if (rc <= 0) {
+        if (rc == 0)
+            st->phase = DETP_PHASE_DONE;
+        return rc;
+    }
+    st->sec_image = 0; /* each frame's report has its own image's */
+    st->rays_image = 0;
+    plan_tiles(job, st, fq);
+    st->wall_start = gi_now();
+    return 0;
 }
 
 /* A frame's vertex outputs (and report), then the next frame. */
@@ -500,6 +548,11 @@ static int detp_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
         }
     } else {
         st->wall_image = gi_now() - st->wall_start;
+        if (camera_only(p)) {
+            rc = write_camera_frames(job, st, &v, fq, err);
+            detp_vertex_data_free(&v);
+            return rc;
+        }
         rc = write_earlier_frame(job, st, err);
         if (rc == 0 && st->anim && detp_anim_frame(st) + 1 < p->anim.frames) {
             /* This frame's images are written while the next frame runs;
@@ -548,9 +601,13 @@ static void detp_progress(const gi_job *job, gi_job_progress *out)
     const gi_detp_params *p = job->params;
     const detp_state *st = job->state;
     double tiles = wants_image(job) ? gi_tiles_cost(job->width, job->height, p->image_spp) : 0;
-    out->frame = st->anim ? detp_anim_frame(st) : 0;
-    out->frames = st->anim ? p->anim.frames : 1;
+    out->frame = st->anim ? detp_anim_frame(st) : job->frame; /* a camera path's, or 0 */
+    out->frames = p->anim.enabled ? p->anim.frames : 1;
     out->cost_unplanned = st->phase == DETP_PHASE_BAKE ? tiles : 0;
+    if (camera_only(p)) { /* one bake, then tiles each frame */
+        out->first_frame_cost = (double)p->photon_count + tiles;
+        out->later_frame_cost = tiles;
+    }
     double share = st->anim ? detp_anim_from_mobile_share(st) : -1;
     if (share >= 0 && p->anim_update != GI_DETP_UPDATE_FULL) {
         double bake = (double)p->photon_count;
@@ -561,11 +618,12 @@ static void detp_progress(const gi_job *job, gi_job_progress *out)
 
 #define STATE_MAGIC 0x53505444u /* "DTPS" */
 /* 2: animations; 3: frame 0's share of segments from the mobile; 4: an
- * animation's earlier frame image not written. */
-#define STATE_VERSION 4u
+ * animation's earlier frame image not written; 5: a camera path's frame. */
+#define STATE_VERSION 5u
 
 static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
 {
+    const gi_detp_params *p = job->params;
     const detp_state *st = job->state;
     (void)err;
     /* A checkpoint past a frame holds its outputs on disk, or the image of
@@ -602,6 +660,8 @@ static int detp_save(const gi_job *job, gi_buf *out, gi_error *err)
         gi_buf_put_str(out, st->hash);
         gi_buf_put_f32s(out, st->img.pixels, (size_t)job->width * job->height * 3);
     }
+    if (camera_only(p))
+        gi_buf_put_u32(out, job->frame);
     if (st->anim) {
         detp_anim_save(st, out);
         gi_buf_put_u8(out, unwritten != NULL);
@@ -679,7 +739,14 @@ static int detp_load(gi_job *job, gi_reader *in, gi_error *err)
         if (rc == 0 && gi_get_f32s(in, st->img.pixels, (size_t)job->width * job->height * 3))
             rc = gi_fail(err, GI_EPROTO, "%s: truncated detp checkpoint", job->file);
     }
-    if (rc == 0 && p->anim.enabled) {
+    if (rc == 0 && camera_only(p)) {
+        uint32_t frame = gi_get_u32(in);
+        if (version < 5 || in->failed || frame >= p->anim.frames)
+            rc = gi_fail(err, GI_EPROTO, "%s: not a checkpoint of this detp job", job->file);
+        else
+            gi_anim_set_frame(&p->anim, job, frame);
+    }
+    if (rc == 0 && gi_anim_moves_object(&p->anim)) {
         rc = detp_anim_load(job, st, in, version, err);
         if (rc == 0 && version >= 4)
             rc = load_unwritten(job, st, in, err);

@@ -25,7 +25,10 @@ enum {
      * the stored batch from the frame before. */
     DETP_TASK_ANIM_BATCH = 5,
     DETP_TASK_ANIM_UPDATE = 6,
-    DETP_TASK_ANIM_TILE = 7 /* gi_tile, str hash, u32 frame */
+    /* gi_tile, str hash, u32 frame: an animation frame's tile, the mobile
+     * posed and seen from the frame's camera (a camera path alone: a still
+     * bake's radiance seen from it). */
+    DETP_TASK_ANIM_TILE = 7
 };
 
 /* A task's payload, by kind: the fields its kind has (the others 0). */

@@ -225,8 +225,14 @@ static cJSON *report(const gi_job *job, const detp_state *st, const detp_vertex_
     cJSON_AddItemToObject(o, "estimator_stats", stats_json(st));
     if (st->nref)
         cJSON_AddItemToObject(o, "reference", reference_json(job, st, v));
-    if (st->anim)
+    if (st->anim) {
         cJSON_AddItemToObject(o, "animation", detp_anim_report(job, st));
+    } else if (p->anim.enabled) { /* a camera path alone: the frame and its camera */
+        cJSON *a = cJSON_AddObjectToObject(o, "animation");
+        add_num(a, "frame", job->frame);
+        add_num(a, "frames", p->anim.frames);
+        gi_anim_report_camera(&p->anim, gi_job_camera(job), job->frame, a);
+    }
     return o;
 }
 

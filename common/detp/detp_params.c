@@ -112,7 +112,7 @@ static int block_for(gi_jv *v, const gi_detp_params *p, const char *name, int ok
  * would be one per frame. */
 static int check_animation(const gi_detp_params *p, gi_jv *v)
 {
-    if (!p->anim.enabled)
+    if (!gi_anim_moves_object(&p->anim)) /* a camera path alone: a still bake */
         return 0;
     if (p->artifact == GI_DETP_AC_VISIBLE_AREA)
         return gi_jv_fail(v, "detp.artifact_control",
@@ -247,7 +247,7 @@ int gi_detp_parse_params(gi_detp_params *p, const cJSON *b, gi_jv *v)
     }
     static const char *const anim_keys[] = {"mobile_estimator", "update", NULL};
     int mest = GI_DETP_MOBILE_LANES, update = GI_DETP_UPDATE_INCREMENTAL;
-    if (gi_anim_parse(&p->anim, anim, "detp.animation", anim_keys, 0, v) ||
+    if (gi_anim_parse(&p->anim, anim, "detp.animation", anim_keys, GI_ANIM_CAMERA, v) ||
         (anim && (gi_jv_enum(v, anim, "detp.animation", "mobile_estimator", 0,
                              gi_detp_mobile_estimator_names, &mest) ||
                   gi_jv_enum(v, anim, "detp.animation", "update", 0, gi_detp_anim_update_names,

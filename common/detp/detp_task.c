@@ -116,7 +116,7 @@ int detp_task_decode(const gi_job *job, const gi_task *t, uint32_t lim, detp_tas
             return -1;
         /* Frame 0 traces a batch, later frames update it; a batch starts
          * where the plan's batch size puts it. */
-        if (!p->anim.enabled || in->frame >= p->anim.frames ||
+        if (!gi_anim_moves_object(&p->anim) || in->frame >= p->anim.frames ||
             (in->frame == 0) != (t->kind == DETP_TASK_ANIM_BATCH) ||
             !photons_ok(p, in->p0, in->p1) ||
             in->p0 != (uint64_t)in->batch * (uint64_t)p->batch)

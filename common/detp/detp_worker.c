@@ -48,7 +48,7 @@ int detp_worker_discs(gi_worker_ctx *ctx, detp_worker *w, gi_error *err)
     if (gi_detp_discs_from_scene(&ctx->job.scene, p->disc_radius, &w->discs, err))
         return -1;
     /* Animations sum exactly, in fixed point (detp_anim_job.c). */
-    int rc = p->anim.enabled
+    int rc = gi_anim_moves_object(&p->anim)
                  ? gi_detp_accum_init_fixed(&w->acc, w->discs.count,
                                             gi_detp_fixed_unit(ctx->job.scene.total_power,
                                                                p->photon_count),
@@ -310,9 +310,12 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
     gi_buf px;
     gi_buf_init(&px);
     shade_ctx sc = {&job->scene, w->radiance};
-    int rc = t->kind == DETP_TASK_ANIM_TILE
+    gi_camera cam; /* a still's: the job's */
+    gi_anim_camera(&p->anim, gi_job_camera(job), in.frame, &cam);
+    int rc = t->kind == DETP_TASK_ANIM_TILE && gi_anim_moves_object(&p->anim)
                  ? detp_anim_render_tile(ctx, w, &in.tile, in.frame, shade, &sc, &px, err)
-                 : gi_tile_render(&ctx->rt, job, &in.tile, p->image_spp, shade, &sc, &px, err);
+                 : gi_tile_render(&ctx->rt, job, &cam, &in.tile, p->image_spp, shade, &sc, &px,
+                                  err);
     if (rc == 0) {
         gi_buf_put_f64(result, gi_now() - t0);
         gi_buf_put_u64(result, ctx->rt.rays - rays0);

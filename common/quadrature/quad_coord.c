@@ -451,18 +451,7 @@ static int write_outputs(gi_job *job, void *state, gi_error *err)
         cJSON_AddNumberToObject(a, "frames", p->anim.frames);
         cJSON_AddStringToObject(a, "object", p->anim.object);
         cJSON_AddItemToObject(a, "pose", gi_anim_pose_json(&p->anim, st->frame));
-        if (p->anim.camera_count) {
-            gi_camera c;
-            gi_anim_camera(&p->anim, gi_job_camera(job), st->frame, &c);
-            cJSON *cam = cJSON_AddObjectToObject(a, "camera");
-            float v[3][3] = {{c.position.x, c.position.y, c.position.z},
-                             {c.look_at.x, c.look_at.y, c.look_at.z},
-                             {c.up.x, c.up.y, c.up.z}};
-            static const char *const vecs[] = {"position", "look_at", "up"};
-            for (int i = 0; i < 3; i++)
-                cJSON_AddItemToObject(cam, vecs[i], cJSON_CreateFloatArray(v[i], 3));
-            cJSON_AddNumberToObject(cam, "fov_y", c.fov_y_deg);
-        }
+        gi_anim_report_camera(&p->anim, gi_job_camera(job), st->frame, a);
     }
     rc = gi_write_json_output(job, "report", doc, err);
     cJSON_Delete(doc);

@@ -954,7 +954,8 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
         shade_ctx sc = {&w->mesh, &ctx->job.scene, corner};
         ctx->stats.samples = (uint64_t)(tt.tile.x1 - tt.tile.x0) * (tt.tile.y1 - tt.tile.y0) *
                              (uint64_t)p->image_spp;
-        return gi_tile_render(&ctx->rt, &ctx->job, &tt.tile, p->image_spp, shade, &sc, result, err);
+        return gi_tile_render(&ctx->rt, &ctx->job, gi_job_camera(&ctx->job), &tt.tile,
+                              p->image_spp, shade, &sc, result, err);
     }
     return gi_fail(err, GI_EPROTO, "radiosity: unknown task kind %u", t->kind);
 }

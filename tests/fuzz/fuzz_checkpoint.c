@@ -2,11 +2,12 @@
  * reads back when it restarts (gi_jobrun_restore and the methods' load):
  * a damaged one must be refused with a message (the job then starts over),
  * never crash, leak or hang the coordinator. The first byte picks one of
- * four small jobs (detp, a detp animation, pt, radiosity; quadrature's
- * checkpoints are in fuzz_quad); the rest is the checkpoint. With the
- * byte's high bit set, the rest is a `gi render` checkpoint file instead
- * (gi_local_checkpoint.h: its header, the job's identity and batch root,
- * then the same state), read back as `gi render --resume` does.
+ * five small jobs (detp, a detp animation, pt, radiosity, a detp camera
+ * path; quadrature's checkpoints are in fuzz_quad); the rest is the
+ * checkpoint. With the byte's high bit set, the rest is a `gi render`
+ * checkpoint file instead (gi_local_checkpoint.h: its header, the job's
+ * identity and batch root, then the same state), read back as `gi render
+ * --resume` does.
  *
  * With GI_FUZZ_CHECKPOINT_SEEDS=DIR in the environment it writes the seed
  * corpus instead: each job run in this process (an in-process worker) and
@@ -27,8 +28,8 @@
 #include "gi_worker_ctx.h"
 #include "small_jobs.h"
 
-static const char *const job_texts[] = {SMALL_JOB_TEXTS};
-#define JOBS SMALL_JOBS
+static const char *const job_texts[] = {SMALL_JOB_TEXTS, SMALL_JOB_DETP_CAMERA};
+#define JOBS (SMALL_JOBS + 1)
 
 static char job_path[JOBS][SMALL_JOB_PATH_MAX], local_path[300];
 
@@ -135,7 +136,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     gi_job job;
     gi_error err;
-    if (small_jobs_load(job_path[data[0] % JOBS], &job, &err))
+    if (small_jobs_load(job_path[(data[0] & 0x7f) % JOBS], &job, &err))
         abort(); /* the jobs are fixed: they load */
     gi_jobrun jr;
     gi_error_clear(&err);

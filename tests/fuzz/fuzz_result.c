@@ -39,8 +39,9 @@ static const char *const job_texts[] = {
     " \"quadrature\": {\"rule\": \"genz-malik\", \"max_evals\": 20000, \"round_tasks\": 2,"
     "  \"task_regions\": 2, \"task_splits\": 4, \"threshold\": 1e-6},"
     " \"outputs\": {\"exr\": \"e.exr\"}}",
+    SMALL_JOB_DETP_CAMERA,
 };
-#define JOBS (SMALL_JOBS + 1)
+#define JOBS (SMALL_JOBS + 2)
 #define MAX_POINTS 64
 
 /* A point in a job's run: the checkpoint taken there, and the result the

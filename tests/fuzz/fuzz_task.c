@@ -60,6 +60,7 @@ static void jobs_init(gi_job *job, int still)
     detp_still_params = detp_params;
     detp_params.anim.enabled = 1;
     detp_params.anim.frames = FRAMES;
+    strcpy(detp_params.anim.object, "mobile"); /* its batches' tasks need a moving object */
     job->params = still ? &detp_still_params : &detp_params;
 }
 

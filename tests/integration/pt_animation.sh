@@ -89,27 +89,8 @@ done
 sed 's/"spp": 8, "tile": 16, "pass_spp": 4,/"spp": 512, "tile": 16, "pass_spp": 64,/' \
     "$TMP/job.json" >"$TMP/long.json"
 grep -q '"spp": 512' "$TMP/long.json" || fail "long job not made"
-"$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long-ref" --progress none \
-    >/dev/null 2>&1 || fail "long reference"
-"$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long" --progress none \
-    --checkpoint 0.1 >"$TMP/long.log" 2>&1 &
-pid=$!
-n=0
-until [ -e "$TMP/long/img.0001.exr" ]; do
-    n=$((n + 1))
-    [ $n -lt 1200 ] || { cat "$TMP/long.log"; fail "frame 1 never written"; }
-    sleep 0.02
-done
-kill -INT $pid
-if wait $pid; then fail "the render finished before its SIGINT"; fi
-[ ! -e "$TMP/long/img.0004.exr" ] || fail "a stopped render wrote its last frame"
-"$GI_RELEASE" render "$TMP/long.json" --workers 2 --out "$TMP/long" --progress none --resume \
-    >"$TMP/long-resume.log" 2>&1 || { cat "$TMP/long-resume.log"; fail "resume"; }
-grep -q "resuming from .*frame [1-4] of 5" "$TMP/long-resume.log" ||
-    { cat "$TMP/long-resume.log"; fail "did not resume past frame 0"; }
-for f in $FRAMES; do
-    cmp "$TMP/long-ref/img.$f.exr" "$TMP/long/img.$f.exr" || fail "resumed: img.$f.exr differs"
-done
+# shellcheck disable=SC2086
+stop_and_resume_animation "$TMP/long.json" "$TMP/long" img $FRAMES
 
 # Frame 2's image cannot be written (a directory in its way): the render
 # fails naming it and keeps its work; once the way is clear, --resume

@@ -665,10 +665,11 @@ GI_TEST(test_detp_anim_tiles_split_at_the_mobile_are_the_whole_scenes)
                 gi_buf whole, split;
                 gi_buf_init(&whole);
                 gi_buf_init(&split);
-                GI_REQUIRE_OK(gi_tile_render(&a.rt, &job, &t, SPP, hit_shader, NULL, &whole,
+                const gi_camera *cam = gi_job_camera(&job);
+                GI_REQUIRE_OK(gi_tile_render(&a.rt, &job, cam, &t, SPP, hit_shader, NULL, &whole,
                                              &err));
                 uint64_t r0 = a.rt.rays;
-                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, &t, SPP, a.mob, ball.c, ball.r,
+                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, cam, &t, SPP, a.mob, ball.c, ball.r,
                                                    rest + at, f > 0, hit_shader, NULL, &split,
                                                    &err));
                 if (f > 0)
@@ -677,7 +678,7 @@ GI_TEST(test_detp_anim_tiles_split_at_the_mobile_are_the_whole_scenes)
                  * sends rays that pass the ball's hit on to the ball. */
                 gi_buf loose;
                 gi_buf_init(&loose);
-                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, &t, SPP, a.mob, ball.c,
+                GI_REQUIRE_OK(gi_tile_render_split(&a.rt, &job, cam, &t, SPP, a.mob, ball.c,
                                                    8.0f * ball.r, rest + at, 1, hit_shader, NULL,
                                                    &loose, &err));
                 at += (size_t)TILE * TILE * SPP;

@@ -47,7 +47,8 @@ GI_TEST(test_tiles_cover_the_image_and_do_not_depend_on_tile_size)
             cost += q.tasks[i].cost;
             gi_buf res;
             gi_buf_init(&res);
-            GI_REQUIRE_OK(gi_tile_render(&rt, &job, &t, 4, albedo_shader, &job.scene, &res, &err));
+            GI_REQUIRE_OK(gi_tile_render(&rt, &job, gi_job_camera(&job), &t, 4, albedo_shader,
+                                         &job.scene, &res, &err));
             GI_REQUIRE_OK(gi_tile_merge(&img[k], &t, &res, &err));
             gi_buf_free(&res);
         }
