@@ -1,8 +1,8 @@
 #!/bin/sh
-# anim_vs_still: what an animation of a pt or quadrature job costs against
-# its stills. Renders JOB (an animation whose frames all move, e.g.
-# scenes/cornell-box/pt-animation.json) and the same job without its
-# animation block (one still, the mobile as loaded), ROUNDS times each,
+# anim_vs_still: what an animation (pt, quadrature, or a detp camera path)
+# costs against its stills. Renders JOB (an animation whose frames all
+# move, e.g. scenes/cornell-box/pt-animation.json) and the same job without
+# its animation block (one still, the mobile as loaded), ROUNDS times each,
 # alternated, with `gi render --workers WORKERS`; prints the medians: the
 # animation's wall time per frame and the still's (a frame costs what a
 # still does if frames add nothing: each frame's tail, its tasks' last
