@@ -1,7 +1,8 @@
-/* gi_anim: the "animation" block of a detp or pt job (docs/job-format.md,
- * "### animation"): which mobile object moves, over how many frames, and
- * its keyframed pose; parsed strictly, resolved against the scene, and
- * evaluated per frame as an affine matrix.
+/* gi_anim: the "animation" block of a detp, pt or quadrature job
+ * (docs/job-format.md, "### animation"): which mobile object moves, over
+ * how many frames, its keyframed pose and the camera path; parsed
+ * strictly, resolved against the scene, and evaluated per frame (the pose
+ * as an affine matrix).
  *
  * A key's pose maps the object's as-loaded (refined) world-space vertices p
  * to  pivot + translate + R * (scale * (p - pivot)),  pivot = the centre of
@@ -97,7 +98,7 @@ int gi_anim_still(const gi_anim *a, uint32_t frame);
  * over an open scene. */
 void gi_anim_warn_keys(const gi_anim *a, const gi_scene *s, const char *file);
 
-/* ---- A method's animation, frame by frame (pt and quadrature). ---- */
+/* ---- A method's animation, frame by frame (pt, quadrature, a detp camera path). ---- */
 
 /* check_scene's part: resolves a against the job's scene (on the
  * coordinator and in every worker), sets the job's frame_count and, on the
