@@ -376,11 +376,12 @@ static void frame_written(gi_job *job, detp_state *st, gi_task_queue *fq)
     st->phase = DETP_PHASE_DONE;
 }
 
-/* A camera path's frame (camera_only): its image and vertex outputs, the
- * same vertex outputs each frame (the light does not change), then those
- * of the frames after it whose camera holds, written again; then the next
- * frame whose camera moves gets its tiles, from the same radiance. A failed
- * write keeps the frame, its image and the phase, to be written again. */
+/* A camera path's frame (camera_only): its image and report, and with
+ * frame 0 the vertex outputs, once and under their own names (NAME.ply, no
+ * frame number: the light is the same in every frame); then the frames
+ * after it whose camera holds, written again; then the next frame whose
+ * camera moves gets its tiles, from the same radiance. A failed write keeps
+ * the frame, its image and the phase, to be written again. */
 typedef struct camera_frame {
     const detp_state *st;
     const detp_vertex_data *v;
@@ -391,7 +392,14 @@ static int write_camera_frame(gi_job *job, void *ctx, gi_error *err)
     const camera_frame *c = ctx;
     if (gi_write_image_outputs(job, &c->st->img, err))
         return -1;
-    return detp_write_outputs(job, c->st, c->v, err);
+    if (job->frame == 0) {
+        job->in_frame = 0;
+        int rc = detp_write_vertex_outputs(job, c->st, c->v, err);
+        job->in_frame = 1;
+        if (rc)
+            return -1;
+    }
+    return detp_write_report(job, c->st, c->v, err);
 }
 
 static int write_camera_frames(gi_job *job, detp_state *st, const detp_vertex_data *v,

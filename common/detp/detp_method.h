@@ -185,9 +185,14 @@ int detp_vertex_data_compute(const gi_job *job, const detp_state *st, detp_verte
                              gi_error *err);
 void detp_vertex_data_free(detp_vertex_data *v);
 
-/* Outputs (detp_outputs.c): PLY, the binary float file, the report. */
+/* Outputs (detp_outputs.c): the per-vertex ones (PLY, glTF, the binary
+ * float file), then the report; or each part alone. */
 int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
                        gi_error *err);
+int detp_write_vertex_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
+                              gi_error *err);
+int detp_write_report(gi_job *job, const detp_state *st, const detp_vertex_data *v,
+                      gi_error *err);
 
 /* Animations, coordinator side (detp_anim_job.c). The frame's state lives
  * in st->anim; st's per-frame counters and irr/hits are filled from it. */

@@ -236,11 +236,24 @@ static cJSON *report(const gi_job *job, const detp_state *st, const detp_vertex_
     return o;
 }
 
+int detp_write_vertex_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
+                              gi_error *err)
+{
+    return write_ply(job, v, err) || write_glb(job, v, err) || write_bin(job, st, v, err) ? -1
+                                                                                          : 0;
+}
+
 int detp_write_outputs(gi_job *job, const detp_state *st, const detp_vertex_data *v,
                        gi_error *err)
 {
-    if (write_ply(job, v, err) || write_glb(job, v, err) || write_bin(job, st, v, err))
+    if (detp_write_vertex_outputs(job, st, v, err))
         return -1;
+    return detp_write_report(job, st, v, err);
+}
+
+int detp_write_report(gi_job *job, const detp_state *st, const detp_vertex_data *v,
+                      gi_error *err)
+{
     if (!gi_job_output(job, "json"))
         return 0;
     cJSON *doc = report(job, st, v);
