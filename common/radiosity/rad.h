@@ -9,7 +9,8 @@
  * every emission set (rad_relight). It writes the factorization (rad_file)
  * so that `gi relight` can answer new emissions in milliseconds, the
  * per-vertex radiosity (PLY), camera images (tile tasks, Gouraud
- * interpolation in the elements) and a JSON report.
+ * interpolation in the elements; with a camera path, each frame's image
+ * from its camera) and a JSON report.
  *
  * Validation pieces, not used by jobs: truncated SVD, CUR and ACA
  * (rad_lowrank.h), the dense reference solve, the moving-object update
@@ -19,6 +20,7 @@
 
 #include <stdint.h>
 
+#include "gi_anim.h"
 #include "gi_method.h"
 #include "rad_emissions.h"
 #include "rad_factor.h"
@@ -43,6 +45,9 @@ typedef struct gi_rad_params {
     gi_rad_emissions emissions; /* the job's sets (or the scene's own) */
     int has_emissions;          /* given in the job */
     int image_spp, tile;
+    /* radiosity.animation: a camera path only (anim.enabled = 0 without
+     * one); the solution, view-independent, is computed once. */
+    gi_anim anim;
 
     /* Relight mode (`gi relight --images`): a loaded factorization and the
      * emission sets to render; the job then plans only image tiles. Owned

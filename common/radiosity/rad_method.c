@@ -91,6 +91,32 @@ static int check_output_names(const gi_job *job, gi_jv *v)
     return 0;
 }
 
+/* radiosity.animation: a camera path, nothing else (the solution does not
+ * depend on the camera: it is computed once, and each frame is its images
+ * from the frame's camera). */
+static int parse_camera_path(const gi_job *job, gi_rad_params *p, const cJSON *anim, gi_jv *v)
+{
+    if (!anim)
+        return 0;
+    static const char *const moving[] = {"object", "keyframes"};
+    for (int i = 0; i < 2; i++)
+        if (cJSON_IsObject(anim) && cJSON_GetObjectItemCaseSensitive(anim, moving[i])) {
+            char path[64];
+            snprintf(path, sizeof path, "radiosity.animation.%s", moving[i]);
+            return gi_jv_fail(v, path,
+                              "radiosity jobs take a camera path only (a moving object: detp, "
+                              "pt or quadrature)");
+        }
+    if (cJSON_IsObject(anim) && !cJSON_GetObjectItemCaseSensitive(anim, "camera"))
+        return gi_jv_fail(v, "radiosity.animation.camera", "missing (required)");
+    if (gi_anim_parse(&p->anim, anim, "radiosity.animation", NULL, GI_ANIM_CAMERA, v))
+        return -1;
+    if (!gi_job_output(job, "exr") && !gi_job_output(job, "png"))
+        return gi_jv_fail(v, "radiosity.animation.camera",
+                          "a camera path needs an image output (\"exr\" or \"png\")");
+    return 0;
+}
+
 static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
 {
     gi_rad_params *p = gi_xcalloc(1, sizeof *p);
@@ -111,7 +137,7 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
     static const char *const keys[] = {
         "factorization", "patches",   "levels",        "patch_level", "max_level", "target_patches",
         "threshold",     "rays",      "task_elements", "solver",      "tolerance", "max_iterations",
-        "emissions",     "image_spp", "tile",          NULL};
+        "emissions",     "image_spp", "tile",          "animation", NULL};
     static const char *const kinds[] = {"2mf", "2mce", NULL};
     static const char *const solvers[] = {"smw", "neumann", NULL};
     int kind = 0, solver = 0;
@@ -119,7 +145,7 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
             rays = p->rays, task_elements = 0, max_it = p->solve.max_iterations, spp = p->image_spp,
             tile = p->tile;
     double threshold = -1.0;
-    const cJSON *emissions = NULL;
+    const cJSON *emissions = NULL, *anim = NULL;
     if (gi_jv_keys(v, params, "radiosity", keys) ||
         gi_jv_enum(v, params, "radiosity", "factorization", 0, kinds, &kind) ||
         gi_jv_int(v, params, "radiosity", "patches", 0, 1, 1 << 20, &patches) ||
@@ -135,7 +161,9 @@ static int rad_parse(gi_job *job, const cJSON *params, gi_jv *v)
         gi_jv_number(v, params, "radiosity", "tolerance", 0, 1e-12, 0.1, &p->solve.tolerance) ||
         gi_jv_int(v, params, "radiosity", "max_iterations", 0, 1, 1000000, &max_it) ||
         gi_jv_int(v, params, "radiosity", "image_spp", 0, 1, 4096, &spp) ||
-        gi_jv_int(v, params, "radiosity", "tile", 0, 4, 4096, &tile))
+        gi_jv_int(v, params, "radiosity", "tile", 0, 4, 4096, &tile) ||
+        gi_jv_member_object(v, params, "radiosity", "animation", 0, &anim) ||
+        parse_camera_path(job, p, anim, v))
         return -1;
     p->factorization = (gi_rad_method_kind)kind;
     p->patches = (uint32_t)patches;
@@ -196,8 +224,10 @@ static uint32_t tracked_level(const gi_rad_params *p)
 
 static int rad_check_scene(gi_job *job, gi_error *err)
 {
-    const gi_rad_params *p = job->params;
+    gi_rad_params *p = job->params;
     const gi_scene *s = &job->scene;
+    if (gi_anim_check_scene(&p->anim, job, err))
+        return -1;
     /* Elements emit from their front face only: a two-sided emitter would
      * silently lose half its light (and its back would stay dark). */
     for (uint32_t m = 0; m < s->material_count; m++)
@@ -442,6 +472,8 @@ static void plan_tiles(gi_job *job, rad_state *st, gi_task_queue *q)
         gi_buf_reset(&extra);
         gi_buf_put_u32(&extra, i);
         gi_buf_put_str(&extra, st->blob[i]);
+        if (p->anim.enabled) /* the frame's camera */
+            gi_buf_put_u32(&extra, job->frame);
         gi_tiles_plan(q, RAD_TASK_TILE, job->width, job->height, p->tile, p->image_spp, &extra);
     }
     gi_buf_free(&extra);
@@ -457,6 +489,7 @@ static int rad_plan(gi_job *job, gi_task_queue *q, gi_error *err)
     if (!st)
         return gi_error_prefix(err, "%s", job->file);
     job->state = st;
+    gi_anim_set_frame(&p->anim, job, 0); /* a camera path's: its images name the frame */
     if (p->relight_factor) {
         /* Relight mode: the factorization exists; only images are left. */
         if (build(job, st, err))
@@ -511,11 +544,18 @@ int gi_rad_task_tile_decode(const gi_job *job, const gi_task *t, uint32_t emissi
     gi_reader_init(&r, t->payload.data, t->payload.len, "radiosity tile task");
     if (gi_tile_read(&r, job->width, job->height, &tt->tile, err))
         return -1;
+    const gi_rad_params *p = job->params;
     tt->emission = gi_get_u32(&r);
     char *hash = gi_get_str(&r, GI_HASH_HEX - 1);
+    tt->frame = p->anim.enabled ? gi_get_u32(&r) : 0;
     if (gi_reader_finish(&r, err)) {
         free(hash);
         return -1;
+    }
+    if (p->anim.enabled && tt->frame >= p->anim.frames) {
+        free(hash);
+        return gi_fail(err, GI_EPROTO, "radiosity tile task %llu: frame %u of %u",
+                       (unsigned long long)t->id, tt->frame, p->anim.frames);
     }
     int ok = hash && gi_hash_is_valid(hash) && tt->emission < emissions;
     if (ok)
@@ -659,7 +699,9 @@ static char *output_path(const gi_job *job, const rad_state *st, const char *kin
     return path;
 }
 
-static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
+/* The solution's outputs: the factorization, and per emission set the
+ * per-vertex radiosity (PLY, glTF). */
+static int write_solution(gi_job *job, rad_state *st, gi_error *err)
 {
     const gi_rad_params *p = job->params;
     const char *ff = gi_job_output(job, "factorization");
@@ -687,8 +729,14 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
             if (rc < 0)
                 return -1;
         }
-        if (!st->images)
-            continue;
+    }
+    return 0;
+}
+
+/* Per emission set, the camera images (if the job wants them). */
+static int write_images(gi_job *job, rad_state *st, gi_error *err)
+{
+    for (uint32_t i = 0; st->images && i < st->em->count; i++) {
         static const char *const kinds[] = {"exr", "png"};
         for (int k = 0; k < 2; k++) {
             char *path = output_path(job, st, kinds[k], i);
@@ -705,6 +753,12 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
                 return -1;
         }
     }
+    return 0;
+}
+
+static int write_report(gi_job *job, rad_state *st, gi_error *err)
+{
+    const gi_rad_params *p = job->params;
     const char *rep = gi_job_output(job, "report");
     if (rep) {
         cJSON *doc = report(job, st);
@@ -727,8 +781,49 @@ static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
     return 0;
 }
 
+static int write_outputs(gi_job *job, rad_state *st, gi_error *err)
+{
+    if (write_solution(job, st, err) || write_images(job, st, err))
+        return -1;
+    return write_report(job, st, err);
+}
+
+/* A camera path's frame: its images, and with frame 0 the solution's
+ * outputs and the report, once and under their own names (no frame
+ * number: the solution is the same in every frame); then the frames after
+ * it whose camera holds, written again; then the next frame whose camera
+ * moves gets its tiles. A failed write keeps the frame, its images and the
+ * phase, to be written again. */
+static int write_camera_frame(gi_job *job, void *ctx, gi_error *err)
+{
+    rad_state *st = ctx;
+    if (job->frame == 0) {
+        job->in_frame = 0;
+        int rc = write_solution(job, st, err) || write_report(job, st, err);
+        job->in_frame = 1;
+        if (rc)
+            return -1;
+    }
+    return write_images(job, st, err);
+}
+
+static int write_camera_frames(gi_job *job, rad_state *st, gi_task_queue *fq, gi_error *err)
+{
+    const gi_rad_params *p = job->params;
+    uint32_t frame = job->frame;
+    int rc = gi_anim_write_frames(&p->anim, job, &frame, write_camera_frame, st, err);
+    if (rc <= 0) {
+        if (rc == 0)
+            st->phase = PHASE_DONE;
+        return rc;
+    }
+    plan_tiles(job, st, fq);
+    return 0;
+}
+
 static int rad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
 {
+    const gi_rad_params *p = job->params;
     rad_state *st = job->state;
     if (st->phase == PHASE_FF) {
         if (!st->built && build(job, st, err))
@@ -743,6 +838,8 @@ static int rad_finish(gi_job *job, gi_task_queue *fq, gi_error *err)
             return 0;
         }
     }
+    if (st->phase == PHASE_IMAGES && p->anim.enabled)
+        return write_camera_frames(job, st, fq, err);
     if (st->phase != PHASE_DONE) {
         if (write_outputs(job, st, err))
             return -1;
@@ -764,10 +861,14 @@ static void rad_progress(const gi_job *job, gi_job_progress *out)
 {
     const gi_rad_params *p = job->params;
     const rad_state *st = job->state;
-    out->cost_unplanned = st->phase == PHASE_FF && images_wanted(job)
-                              ? p->emissions.count *
-                                    gi_tiles_cost(job->width, job->height, p->image_spp)
-                              : 0;
+    double images = p->emissions.count * gi_tiles_cost(job->width, job->height, p->image_spp);
+    out->cost_unplanned = st->phase == PHASE_FF && images_wanted(job) ? images : 0;
+    if (p->anim.enabled) { /* a camera path: the solution once, then images each frame */
+        out->frame = job->frame;
+        out->frames = p->anim.frames;
+        out->first_frame_cost = (double)st->mesh.element_count * p->rays + images;
+        out->later_frame_cost = images;
+    }
 }
 
 /* ------------------------------------------------------------------------ */
@@ -793,6 +894,9 @@ static int rad_save(const gi_job *job, gi_buf *out, gi_error *err)
     if (st->phase == PHASE_IMAGES)
         for (uint32_t i = 0; i < st->em->count; i++)
             gi_buf_put_f32s(out, st->images[i].pixels, (size_t)job->width * job->height * 3);
+    const gi_rad_params *p = job->params;
+    if (p->anim.enabled) /* a camera path's frame (its images above) */
+        gi_buf_put_u32(out, job->frame);
     return 0;
 }
 
@@ -829,6 +933,13 @@ static int rad_load(gi_job *job, gi_reader *in, gi_error *err)
         for (uint32_t i = 0; i < st->em->count; i++)
             if (gi_get_f32s(in, st->images[i].pixels, (size_t)job->width * job->height * 3))
                 return gi_fail(err, GI_EPROTO, "radiosity checkpoint: truncated images");
+    }
+    const gi_rad_params *p = job->params;
+    if (p->anim.enabled) {
+        uint32_t frame = gi_get_u32(in);
+        if (in->failed || frame >= p->anim.frames)
+            return gi_fail(err, GI_EPROTO, "radiosity checkpoint: not one of this camera path");
+        gi_anim_set_frame(&p->anim, job, frame);
     }
     return 0;
 }
@@ -954,8 +1065,10 @@ static int rad_run(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_erro
         shade_ctx sc = {&w->mesh, &ctx->job.scene, corner};
         ctx->stats.samples = (uint64_t)(tt.tile.x1 - tt.tile.x0) * (tt.tile.y1 - tt.tile.y0) *
                              (uint64_t)p->image_spp;
-        return gi_tile_render(&ctx->rt, &ctx->job, gi_job_camera(&ctx->job), &tt.tile,
-                              p->image_spp, shade, &sc, result, err);
+        gi_camera cam; /* a still's: the job's */
+        gi_anim_camera(&p->anim, gi_job_camera(&ctx->job), tt.frame, &cam);
+        return gi_tile_render(&ctx->rt, &ctx->job, &cam, &tt.tile, p->image_spp, shade, &sc,
+                              result, err);
     }
     return gi_fail(err, GI_EPROTO, "radiosity: unknown task kind %u", t->kind);
 }

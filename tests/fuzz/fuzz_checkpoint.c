@@ -2,12 +2,12 @@
  * reads back when it restarts (gi_jobrun_restore and the methods' load):
  * a damaged one must be refused with a message (the job then starts over),
  * never crash, leak or hang the coordinator. The first byte picks one of
- * five small jobs (detp, a detp animation, pt, radiosity, a detp camera
- * path; quadrature's checkpoints are in fuzz_quad); the rest is the
- * checkpoint. With the byte's high bit set, the rest is a `gi render`
- * checkpoint file instead (gi_local_checkpoint.h: its header, the job's
- * identity and batch root, then the same state), read back as `gi render
- * --resume` does.
+ * six small jobs (detp, a detp animation, pt, radiosity, detp and
+ * radiosity camera paths; quadrature's checkpoints are in fuzz_quad); the
+ * rest is the checkpoint. With the byte's high bit set, the rest is a `gi
+ * render` checkpoint file instead (gi_local_checkpoint.h: its header, the
+ * job's identity and batch root, then the same state), read back as `gi
+ * render --resume` does.
  *
  * With GI_FUZZ_CHECKPOINT_SEEDS=DIR in the environment it writes the seed
  * corpus instead: each job run in this process (an in-process worker) and
@@ -28,8 +28,9 @@
 #include "gi_worker_ctx.h"
 #include "small_jobs.h"
 
-static const char *const job_texts[] = {SMALL_JOB_TEXTS, SMALL_JOB_DETP_CAMERA};
-#define JOBS (SMALL_JOBS + 1)
+static const char *const job_texts[] = {SMALL_JOB_TEXTS, SMALL_JOB_DETP_CAMERA,
+                                        SMALL_JOB_RAD_CAMERA};
+#define JOBS (SMALL_JOBS + 2)
 
 static char job_path[JOBS][SMALL_JOB_PATH_MAX], local_path[300];
 

@@ -40,8 +40,9 @@ static const char *const job_texts[] = {
     "  \"task_regions\": 2, \"task_splits\": 4, \"threshold\": 1e-6},"
     " \"outputs\": {\"exr\": \"e.exr\"}}",
     SMALL_JOB_DETP_CAMERA,
+    SMALL_JOB_RAD_CAMERA,
 };
-#define JOBS (SMALL_JOBS + 2)
+#define JOBS (SMALL_JOBS + 3)
 #define MAX_POINTS 64
 
 /* A point in a job's run: the checkpoint taken there, and the result the

@@ -7,7 +7,7 @@
  * The first byte picks the decoder (% 10: 0 pt, 1..7 detp's task kinds,
  * 8 radiosity FF, 9 radiosity tile); its bit 7 takes the pt job with an
  * animation, the detp job without one, and radiosity tiles as a worker
- * reads them (emissions unknown). The rest is the payload, read against a fixed small job.
+ * reads them (emissions unknown) of a job with a camera path. The rest is the payload, read against a fixed small job.
  *
  * Any payload must decode or fail with GI_EPROTO and a one-line message,
  * never crash, leak or hang. One that decodes must be in the job's range
@@ -24,6 +24,7 @@
 #include "gi_fs.h"
 #include "pt/pt.h"
 #include "pt/pt_task.h"
+#include "radiosity/rad.h"
 #include "radiosity/rad_task.h"
 
 /* The fixed job. */
@@ -42,6 +43,7 @@ static const char HASH[] = "0123456789abcdef0123456789abcdef0123456789abcdef0123
 
 static gi_pt_job_params pt_params, pt_anim_params;
 static gi_detp_params detp_params, detp_still_params;
+static gi_rad_params rad_params, rad_path_params;
 
 static void jobs_init(gi_job *job, int still)
 {
@@ -62,6 +64,10 @@ static void jobs_init(gi_job *job, int still)
     detp_params.anim.frames = FRAMES;
     strcpy(detp_params.anim.object, "mobile"); /* its batches' tasks need a moving object */
     job->params = still ? &detp_still_params : &detp_params;
+    memset(&rad_params, 0, sizeof rad_params);
+    rad_path_params = rad_params;
+    rad_path_params.anim.enabled = 1;
+    rad_path_params.anim.frames = FRAMES;
 }
 
 static void check_error(int rc, const gi_error *err)
@@ -156,6 +162,7 @@ static int one(gi_job *job, int which, int flag, gi_task *t)
         }
     } else {
         t->kind = RAD_TASK_TILE;
+        job->params = flag ? &rad_path_params : &rad_params;
         uint32_t emissions = flag ? UINT32_MAX : EMISSIONS;
         gi_rad_tile_task tt;
         rc = gi_rad_task_tile_decode(job, t, emissions, &tt, &err);
@@ -163,11 +170,14 @@ static int one(gi_job *job, int which, int flag, gi_task *t)
             check_error(rc, &err);
         } else {
             tile_in_image(&tt.tile);
-            if (tt.emission >= emissions || !gi_hash_is_valid(tt.hash))
+            if (tt.emission >= emissions || !gi_hash_is_valid(tt.hash) ||
+                tt.frame >= (flag ? FRAMES : 1))
                 abort();
             put_tile(&out, &tt.tile);
             gi_buf_put_u32(&out, tt.emission);
             gi_buf_put_str(&out, tt.hash);
+            if (flag)
+                gi_buf_put_u32(&out, tt.frame);
             same(&out, in, n);
         }
     }
@@ -259,6 +269,8 @@ static void write_seeds(const char *dir)
     gi_buf_put_u32(&b, EMISSIONS - 1);
     gi_buf_put_str(&b, HASH);
     seed_tiles(dir, 9, &b, &count);
+    gi_buf_put_u32(&b, FRAMES - 1); /* a camera path's frame */
+    seed_tiles(dir, 0x80 | 9, &b, &count);
     gi_buf_free(&b);
 }
 

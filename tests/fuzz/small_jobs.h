@@ -48,8 +48,8 @@ static const char small_scene_text[] =
     " \"radiosity\": {\"patches\": 4, \"levels\": 1, \"rays\": 16, \"task_elements\": 40}," \
     " \"outputs\": {\"exr\": \"d.exr\", \"report\": \"d.json\"}}"
 #define SMALL_JOBS 4
-/* A detp camera path (a still bake seen along it), which the targets
- * append after their own jobs. */
+/* A detp and a radiosity camera path (the light computed once and seen
+ * along it), which the targets append after their own jobs. */
 #define SMALL_JOB_DETP_CAMERA \
     "{\"scene\": \"scene.json\", \"method\": \"detp\", \"seed\": 3," \
     " \"image\": {\"width\": 8, \"height\": 6}," \
@@ -58,6 +58,14 @@ static const char small_scene_text[] =
     "   {\"frame\": 0, \"position\": [0, 0, -0.9], \"look_at\": [0, 0, 0], \"fov_y\": 60}," \
     "   {\"frame\": 1, \"position\": [0.3, 0.2, -0.8], \"look_at\": [0, 0, 0], \"fov_y\": 70}]}}," \
     " \"outputs\": {\"exr\": \"f.exr\", \"bin\": \"f.bin\", \"json\": \"f.json\"}}"
+#define SMALL_JOB_RAD_CAMERA \
+    "{\"scene\": \"scene.json\", \"method\": \"radiosity\", \"seed\": 3," \
+    " \"image\": {\"width\": 8, \"height\": 6}," \
+    " \"radiosity\": {\"patches\": 4, \"levels\": 1, \"rays\": 16, \"task_elements\": 40," \
+    "  \"tile\": 4, \"animation\": {\"frames\": 3, \"camera\": [" \
+    "   {\"frame\": 0, \"position\": [0, 0, -0.9], \"look_at\": [0, 0, 0], \"fov_y\": 60}," \
+    "   {\"frame\": 1, \"position\": [0.3, 0.2, -0.8], \"look_at\": [0, 0, 0], \"fov_y\": 70}]}}," \
+    " \"outputs\": {\"exr\": \"g.exr\", \"report\": \"g.json\"}}"
 
 #define SMALL_JOB_PATH_MAX 300
 

@@ -1,6 +1,6 @@
 # Every method runs on the farm unchanged: a detp, a quadrature, a
-# radiosity job, pt and quadrature animations and a detp camera path
-# (a bake seen from each frame's camera) through gi-farmd + one
+# radiosity job, pt and quadrature animations and detp and radiosity camera
+# paths (the light seen from each frame's camera) through gi-farmd + one
 # gi-worker (2 processes, loopback) give byte-identical outputs to `gi
 # render` (the animations' every frame, reports' timings aside). This also carries the data methods
 # publish for their image tiles (detp's per-vertex radiance, radiosity's
@@ -51,8 +51,15 @@ write_job "$TMP/detpcam.json" <<JOB
             {"frame": 2, "position": [100, 300, -600], "look_at": [278, 200, 300], "fov_y": 50}]}},
  "outputs": {"exr": "cam.exr", "bin": "cam.bin"}}
 JOB
-render_refs detp quad rad ptanim quadanim detpcam
+write_job "$TMP/radcam.json" <<JOB
+{"scene": "$S", "method": "radiosity", "image": {"width": 32, "height": 32},
+ "radiosity": {"patches": 40, "levels": 1, "rays": 256, "tile": 16,
+               "animation": {"frames": 3, "camera": [{"frame": 0, $CAM_KEY0}, {"frame": 2, $CAM_KEY2}]}},
+ "outputs": {"exr": "radcam.exr", "ply": "radcam.ply"}}
+JOB
+render_refs detp quad rad ptanim quadanim detpcam radcam
 [ "$(ls "$TMP/ref-detpcam" | wc -l)" = 4 ] || fail "the detp camera path did not write 3 frames and its light"
+[ "$(ls "$TMP/ref-radcam" | wc -l)" = 4 ] || fail "the radiosity camera path did not write 3 frames and its light"
 [ "$(ls "$TMP/ref-ptanim" | wc -l)" = 4 ] || fail "the pt animation did not write 4 frames"
 [ "$(ls "$TMP/ref-quadanim" | wc -l)" = 3 ] || fail "the quadrature animation did not write 3 frames"
 
@@ -61,7 +68,7 @@ OPTS="--heartbeat 0.2 --lease 5 --dead 20 --checkpoint 0.2"
 start_farmd "$TMP/state" "$TMP/farmd.log" -- $OPTS
 PORTS="--listen-workers $WADDR --listen-api $API"
 start_worker "$TMP/worker.log" -- --connect "$WADDR" --procs 2 --cache "$TMP/cache"
-for j in quad rad ptanim quadanim detpcam; do
+for j in quad rad ptanim quadanim detpcam radcam; do
     "$GI" submit "$TMP/$j.json" --wait --out "$TMP/farm-$j" --progress none >"$TMP/$j.log" 2>&1 ||
         { cat "$TMP/$j.log"; fail "farm $j"; }
     for f in "$TMP/ref-$j"/*; do
@@ -86,5 +93,5 @@ for f in "$TMP/ref-detp"/*; do
     cmp "$f" "$TMP/farm-detp/$(basename "$f")" || fail "detp: $(basename "$f") differs from gi render"
 done
 stop_farmd "$TMP/farmd.log"
-echo "detp, quadrature, radiosity, pt and quadrature animations, a detp camera path: outputs" \
-    "identical on the farm (detp across a coordinator restart)"
+echo "detp, quadrature, radiosity, pt and quadrature animations, detp and radiosity camera paths:" \
+    "outputs identical on the farm (detp across a coordinator restart)"

@@ -17,6 +17,21 @@ skip() {
 write_job() {
     cat >"$1"
 }
+# The camera path tests' keys over the Cornell box: frame 0 the scene's
+# camera, frame 2 another view (a path of 4 frames: frame 3 holds it).
+CAM_KEY0='"position": [278, 273, -800], "look_at": [278, 273, 0], "up": [0, 1, 0], "fov_y": 39.3'
+CAM_KEY2='"position": [100, 300, -600], "look_at": [278, 200, 300], "up": [0, 1, 0], "fov_y": 50'
+# A camera path's frames in DIR (NAME.0000.exr ...; those keys): frame 2 is
+# STILL (the still seen from key 2's camera) bit for bit, the held frame 3
+# is frame 2, and frame 1, between the keys, is neither.
+#   camera_path_frames DIR NAME STILL
+camera_path_frames() {
+    cmp "$3" "$1/$2.0002.exr" || fail "$1: frame 2 is not the still seen from its key's camera"
+    cmp "$1/$2.0002.exr" "$1/$2.0003.exr" || fail "$1: the held frame 3 differs from frame 2"
+    for f in 0000 0002; do
+        if cmp -s "$1/$2.0001.exr" "$1/$2.$f.exr"; then fail "$1: frame 1 is frame $f"; fi
+    done
+}
 # An animation stopped (SIGINT) once its frame 1 is written, then resumed,
 # gives the same frames as a render not stopped: JOB (release build, 2
 # workers, a checkpoint every 0.1 s) into OUT, its reference into OUT-ref;
