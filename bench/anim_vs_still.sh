@@ -1,6 +1,6 @@
 #!/bin/sh
-# anim_vs_still: what an animation (pt, quadrature, or a detp camera path)
-# costs against its stills. Renders JOB (an animation whose frames all
+# anim_vs_still: what an animation (pt, quadrature, or a detp or radiosity
+# camera path) costs against its stills. Renders JOB (an animation whose frames all
 # move, e.g. scenes/cornell-box/pt-animation.json) and the same job without
 # its animation block (one still, the mobile as loaded), ROUNDS times each,
 # alternated, with `gi render --workers WORKERS`; prints the medians: the

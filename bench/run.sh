@@ -27,10 +27,11 @@ echo "== detp_anim_image: a 1080p animation with EXR + PNG outputs (2 workers): 
 sh bench/detp_anim_image.sh "$BIN" 24 1920 1080
 echo "== detp_anim_memory: 100 M photon paths, moving sphere, 2 workers: peak RSS and batch disk (TMPDIR needs ~13 GB; ~11 min)"
 sh bench/detp_anim_memory.sh "$BIN" 100000000 3 250000
-echo "== anim_vs_still: 24-frame pt and quadrature animations and a detp walk-through against their stills (2 workers; ~4 min)"
+echo "== anim_vs_still: 24-frame pt and quadrature animations, detp and radiosity walk-throughs against their stills (2 workers; ~4 min)"
 sh bench/anim_vs_still.sh "$BIN" scenes/cornell-box/pt-animation.json 3 2
 sh bench/anim_vs_still.sh "$BIN" scenes/cornell-box/quadrature-animation.json 3 2
 sh bench/anim_vs_still.sh "$BIN" scenes/cornell-box/detp-flythrough.json 3 2
+sh bench/anim_vs_still.sh "$BIN" scenes/cornell-box/radiosity-flythrough.json 3 2
 echo "== resume_anim: gi render --resume of a 24-frame animation stopped at frame 16 (4 M photons; ~1 min)"
 sh bench/resume_anim.sh "$BIN" 4000000 500000 24 16
 echo "== mesh_import: gi validate on a 25 MB OBJ (980k triangles; assimp in a child process)"
