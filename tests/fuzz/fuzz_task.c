@@ -7,7 +7,8 @@
  * The first byte picks the decoder (% 10: 0 pt, 1..7 detp's task kinds,
  * 8 radiosity FF, 9 radiosity tile); its bit 7 takes the pt job with an
  * animation, the detp job without one, and radiosity tiles as a worker
- * reads them (emissions unknown) of a job with a camera path. The rest is the payload, read against a fixed small job.
+ * reads them (emissions unknown) of a job with a camera path. The rest is
+ * the payload, read against a fixed small job.
  *
  * Any payload must decode or fail with GI_EPROTO and a one-line message,
  * never crash, leak or hang. One that decodes must be in the job's range

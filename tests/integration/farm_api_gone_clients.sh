@@ -58,7 +58,7 @@ def ask(path, pace):
 small = ask(b"/api/v1/workers", 0)
 print("workers:", small.split(b"\r\n")[0].decode())
 t = time.time()
-out = ask(b"/api/v1/jobs/1/outputs/img.exr", 0.1)
+out = ask(b"/api/v1/jobs/1/outputs/img.exr", 0.15)
 body = out[out.find(b"\r\n\r\n") + 4:]
 print("output:", out.split(b"\r\n")[0].decode(), "in %.1f s," % (time.time() - t),
       "whole" if body == ref else "%d bytes of %d" % (len(body), len(ref)))
