@@ -351,8 +351,8 @@ static int mobile_at(gi_worker_ctx *ctx, detp_anim_worker *a, uint32_t frame,
 #define TILE_HITS_MAX_BYTES ((uint64_t)4 << 30)
 
 int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *tile,
-                          uint32_t frame, gi_surface_shader shade, void *user, gi_buf *px,
-                          gi_error *err)
+                          uint32_t frame, const gi_camera *cam, gi_surface_shader shade,
+                          void *user, gi_buf *px, gi_error *err)
 {
     const gi_detp_params *p = ctx->job.params;
     detp_anim_worker *a;
@@ -377,8 +377,6 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
                (uint64_t)ctx->job.width * (uint64_t)ctx->job.height * (uint64_t)p->image_spp *
                        sizeof *rest <=
                    TILE_HITS_MAX_BYTES;
-    gi_camera cam;
-    gi_anim_camera(&p->anim, gi_job_camera(&ctx->job), frame, &cam);
     gi_error miss;
     gi_error_clear(&miss);
     int known = keep ? gi_tile_hits_read(dir, tile, p->image_spp,
@@ -386,7 +384,7 @@ int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *til
                      : 0;
     int rc = known < 0 ? gi_fail(err, miss.code, "%s", miss.msg) : 0;
     if (rc == 0)
-        rc = gi_tile_render_split(&ctx->rt, &ctx->job, &cam, tile, p->image_spp, a->object,
+        rc = gi_tile_render_split(&ctx->rt, &ctx->job, cam, tile, p->image_spp, a->object,
                                   m.sphere.c, m.sphere.r, rest, known, shade, user, px, err);
     if (rc == 0 && keep && !known)
         rc = gi_tile_hits_write(dir, tile, p->image_spp, rest, err);

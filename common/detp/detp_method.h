@@ -265,12 +265,13 @@ int detp_worker_estimate(gi_worker_ctx *ctx, detp_worker *w, gi_detp_stats *st,
                          gi_error *err);
 
 /* Animations, worker side (detp_anim_worker.c): frame-0 batches, updates,
- * and a frame's image tiles (the mobile posed and traced alone, the rest's
- * hits kept in the batch directory: gi_tile_render_split). */
+ * and a frame's image tiles seen from cam, the frame's camera (the mobile
+ * posed and traced alone, the rest's hits kept in the batch directory:
+ * gi_tile_render_split). */
 int detp_anim_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
 int detp_anim_render_tile(gi_worker_ctx *ctx, detp_worker *w, const gi_tile *tile,
-                          uint32_t frame, gi_surface_shader shade, void *user, gi_buf *px,
-                          gi_error *err);
+                          uint32_t frame, const gi_camera *cam, gi_surface_shader shade,
+                          void *user, gi_buf *px, gi_error *err);
 void detp_anim_worker_free(struct detp_anim_worker *a);
 int detp_run(gi_worker_ctx *ctx, const gi_task *task, gi_buf *result, gi_error *err);
 

@@ -310,10 +310,10 @@ static int run_tile(gi_worker_ctx *ctx, const gi_task *t, gi_buf *result, gi_err
     gi_buf px;
     gi_buf_init(&px);
     shade_ctx sc = {&job->scene, w->radiance};
-    gi_camera cam; /* a still's: the job's */
+    gi_camera cam; /* the frame's (a still's: the job's) */
     gi_anim_camera(&p->anim, gi_job_camera(job), in.frame, &cam);
     int rc = t->kind == DETP_TASK_ANIM_TILE && gi_anim_moves_object(&p->anim)
-                 ? detp_anim_render_tile(ctx, w, &in.tile, in.frame, shade, &sc, &px, err)
+                 ? detp_anim_render_tile(ctx, w, &in.tile, in.frame, &cam, shade, &sc, &px, err)
                  : gi_tile_render(&ctx->rt, job, &cam, &in.tile, p->image_spp, shade, &sc, &px,
                                   err);
     if (rc == 0) {

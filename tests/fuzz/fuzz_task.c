@@ -46,29 +46,31 @@ static gi_pt_job_params pt_params, pt_anim_params;
 static gi_detp_params detp_params, detp_still_params;
 static gi_rad_params rad_params, rad_path_params;
 
-static void jobs_init(gi_job *job, int still)
+/* The jobs' parameters, once (they are large, an animation block each, and
+ * the decoders only read them). */
+static void params_init(void)
 {
-    memset(job, 0, sizeof *job);
-    job->width = WIDTH;
-    job->height = HEIGHT;
-    memset(&pt_params, 0, sizeof pt_params);
     gi_pt_params_default(&pt_params.pt);
     pt_params.pt.spp = SPP;
     pt_anim_params = pt_params;
     pt_anim_params.anim.enabled = 1;
     pt_anim_params.anim.frames = FRAMES;
-    memset(&detp_params, 0, sizeof detp_params);
     detp_params.photon_count = PHOTONS;
     detp_params.batch = BATCH;
     detp_still_params = detp_params;
     detp_params.anim.enabled = 1;
     detp_params.anim.frames = FRAMES;
     strcpy(detp_params.anim.object, "mobile"); /* its batches' tasks need a moving object */
-    job->params = still ? &detp_still_params : &detp_params;
-    memset(&rad_params, 0, sizeof rad_params);
-    rad_path_params = rad_params;
     rad_path_params.anim.enabled = 1;
     rad_path_params.anim.frames = FRAMES;
+}
+
+static void job_init(gi_job *job, int still)
+{
+    memset(job, 0, sizeof *job);
+    job->width = WIDTH;
+    job->height = HEIGHT;
+    job->params = still ? &detp_still_params : &detp_params;
 }
 
 static void check_error(int rc, const gi_error *err)
@@ -190,7 +192,7 @@ static void one_input(const uint8_t *data, size_t size, int must_decode)
 {
     gi_job job;
     int flag = data[0] >> 7;
-    jobs_init(&job, flag);
+    job_init(&job, flag);
     gi_task t;
     memset(&t, 0, sizeof t);
     t.id = 7;
@@ -279,6 +281,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
+    params_init();
     const char *dir = getenv("GI_FUZZ_TASK_SEEDS");
     if (dir) {
         write_seeds(dir);

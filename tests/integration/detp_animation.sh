@@ -23,10 +23,6 @@ write_job "$TMP/job.json" <<JOB
   "outputs": {"exr": "img.exr", "ply": "v.ply", "bin": "v.bin", "json": "report.json"}
 }
 JOB
-render() { # render JOB OUT WORKERS [PROGRESS]
-    "$GI" render "$1" --workers "$3" --out "$2" --progress "${4:-none}" >"$2.log" 2>&1 ||
-        { cat "$2.log"; fail "render $2"; }
-}
 same_frames() { # same_frames DIR_A DIR_B WHAT
     for f in 0000 0001 0002 0003 0004 0005; do
         for k in img.$f.exr v.$f.ply v.$f.bin; do

@@ -24,10 +24,6 @@ write_job "$TMP/still.json" <<JOB
  "image": {"width": 32, "height": 32}, "camera": {$CAM_KEY2},
  "detp": {$DETP}, "outputs": {"exr": "still.exr", "ply": "v.ply"}}
 JOB
-render() { # render JOB OUT WORKERS
-    "$GI" render "$1" --workers "$3" --out "$2" --progress none >"$2.log" 2>&1 ||
-        { cat "$2.log"; fail "render $2"; }
-}
 FRAMES="0000 0001 0002 0003"
 
 for j in "$SRC/scenes/cornell-box/detp-flythrough.json" "$TMP/cam.json"; do

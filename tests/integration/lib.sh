@@ -17,6 +17,12 @@ skip() {
 write_job() {
     cat >"$1"
 }
+# render JOB OUT WORKERS [PROGRESS]: `gi render` (ASan build) into OUT, its
+# output in OUT.log, shown if it fails.
+render() {
+    "$GI" render "$1" --workers "$3" --out "$2" --progress "${4:-none}" >"$2.log" 2>&1 ||
+        { cat "$2.log"; fail "render $2"; }
+}
 # The camera path tests' keys over the Cornell box: frame 0 the scene's
 # camera, frame 2 another view (a path of 4 frames: frame 3 holds it).
 CAM_KEY0='"position": [278, 273, -800], "look_at": [278, 273, 0], "up": [0, 1, 0], "fov_y": 39.3'

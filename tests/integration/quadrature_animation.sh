@@ -22,10 +22,6 @@ write_job "$TMP/job.json" <<JOB
 }
 JOB
 FRAMES="0000 0001 0002 0003 0004"
-render() { # render JOB OUT WORKERS
-    "$GI" render "$1" --workers "$3" --out "$2" --progress none >"$2.log" 2>&1 ||
-        { cat "$2.log"; fail "render $2"; }
-}
 untimed() { grep -v '"seconds"' "$1"; }
 same_frames() { # same_frames DIR_A DIR_B WHAT
     for f in $FRAMES; do

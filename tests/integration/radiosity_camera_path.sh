@@ -23,10 +23,6 @@ write_job "$TMP/still.json" <<JOB
  "image": {"width": 32, "height": 32}, "camera": {$CAM_KEY2},
  "radiosity": {$RAD}, "outputs": {"exr": "still.exr", "ply": "v.ply"}}
 JOB
-render() { # render JOB OUT WORKERS
-    "$GI" render "$1" --workers "$3" --out "$2" --progress none >"$2.log" 2>&1 ||
-        { cat "$2.log"; fail "render $2"; }
-}
 FRAMES="0000 0001 0002 0003"
 
 "$GI" validate "$SRC/scenes/cornell-box/radiosity-flythrough.json" >"$TMP/validate.out" 2>&1 ||
